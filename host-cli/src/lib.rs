@@ -1,0 +1,4 @@
+//! Host-side library behind the `needle` command: scenario files, plan rendering, commands.
+
+pub mod report;
+pub mod scenario_file;

@@ -1,0 +1,87 @@
+//! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use needle_cli::report::{plan_json, plan_table, Stats};
+use needle_cli::scenario_file::{load_scenario, parse_form};
+use planner_core::form::FormSet;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "needle", version, about = "Path planner for bevel-tip steerable needles")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Options that restrict what is planned, shared by `plan` and `send`.
+#[derive(clap::Args, Clone)]
+struct PlanArgs {
+    /// Scenario file (TOML, see examples/paper.toml).
+    file: PathBuf,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Largest control degree N to try (overrides the file).
+    #[arg(long)]
+    max_degree: Option<u8>,
+    /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
+    #[arg(long, value_delimiter = ',')]
+    forms: Option<Vec<String>>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Plan a scenario on this machine.
+    Plan(PlanArgs),
+}
+
+fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
+    let mut scenario = load_scenario(&args.file)?;
+    if let Some(n) = args.max_degree {
+        scenario.options.max_control_degree = n;
+    }
+    if let Some(words) = &args.forms {
+        let mut set = FormSet::default();
+        for w in words {
+            set.insert(parse_form(w)?);
+        }
+        scenario.options.forms = set;
+        if args.max_degree.is_none() {
+            scenario.options.max_control_degree = planner_core::MAX_CONTROL_DEGREE as u8;
+        }
+    }
+    scenario.validate().context("invalid planning options")?;
+    Ok(scenario)
+}
+
+fn plan(args: &PlanArgs) -> Result<()> {
+    let scenario = load(args)?;
+    let start = Instant::now();
+    let report = planner_core::plan(&scenario).context("planning failed")?;
+    let stats = Stats {
+        time_us: start.elapsed().as_micros() as u64,
+    };
+    if args.json {
+        println!("{}", plan_json(&scenario, &report, stats));
+    } else {
+        print!("{}", plan_table(&report, stats));
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Plan(a) => plan(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! Typed errors of the planner. They travel on the wire unchanged, so they are plain data.
+
+use serde::{Deserialize, Serialize};
+
+/// Which input a validation error speaks of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Field {
+    /// `needle.curvature_radius`
+    CurvatureRadius,
+    /// `needle.max_arc_deg`
+    MaxArc,
+    /// `needle.max_line_length`
+    MaxLineLength,
+    /// `entry.position`
+    EntryPosition,
+    /// `entry.direction`
+    EntryDirection,
+    /// `entry.max_tilt_deg`
+    MaxTilt,
+    /// `target.position`
+    TargetPosition,
+    /// `target.tolerance`
+    TargetTolerance,
+    /// `obstacles[i].center`
+    ObstacleCenter(u16),
+    /// `obstacles[i].radius`
+    ObstacleRadius(u16),
+    /// One of the `weights`.
+    Weights,
+    /// `planner.min_clearance`
+    MinClearance,
+    /// `planner.max_control_degree`
+    ControlDegree,
+}
+
+impl core::fmt::Display for Field {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Field::CurvatureRadius => f.write_str("needle.curvature_radius"),
+            Field::MaxArc => f.write_str("needle.max_arc_deg"),
+            Field::MaxLineLength => f.write_str("needle.max_line_length"),
+            Field::EntryPosition => f.write_str("entry.position"),
+            Field::EntryDirection => f.write_str("entry.direction"),
+            Field::MaxTilt => f.write_str("entry.max_tilt_deg"),
+            Field::TargetPosition => f.write_str("target.position"),
+            Field::TargetTolerance => f.write_str("target.tolerance"),
+            Field::ObstacleCenter(i) => write!(f, "obstacles[{i}].center"),
+            Field::ObstacleRadius(i) => write!(f, "obstacles[{i}].radius"),
+            Field::Weights => f.write_str("weights"),
+            Field::MinClearance => f.write_str("planner.min_clearance"),
+            Field::ControlDegree => f.write_str("planner.max_control_degree"),
+        }
+    }
+}
+
+/// Why a scenario cannot be planned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PlanError {
+    /// A number is NaN or infinite.
+    NotFinite(Field),
+    /// A number that must be positive is zero or negative.
+    NotPositive(Field),
+    /// A number is outside the range the planner accepts (a negative weight, a tilt over 89 degrees, ...).
+    OutOfRange(Field),
+    /// The entry direction is the zero vector.
+    ZeroDirection,
+    /// More obstacles than the planner has room for.
+    TooManyObstacles {
+        /// Obstacles in the scenario.
+        given: u16,
+        /// Obstacles the planner can hold.
+        capacity: u16,
+    },
+    /// A control degree beyond what the planner has room for, or zero.
+    ControlDegreeOutOfRange {
+        /// Degree asked for.
+        requested: u8,
+        /// Largest degree supported.
+        max: u8,
+    },
+    /// No path form is selected (an empty form list, or forms all above the degree limit).
+    NoForms,
+    /// The entry point lies inside (or on) this obstacle.
+    EntryInsideObstacle(u16),
+    /// The target lies inside (or on) this obstacle.
+    TargetInsideObstacle(u16),
+    /// The target coincides with the entry point.
+    TargetAtEntry,
+    /// Plane mode was asked for but the entry, its direction or the target leave the y-z plane.
+    NotInPlane(Field),
+    /// No selected form gives a collision-free path that reaches the target.
+    Unreachable,
+}
+
+impl core::fmt::Display for PlanError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PlanError::NotFinite(field) => write!(f, "{field} is not a finite number"),
+            PlanError::NotPositive(field) => write!(f, "{field} must be positive"),
+            PlanError::OutOfRange(field) => write!(f, "{field} is out of range"),
+            PlanError::ZeroDirection => f.write_str("entry.direction is the zero vector"),
+            PlanError::TooManyObstacles { given, capacity } => write!(
+                f,
+                "{given} obstacles given but the planner holds at most {capacity} \
+                 (obstacle {capacity} is the first that does not fit)"
+            ),
+            PlanError::ControlDegreeOutOfRange { requested, max } => write!(
+                f,
+                "control degree {requested} is not supported (1 to {max})"
+            ),
+            PlanError::NoForms => f.write_str("no path form selected"),
+            PlanError::EntryInsideObstacle(i) => {
+                write!(f, "the entry point lies inside obstacle {i}")
+            }
+            PlanError::TargetInsideObstacle(i) => write!(f, "the target lies inside obstacle {i}"),
+            PlanError::TargetAtEntry => f.write_str("the target coincides with the entry point"),
+            PlanError::NotInPlane(field) => write!(
+                f,
+                "plane = \"yz\" needs x = entry x for {field} (and no x component in the direction)"
+            ),
+            PlanError::Unreachable => f.write_str(
+                "the target is unreachable: no selected path form gives a collision-free path \
+                 within the bounds",
+            ),
+        }
+    }
+}
+
+impl core::error::Error for PlanError {}

@@ -1,0 +1,24 @@
+//! Path planner for bevel-tip steerable needles: `no_std`, no heap, bounded work.
+//!
+//! Data flows scenario → forms → solve → check → plan:
+//! [`scenario::Scenario`] is validated, each [`form::Form`] is optimised by [`solve`] (seeds, then
+//! a feasible-path SQP over the insertion posture and the segment parameters), every candidate is
+//! re-checked by [`verify`] independently of the optimiser, and [`planner`] keeps the best form.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod clearance;
+pub mod error;
+pub mod form;
+pub mod kinematics;
+pub mod plan;
+pub mod planner;
+pub mod scenario;
+pub mod verify;
+
+pub use error::{Field, PlanError};
+pub use form::{Form, FormSet, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
+pub use plan::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
+pub use planner::{plan, PlanSession};
+pub use scenario::{Scenario, MAX_OBSTACLES};

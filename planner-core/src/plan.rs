@@ -1,0 +1,105 @@
+//! What the planner reports: one outcome per form tried, and the best of them.
+
+use crate::form::{Form, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
+use serde::{Deserialize, Serialize};
+
+/// How a form's optimisation ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SolveStatus {
+    /// The KKT conditions hold to the solver's tolerance.
+    Converged,
+    /// The iteration budget ran out; the best feasible point found is reported.
+    BudgetExhausted,
+    /// No collision-free path of this form reaches the target within the bounds.
+    Infeasible,
+}
+
+/// The insertion posture: the nominal axis turned about the entry frame's first axis, then its second.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Insertion {
+    /// Rotation about the entry frame's first axis (world x for the default frame), degrees.
+    pub theta1_deg: f32,
+    /// Rotation about the entry frame's second axis (world y for the default frame), degrees.
+    pub theta2_deg: f32,
+    /// Angle between the insertion direction and the nominal axis, degrees.
+    pub tilt_deg: f32,
+    /// Unit insertion direction.
+    pub direction: [f32; 3],
+}
+
+/// One segment of a planned path.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SegmentPlan {
+    /// Arc or line.
+    pub kind: SegmentKind,
+    /// Length along the needle (mm).
+    pub length: f32,
+    /// Rotation of the bevel about the shaft before this segment (degrees, in (-180, 180]).
+    pub bevel_deg: f32,
+}
+
+/// Fixed-capacity segment list.
+pub type Segments = heapless::Vec<SegmentPlan, MAX_CONTROL_DEGREE>;
+
+/// The best path found for one form ("path classification").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FormOutcome {
+    /// The form.
+    pub form: Form,
+    /// How the solve ended.
+    pub status: SolveStatus,
+    /// Whether the path passed the independent check (end point, clearances, bounds).
+    pub feasible: bool,
+    /// L: total length (mm).
+    pub length: f32,
+    /// D: risk degree.
+    pub risk: f32,
+    /// H: penalty degree (0 for a feasible path).
+    pub penalty: f32,
+    /// F = a1 L + a2 D + a3 H + a4 N.
+    pub objective: f32,
+    /// Smallest clearance to any obstacle surface (mm; infinite without obstacles).
+    pub min_clearance: f32,
+    /// Distance from the path's end to the target (mm).
+    pub target_error: f32,
+    /// Insertion posture.
+    pub insertion: Insertion,
+    /// The segments, entry first.
+    pub segments: Segments,
+    /// Optimiser iterations spent on this form (all starts).
+    pub iterations: u32,
+    /// Objective/constraint evaluations spent on this form.
+    pub evaluations: u32,
+}
+
+/// Fixed-capacity list of per-form outcomes.
+pub type FormOutcomes = heapless::Vec<FormOutcome, FORM_COUNT>;
+
+/// The result of planning: every form tried, and which one won ("player killing").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanReport {
+    /// One outcome per form tried, in catalogue order.
+    pub forms: FormOutcomes,
+    /// Index into `forms` of the feasible outcome with the lowest objective.
+    pub best: u8,
+}
+
+impl PlanReport {
+    /// The overall best outcome.
+    pub fn best(&self) -> Option<&FormOutcome> {
+        self.forms.get(usize::from(self.best))
+    }
+
+    /// Total optimiser iterations.
+    pub fn iterations(&self) -> u32 {
+        self.forms.iter().map(|f| f.iterations).sum()
+    }
+
+    /// Total evaluations.
+    pub fn evaluations(&self) -> u32 {
+        self.forms.iter().map(|f| f.evaluations).sum()
+    }
+}

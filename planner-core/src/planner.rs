@@ -1,0 +1,93 @@
+//! Path classification (the best path of each form) and player killing (the best form).
+//!
+//! [`PlanSession`] plans one form per [`PlanSession::step`], so a device can report progress and
+//! honour a cancel request between forms; [`plan`] runs a session to the end.
+
+use crate::error::PlanError;
+use crate::form::{Form, FormSet};
+use crate::plan::{FormOutcome, FormOutcomes, Insertion, PlanReport, Segments, SolveStatus};
+use crate::scenario::Scenario;
+
+/// A planning run in progress.
+pub struct PlanSession {
+    scenario: Scenario,
+    remaining: FormSet,
+    outcomes: FormOutcomes,
+}
+
+impl PlanSession {
+    /// Validates the scenario and prepares to plan its selected forms.
+    pub fn new(scenario: Scenario) -> Result<Self, PlanError> {
+        scenario.validate()?;
+        Ok(PlanSession {
+            scenario,
+            remaining: scenario.options.selected_forms(),
+            outcomes: FormOutcomes::new(),
+        })
+    }
+
+    /// The scenario being planned.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// Number of forms this session plans.
+    pub fn form_count(&self) -> usize {
+        self.outcomes.len() + self.remaining.iter().count()
+    }
+
+    /// Plans the next form and returns its outcome; `None` once every form is done.
+    pub fn step(&mut self) -> Option<&FormOutcome> {
+        let form = self.remaining.iter().next()?;
+        self.remaining.0 &= !(1 << form.index());
+        let outcome = solve_form(&self.scenario, form);
+        // Capacity is the catalogue size and each form is planned once.
+        self.outcomes.push(outcome).ok()?;
+        self.outcomes.last()
+    }
+
+    /// Plans what is left and picks the best feasible form.
+    pub fn finish(mut self) -> Result<PlanReport, PlanError> {
+        while self.step().is_some() {}
+        let mut best: Option<usize> = None;
+        for (i, o) in self.outcomes.iter().enumerate() {
+            let better = match best {
+                None => true,
+                Some(b) => o.objective < self.outcomes[b].objective,
+            };
+            if o.feasible && better {
+                best = Some(i);
+            }
+        }
+        match best {
+            Some(b) => Ok(PlanReport {
+                forms: self.outcomes,
+                best: b as u8,
+            }),
+            None => Err(PlanError::Unreachable),
+        }
+    }
+}
+
+/// Plans every selected form of `scenario` and returns the per-form table and the best plan.
+pub fn plan(scenario: &Scenario) -> Result<PlanReport, PlanError> {
+    PlanSession::new(scenario.clone())?.finish()
+}
+
+fn solve_form(_scenario: &Scenario, form: Form) -> FormOutcome {
+    FormOutcome {
+        form,
+        status: SolveStatus::Infeasible,
+        feasible: false,
+        length: f32::NAN,
+        risk: f32::NAN,
+        penalty: f32::NAN,
+        objective: f32::INFINITY,
+        min_clearance: f32::NAN,
+        target_error: f32::NAN,
+        insertion: Insertion::default(),
+        segments: Segments::new(),
+        iterations: 0,
+        evaluations: 0,
+    }
+}

@@ -1,0 +1,293 @@
+//! The planning problem as the user states it: needle, entry, target, obstacles, weights, options.
+//! Lengths in millimetres, angles in degrees, as in the scenario files.
+
+use crate::error::{Field, PlanError};
+use crate::form::{FormSet, MAX_CONTROL_DEGREE};
+use serde::{Deserialize, Serialize};
+
+/// Obstacles a scenario can hold.
+pub const MAX_OBSTACLES: usize = 32;
+
+/// Fixed-capacity obstacle list.
+pub type Obstacles = heapless::Vec<Obstacle, MAX_OBSTACLES>;
+
+/// The needle's mechanics.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Needle {
+    /// Radius of an R segment (mm).
+    pub curvature_radius: f32,
+    /// Longest single R segment as a turning angle (degrees).
+    pub max_arc_deg: f32,
+    /// Longest single L segment (mm); 0 means "twice the entry-target distance plus a half turn".
+    pub max_line_length: f32,
+}
+
+/// Where and how the needle enters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Entry {
+    /// Entry point (mm).
+    pub position: [f32; 3],
+    /// Nominal insertion axis (any length but zero).
+    pub direction: [f32; 3],
+    /// Largest tilt of the insertion posture away from the nominal axis (degrees).
+    pub max_tilt_deg: f32,
+}
+
+/// Where the tip must end.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Target {
+    /// Target point (mm).
+    pub position: [f32; 3],
+    /// Largest allowed distance between the path's end and the target (mm).
+    pub tolerance: f32,
+}
+
+/// A spherical obstacle (a circle in plane mode).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Obstacle {
+    /// Centre (mm).
+    pub center: [f32; 3],
+    /// Radius (mm).
+    pub radius: f32,
+}
+
+/// The weights a1..a4 of F = a1 L + a2 D + a3 H + a4 N.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Weights {
+    /// a1, on the path length L (mm).
+    pub length: f32,
+    /// a2, on the risk degree D.
+    pub risk: f32,
+    /// a3, on the penalty H for entering an obstacle.
+    pub penalty: f32,
+    /// a4, on the control degree N.
+    pub control: f32,
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Weights {
+            length: 1.0,
+            risk: 1.0,
+            penalty: 1000.0,
+            control: 2.0,
+        }
+    }
+}
+
+/// How the risk degree D combines the obstacles' clearances d_i.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RiskMeasure {
+    /// D = mean over obstacles of 1/d_i (reproduces the paper's figures).
+    #[default]
+    Mean,
+    /// D = sum over obstacles of 1/d_i.
+    Sum,
+}
+
+/// Where paths may go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Workspace {
+    /// Full 3-D: bevel rotations are continuous.
+    #[default]
+    Space,
+    /// The y-z plane through the entry (as the paper): each arc turns to one side or the other.
+    PlaneYz,
+}
+
+/// What to plan and how hard to try.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PlannerOptions {
+    /// Largest control degree N tried.
+    pub max_control_degree: u8,
+    /// Forms to try; empty means every form up to `max_control_degree`.
+    pub forms: FormSet,
+    /// Plane or space.
+    pub workspace: Workspace,
+    /// Definition of D.
+    pub risk: RiskMeasure,
+    /// Smallest clearance a plan may keep to any obstacle (mm, >= 0).
+    pub min_clearance: f32,
+}
+
+impl Default for PlannerOptions {
+    fn default() -> Self {
+        PlannerOptions {
+            max_control_degree: 3,
+            forms: FormSet::default(),
+            workspace: Workspace::Space,
+            risk: RiskMeasure::Mean,
+            min_clearance: 0.0,
+        }
+    }
+}
+
+impl PlannerOptions {
+    /// The forms this request tries: the explicit list cut to the degree limit, or all up to it.
+    pub fn selected_forms(&self) -> FormSet {
+        let by_degree = FormSet::up_to_degree(usize::from(self.max_control_degree));
+        if self.forms.is_empty() {
+            by_degree
+        } else {
+            FormSet(self.forms.0 & by_degree.0)
+        }
+    }
+}
+
+/// A whole planning problem.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    /// Needle mechanics.
+    pub needle: Needle,
+    /// Entry point and posture bounds.
+    pub entry: Entry,
+    /// Target and tolerance.
+    pub target: Target,
+    /// Obstacles (at most [`MAX_OBSTACLES`]).
+    pub obstacles: Obstacles,
+    /// Objective weights.
+    pub weights: Weights,
+    /// Planner options.
+    pub options: PlannerOptions,
+}
+
+fn finite(field: Field, values: &[f32]) -> Result<(), PlanError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(PlanError::NotFinite(field))
+    }
+}
+
+fn positive(field: Field, v: f32) -> Result<(), PlanError> {
+    finite(field, &[v])?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(PlanError::NotPositive(field))
+    }
+}
+
+fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
+    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+}
+
+impl Scenario {
+    /// Checks every number and relation the planner relies on; the first problem found is returned.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let n = &self.needle;
+        positive(Field::CurvatureRadius, n.curvature_radius)?;
+        positive(Field::MaxArc, n.max_arc_deg)?;
+        if n.max_arc_deg > 360.0 {
+            return Err(PlanError::OutOfRange(Field::MaxArc));
+        }
+        finite(Field::MaxLineLength, &[n.max_line_length])?;
+        if n.max_line_length < 0.0 {
+            return Err(PlanError::OutOfRange(Field::MaxLineLength));
+        }
+        let e = &self.entry;
+        finite(Field::EntryPosition, &e.position)?;
+        finite(Field::EntryDirection, &e.direction)?;
+        let dir_len = dist(e.direction, [0.0; 3]);
+        if !(dir_len > 0.0) || !dir_len.is_finite() {
+            return Err(PlanError::ZeroDirection);
+        }
+        finite(Field::MaxTilt, &[e.max_tilt_deg])?;
+        if !(0.0..=89.0).contains(&e.max_tilt_deg) {
+            return Err(PlanError::OutOfRange(Field::MaxTilt));
+        }
+        let t = &self.target;
+        finite(Field::TargetPosition, &t.position)?;
+        positive(Field::TargetTolerance, t.tolerance)?;
+        if dist(e.position, t.position) <= t.tolerance {
+            return Err(PlanError::TargetAtEntry);
+        }
+        let w = &self.weights;
+        finite(Field::Weights, &[w.length, w.risk, w.penalty, w.control])?;
+        if w.length < 0.0 || w.risk < 0.0 || w.penalty < 0.0 || w.control < 0.0 {
+            return Err(PlanError::OutOfRange(Field::Weights));
+        }
+        let o = &self.options;
+        finite(Field::MinClearance, &[o.min_clearance])?;
+        if o.min_clearance < 0.0 {
+            return Err(PlanError::OutOfRange(Field::MinClearance));
+        }
+        if o.max_control_degree == 0 || usize::from(o.max_control_degree) > MAX_CONTROL_DEGREE {
+            return Err(PlanError::ControlDegreeOutOfRange {
+                requested: o.max_control_degree,
+                max: MAX_CONTROL_DEGREE as u8,
+            });
+        }
+        if o.selected_forms().is_empty() {
+            return Err(PlanError::NoForms);
+        }
+        if o.workspace == Workspace::PlaneYz {
+            if e.direction[0] != 0.0 {
+                return Err(PlanError::NotInPlane(Field::EntryDirection));
+            }
+            if t.position[0] != e.position[0] {
+                return Err(PlanError::NotInPlane(Field::TargetPosition));
+            }
+        }
+        for (i, ob) in self.obstacles.iter().enumerate() {
+            let i = i as u16;
+            finite(Field::ObstacleCenter(i), &ob.center)?;
+            positive(Field::ObstacleRadius(i), ob.radius)?;
+            if dist(ob.center, e.position) <= ob.radius {
+                return Err(PlanError::EntryInsideObstacle(i));
+            }
+            if dist(ob.center, t.position) <= ob.radius {
+                return Err(PlanError::TargetInsideObstacle(i));
+            }
+        }
+        Ok(())
+    }
+
+    /// The paper's simulation scenario (as `examples/paper.toml`).
+    pub fn paper() -> Scenario {
+        let mut obstacles = Obstacles::new();
+        for (c, r) in [
+            ([0.0, 30.0, 50.0], 10.0),
+            ([0.0, -5.0, 40.0], 11.0),
+            ([0.0, -40.0, 30.0], 13.0),
+        ] {
+            // Three obstacles always fit in the capacity.
+            let _ = obstacles.push(Obstacle {
+                center: c,
+                radius: r,
+            });
+        }
+        Scenario {
+            needle: Needle {
+                curvature_radius: 63.7,
+                max_arc_deg: 180.0,
+                max_line_length: 0.0,
+            },
+            entry: Entry {
+                position: [0.0; 3],
+                direction: [0.0, 0.0, 1.0],
+                max_tilt_deg: 60.0,
+            },
+            target: Target {
+                position: [0.0, 0.0, 90.0],
+                tolerance: 0.1,
+            },
+            obstacles,
+            weights: Weights::default(),
+            options: PlannerOptions {
+                max_control_degree: 3,
+                workspace: Workspace::PlaneYz,
+                ..PlannerOptions::default()
+            },
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! The independent check every reported plan passes: the path is rebuilt from the *reported*
+//! numbers (insertion angles, segment kinds, lengths and bevel angles), not from the optimiser's
+//! state, and its end point, every clearance and every bound are measured afresh.
+
+use crate::clearance::closest;
+use crate::form::{Form, SegmentKind};
+use crate::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
+use crate::plan::{Insertion, SegmentPlan};
+use crate::scenario::Scenario;
+use crate::MAX_CONTROL_DEGREE;
+
+/// What the check measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Verdict {
+    /// Distance from the rebuilt end point to the target (mm).
+    pub target_error: f32,
+    /// Smallest clearance to any obstacle surface (mm; infinite without obstacles).
+    pub min_clearance: f32,
+    /// Every segment within its length bounds and the posture within the tilt bound.
+    pub within_bounds: bool,
+    /// All three conditions hold: end within tolerance, clearance above the minimum, bounds.
+    pub feasible: bool,
+}
+
+/// Rebuilds the path that `insertion` and `segments` describe.
+pub fn rebuild(
+    scenario: &Scenario,
+    form: Form,
+    insertion: &Insertion,
+    segments: &[SegmentPlan],
+) -> PathGeometry {
+    let e = &scenario.entry;
+    let basis = entry_basis(e.direction);
+    let p0 = V3::new(e.position[0], e.position[1], e.position[2]);
+    let first = insertion_frame(
+        p0,
+        &basis,
+        insertion.theta1_deg.to_radians(),
+        insertion.theta2_deg.to_radians(),
+    );
+    let mut lengths = [0.0; MAX_CONTROL_DEGREE];
+    let mut bevels = [0.0; MAX_CONTROL_DEGREE];
+    for (i, s) in segments.iter().take(MAX_CONTROL_DEGREE).enumerate() {
+        lengths[i] = s.length;
+        bevels[i] = s.bevel_deg.to_radians();
+    }
+    PathGeometry::build(
+        form,
+        first,
+        &lengths,
+        &bevels,
+        scenario.needle.curvature_radius,
+    )
+}
+
+/// Longest line segment allowed (mm).
+pub fn max_line_length(scenario: &Scenario) -> f32 {
+    let n = &scenario.needle;
+    if n.max_line_length > 0.0 {
+        return n.max_line_length;
+    }
+    let (a, b) = (scenario.entry.position, scenario.target.position);
+    let d = V3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    2.0 * libm::sqrtf(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
+}
+
+/// Checks a reported path against the scenario.
+pub fn check(
+    scenario: &Scenario,
+    form: Form,
+    insertion: &Insertion,
+    segments: &[SegmentPlan],
+) -> Verdict {
+    let geo = rebuild(scenario, form, insertion, segments);
+    let t = scenario.target.position;
+    let target = V3::new(t[0], t[1], t[2]);
+    let target_error = (geo.end() - target).norm();
+    let mut min_clearance = f32::INFINITY;
+    for ob in &scenario.obstacles {
+        let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
+        for i in 0..form.len() {
+            let d = closest(&geo.starts[i], form.kind(i), geo.lengths[i], geo.radius, &c);
+            min_clearance = min_clearance.min(d.distance - ob.radius);
+        }
+    }
+    let max_arc = scenario.needle.curvature_radius * scenario.needle.max_arc_deg.to_radians();
+    let max_line = max_line_length(scenario);
+    // Bounds are checked with a relative slack of one part in 10^5 (f32 rounding of the report).
+    let slack = |bound: f32| bound * 1e-5;
+    let lengths_ok = segments.len() == form.len()
+        && segments.iter().enumerate().all(|(i, s)| {
+            let max = match form.kind(i) {
+                SegmentKind::Arc => max_arc,
+                SegmentKind::Line => max_line,
+            };
+            s.kind == form.kind(i)
+                && s.length.is_finite()
+                && s.length >= 0.0
+                && s.length <= max + slack(max)
+        });
+    let basis = entry_basis(scenario.entry.direction);
+    let nominal: V3 = basis.column(2).into();
+    let heading = insertion_frame(
+        V3::zeros(),
+        &basis,
+        insertion.theta1_deg.to_radians(),
+        insertion.theta2_deg.to_radians(),
+    )
+    .e3();
+    let tilt = heading.dot(&nominal);
+    let cos_max = libm::cosf(scenario.entry.max_tilt_deg.to_radians());
+    let tilt_ok = tilt >= cos_max - 1e-6;
+    let within_bounds = lengths_ok && tilt_ok;
+    let clearance_floor = scenario.options.min_clearance.max(0.0);
+    let feasible = target_error.is_finite()
+        && target_error <= scenario.target.tolerance
+        && min_clearance > clearance_floor
+        && within_bounds;
+    Verdict {
+        target_error,
+        min_clearance,
+        within_bounds,
+        feasible,
+    }
+}
+
+/// Calls `visit` with points along `geo` from the entry to the end, no more than `spacing` apart.
+pub fn sample_points(geo: &PathGeometry, spacing: f32, mut visit: impl FnMut(V3)) {
+    visit(geo.starts[0].p);
+    for i in 0..geo.form.len() {
+        let len = geo.lengths[i];
+        let pieces = libm::ceilf(len / spacing).max(1.0) as u32;
+        for k in 1..=pieces {
+            let t = len * k as f32 / pieces as f32;
+            visit(geo.starts[i].point_at(geo.form.kind(i), t, geo.radius));
+        }
+    }
+}
