@@ -10,7 +10,11 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "needle", version, about = "Path planner for bevel-tip steerable needles")]
+#[command(
+    name = "needle",
+    version,
+    about = "Path planner for bevel-tip steerable needles"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -166,7 +166,9 @@ impl ScenarioFile {
         let workspace = match p.plane.as_deref() {
             None => Workspace::Space,
             Some(s) if s.eq_ignore_ascii_case("yz") => Workspace::PlaneYz,
-            Some(other) => bail!("planner.plane = {other:?}: only \"yz\" is supported (or leave it out for 3-D)"),
+            Some(other) => bail!(
+                "planner.plane = {other:?}: only \"yz\" is supported (or leave it out for 3-D)"
+            ),
         };
         let risk = match p.risk.as_deref() {
             None | Some("mean") => RiskMeasure::Mean,
@@ -183,8 +185,14 @@ impl ScenarioFile {
         let weights = Weights {
             length: w.as_ref().and_then(|w| w.length).unwrap_or(defaults.length),
             risk: w.as_ref().and_then(|w| w.risk).unwrap_or(defaults.risk),
-            penalty: w.as_ref().and_then(|w| w.penalty).unwrap_or(defaults.penalty),
-            control: w.as_ref().and_then(|w| w.control).unwrap_or(defaults.control),
+            penalty: w
+                .as_ref()
+                .and_then(|w| w.penalty)
+                .unwrap_or(defaults.penalty),
+            control: w
+                .as_ref()
+                .and_then(|w| w.control)
+                .unwrap_or(defaults.control),
         };
         let scenario = Scenario {
             needle: Needle {

@@ -15,6 +15,7 @@ pub mod kinematics;
 pub mod plan;
 pub mod planner;
 pub mod scenario;
+pub mod service;
 pub mod verify;
 
 pub use error::{Field, PlanError};

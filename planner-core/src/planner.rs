@@ -20,8 +20,8 @@ impl PlanSession {
     pub fn new(scenario: Scenario) -> Result<Self, PlanError> {
         scenario.validate()?;
         Ok(PlanSession {
-            scenario,
             remaining: scenario.options.selected_forms(),
+            scenario,
             outcomes: FormOutcomes::new(),
         })
     }
