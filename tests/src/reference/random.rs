@@ -1,0 +1,1 @@
+//! Seeded random scenarios for the optimality comparison.
