@@ -14,8 +14,13 @@ pub mod form;
 pub mod kinematics;
 pub mod plan;
 pub mod planner;
+pub mod problem;
+pub mod qp;
 pub mod scenario;
+pub mod seeds;
 pub mod service;
+pub mod solve;
+pub mod sqp;
 pub mod verify;
 
 pub use error::{Field, PlanError};
