@@ -41,7 +41,7 @@ impl PlanSession {
     pub fn step(&mut self) -> Option<&FormOutcome> {
         let form = self.remaining.iter().next()?;
         self.remaining.0 &= !(1 << form.index());
-        let outcome = solve_form(&self.scenario, form);
+        let outcome = solve_form(&self.scenario, form, &self.outcomes);
         // Capacity is the catalogue size and each form is planned once.
         self.outcomes.push(outcome).ok()?;
         self.outcomes.last()

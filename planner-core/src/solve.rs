@@ -4,7 +4,7 @@
 //! onto the target and scored; the best distinct ones are refined by the SQP; the best refined
 //! path is re-checked by [`crate::verify`] and reported with the numbers the check measured.
 
-use crate::form::{Form, SegmentKind};
+use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::problem::{Evaluation, Problem, Vars};
@@ -59,8 +59,15 @@ struct Effort {
     evaluations: u32,
 }
 
-/// Scores every seed of one group and refines the shortlist; returns the best local solution.
-fn solve_group(p: &Problem, psi: f32, sides: u8, effort: &mut Effort) -> Option<LocalSolution> {
+/// Scores every seed of one group and refines the shortlist and the `extra` starts; returns the
+/// best local solution.
+fn solve_group(
+    p: &Problem,
+    psi: f32,
+    sides: u8,
+    extra: &[Vars],
+    effort: &mut Effort,
+) -> Option<LocalSolution> {
     let mut list = Shortlist::new();
     let arc_sides = if p.plane {
         1
@@ -86,7 +93,7 @@ fn solve_group(p: &Problem, psi: f32, sides: u8, effort: &mut Effort) -> Option<
         }
     }
     let mut best: Option<LocalSolution> = None;
-    for (_, x) in list.items.iter() {
+    for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
         if let Some(sol) = sqp::solve(p, x) {
             effort.iterations += sol.iterations;
             effort.evaluations += sol.evaluations;
@@ -101,21 +108,100 @@ fn solve_group(p: &Problem, psi: f32, sides: u8, effort: &mut Effort) -> Option<
     best
 }
 
-/// Plans one form of `scenario`.
-pub fn solve_form(scenario: &Scenario, form: Form) -> FormOutcome {
+/// Starts for `form` made from the best paths of the forms one segment shorter: the missing
+/// segment is inserted with zero length, so a form never reports a worse path than a sub-form
+/// it contains. Each start comes with its plane-mode side assignment.
+fn extension_starts(
+    scenario: &Scenario,
+    form: Form,
+    previous: &[FormOutcome],
+) -> heapless::Vec<(u8, Vars), EXTENSIONS> {
+    let mut out = heapless::Vec::new();
+    for o in previous
+        .iter()
+        .filter(|o| o.feasible && o.form.len() + 1 == form.len())
+    {
+        for gap in 0..form.len() {
+            let shorter = (0..form.len()).filter(|&i| i != gap).map(|i| form.kind(i));
+            if !shorter.eq((0..o.form.len()).map(|i| o.form.kind(i))) {
+                continue;
+            }
+            let mut lengths = [0.0; MAX_CONTROL_DEGREE];
+            let mut bevels = [0.0; MAX_CONTROL_DEGREE];
+            for (k, i) in (0..form.len()).filter(|&i| i != gap).enumerate() {
+                lengths[i] = o.segments[k].length;
+                bevels[i] = o.segments[k].bevel_deg.to_radians();
+            }
+            let mut sides = 0u8;
+            let mut facing_negative = false;
+            let mut arc = 0;
+            for i in 0..form.len() {
+                if form.kind(i) == SegmentKind::Arc {
+                    if libm::fabsf(bevels[i]) > 1.0 {
+                        facing_negative = !facing_negative;
+                    }
+                    if facing_negative {
+                        sides |= 1 << arc;
+                    }
+                    arc += 1;
+                }
+            }
+            let p = Problem::new(scenario, form, sides);
+            let mut x = [0.0; crate::problem::MAX_VARS];
+            x[0] = o.insertion.theta1_deg.to_radians();
+            if !p.plane {
+                x[1] = o.insertion.theta2_deg.to_radians();
+            }
+            for i in 0..form.len() {
+                x[p.length_var(i)] = lengths[i] / p.radius;
+                if let Some(k) = p.bevel_var(i) {
+                    x[k] = bevels[i];
+                }
+            }
+            if out.push((sides, x)).is_err() {
+                return out;
+            }
+        }
+    }
+    out
+}
+
+/// Extension starts kept per form (forms one shorter times insertion places).
+const EXTENSIONS: usize = 16;
+
+/// Plans one form of `scenario`; `previous` holds the outcomes of forms already planned.
+pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> FormOutcome {
     let mut effort = Effort::default();
     let mut best: Option<(Problem, LocalSolution)> = None;
+    let extensions = extension_starts(scenario, form, previous);
+    let mut extra: heapless::Vec<Vars, EXTENSIONS> = heapless::Vec::new();
     if scenario.options.workspace == Workspace::PlaneYz {
         for sides in 0..(1u16 << form.arc_count()) {
             let p = Problem::new(scenario, form, sides as u8);
-            let sol = solve_group(&p, 0.0, sides as u8, &mut effort);
+            extra.clear();
+            for (s, x) in extensions.iter() {
+                if u16::from(*s) == sides {
+                    // Same capacity as `extensions`.
+                    let _ = extra.push(*x);
+                }
+            }
+            let sol = solve_group(&p, 0.0, sides as u8, &extra, &mut effort);
             consider(p, sol, &mut best);
         }
     } else {
         for k in 0..SPACE_PLANES {
             let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
             let p = Problem::new(scenario, form, 0);
-            let sol = solve_group(&p, psi, 0, &mut effort);
+            let sol = solve_group(&p, psi, 0, &[], &mut effort);
+            consider(p, sol, &mut best);
+        }
+        for (_, x) in extensions.iter() {
+            let p = Problem::new(scenario, form, 0);
+            let sol = sqp::solve(&p, x);
+            if let Some(s) = &sol {
+                effort.iterations += s.iterations;
+                effort.evaluations += s.evaluations;
+            }
             consider(p, sol, &mut best);
         }
     }
