@@ -385,3 +385,114 @@ impl<'a> Problem<'a> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{Obstacle, Workspace};
+
+    fn space_scenario() -> Scenario {
+        let mut s = Scenario::paper();
+        s.options.workspace = Workspace::Space;
+        s.target.position = [12.0, 8.0, 85.0];
+        s.obstacles.clear();
+        for (c, r) in [
+            ([6.0, 4.0, 42.0], 9.0),
+            ([-10.0, 14.0, 58.0], 8.0),
+            ([22.0, -6.0, 62.0], 7.0),
+        ] {
+            s.obstacles
+                .push(Obstacle {
+                    center: c,
+                    radius: r,
+                })
+                .unwrap();
+        }
+        s
+    }
+
+    /// Central differences in f32 agree with the analytic derivatives to a few parts in 10^3.
+    fn check_gradients(p: &Problem, x: &Vars) -> usize {
+        let mut objective_checks = 0;
+        let e = p.evaluate(x);
+        let h = 1e-3f32;
+        for k in 0..p.n {
+            let mut xp = *x;
+            let mut xm = *x;
+            xp[k] += h;
+            xm[k] -= h;
+            let (ep, em) = (p.evaluate(&xp), p.evaluate(&xm));
+            for r in 0..p.m_eq {
+                let fd = (ep.residual[r] - em.residual[r]) / (2.0 * h);
+                assert!(
+                    (fd - e.jac[r][k]).abs() < 2e-2 * (1.0 + fd.abs()),
+                    "jac[{r}][{k}] {fd} vs {}",
+                    e.jac[r][k]
+                );
+            }
+            for o in 0..p.scenario.obstacles.len() {
+                let fd = (ep.clearance[o] - em.clearance[o]) / (2.0 * h);
+                let an = e.clearance_grad[o][k];
+                assert!(
+                    (fd - an).abs() < 2e-2 * (1.0 + fd.abs()),
+                    "clearance {o} var {k}: {fd} vs {an}"
+                );
+            }
+            // The objective is only defined away from the obstacles.
+            if [e.risk, ep.risk, em.risk].iter().all(|r| r.is_finite()) {
+                let fd = (ep.objective - em.objective) / (2.0 * h);
+                assert!(
+                    (fd - e.grad[k]).abs() < 3e-2 * (1.0 + fd.abs()),
+                    "objective var {k}: {fd} vs {}",
+                    e.grad[k]
+                );
+                objective_checks += 1;
+            }
+        }
+        objective_checks
+    }
+
+    #[test]
+    fn analytic_derivatives_match_finite_differences_in_space() {
+        let s = space_scenario();
+        let mut objective_checks = 0;
+        for word in ["RL", "LRL", "RRR", "RLR"] {
+            let form = Form::parse(word).unwrap();
+            let p = Problem::new(&s, form, 0);
+            let mut x = [0.0; MAX_VARS];
+            x[0] = 0.2;
+            x[1] = -0.15;
+            for i in 0..form.len() {
+                x[p.length_var(i)] = 0.45 + 0.1 * i as f32;
+                if let Some(k) = p.bevel_var(i) {
+                    x[k] = 0.7 - 0.9 * i as f32;
+                }
+            }
+            objective_checks += check_gradients(&p, &x);
+        }
+        assert!(objective_checks > 0);
+    }
+
+    #[test]
+    fn analytic_derivatives_match_finite_differences_in_plane() {
+        let s = Scenario::paper();
+        let mut objective_checks = 0;
+        let cases = [
+            ("RL", 1, [-0.3, 0.5, 0.55, 0.0]),
+            ("LRL", 0, [-0.3, 0.5, 0.55, 0.6]),
+            ("RRR", 0b101, [-0.3, 0.5, 0.55, 0.6]),
+            ("LRR", 0b10, [-0.3, 0.5, 0.55, 0.6]),
+            // Near the paper's best RL: clear of every obstacle.
+            ("RL", 1, [0.5, 0.64, 0.8, 0.0]),
+            ("RL", 1, [-0.5, 0.64, 0.8, 0.0]),
+        ];
+        for (word, sides, v) in cases {
+            let form = Form::parse(word).unwrap();
+            let p = Problem::new(&s, form, sides);
+            let mut x = [0.0; MAX_VARS];
+            x[..4].copy_from_slice(&v);
+            objective_checks += check_gradients(&p, &x);
+        }
+        assert!(objective_checks > 0);
+    }
+}
