@@ -5,7 +5,7 @@ use core::f64::consts::TAU;
 
 /// Distance from `c` to the line segment of length `len` leaving `f` along its heading.
 pub fn to_line(f: &Frame, len: f64, c: V3) -> f64 {
-    let t = (c - f.p).dot(f.e3).clamp(0.0, len);
+    let t = (c - f.p).dot(f.e3).clamp(0.0, len.max(0.0));
     (f.p + f.e3 * t - c).norm()
 }
 

@@ -6,6 +6,7 @@
 //! mode) or sampled densely at random (3-D), and the best distinct starts are polished with
 //! Nelder-Mead. See `docs/optimality.md`.
 
+pub mod compare;
 pub mod complete;
 pub mod distance;
 pub mod frame;
@@ -97,7 +98,12 @@ fn expand(c: &Cand) -> Cand {
 
 /// The global optimum of `form` for `scenario`, or `None` when no feasible path was found.
 pub fn solve_form(scenario: &Scenario, form: Form, effort: Effort) -> Option<RefSolution> {
-    let pb = Problem::new(scenario);
+    solve_problem(&Problem::new(scenario), form, effort)
+}
+
+/// The global optimum of `form` for a problem (e.g. a scenario with its target moved).
+pub fn solve_problem(pb: &Problem, form: Form, effort: Effort) -> Option<RefSolution> {
+    let pb = pb.clone();
     let mut best: Option<search::Found> = None;
     let mut evaluations = 0;
     for (i, v) in variant::variants(&pb, &kinds(form)).iter().enumerate() {
