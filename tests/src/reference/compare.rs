@@ -224,3 +224,78 @@ pub fn describe_scenario(s: &Scenario) -> String {
     }
     t
 }
+
+/// Totals over many scenarios.
+#[derive(Clone, Debug, Default)]
+pub struct Summary {
+    /// Scenarios compared.
+    pub scenarios: usize,
+    /// Forms compared.
+    pub forms: usize,
+    /// Forms the reference found feasible.
+    pub feasible: usize,
+    /// Forms where the planner is worse than the reference by more than 0.01 (within tolerance).
+    pub near_misses: usize,
+    /// Largest F(planner) - F(reference) over forms both solved without a mismatch.
+    pub worst_gap: f64,
+    /// Full text of every disagreement.
+    pub mismatches: Vec<String>,
+}
+
+impl core::fmt::Display for Summary {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{} scenarios, {} forms ({} feasible): {} mismatches, {} near misses (gap > 0.01), \
+             worst tolerated gap {:.4}",
+            self.scenarios,
+            self.forms,
+            self.feasible,
+            self.mismatches.len(),
+            self.near_misses,
+            self.worst_gap
+        )
+    }
+}
+
+/// Compares every named scenario, printing each disagreement and near miss as it goes.
+pub fn run_suite(
+    scenarios: impl IntoIterator<Item = (String, Scenario)>,
+    effort: super::Effort,
+    ask: Ask,
+) -> Summary {
+    let mut sum = Summary::default();
+    for (name, s) in scenarios {
+        let rep = compare_scenario(&s, effort, ask);
+        sum.scenarios += 1;
+        for (o, r, c) in &rep.forms {
+            sum.forms += 1;
+            sum.feasible += usize::from(r.is_some());
+            let gap = r
+                .as_ref()
+                .filter(|_| o.feasible)
+                .map(|r| f64::from(o.objective) - r.objective);
+            let text = format!(
+                "--- {name}, form {}, {ask:?}: {}\n{}\n{}",
+                o.form,
+                c.mismatch
+                    .as_ref()
+                    .map_or("near miss".to_string(), |m| format!("{m:?}")),
+                describe_scenario(&s),
+                c.detail
+            );
+            if c.mismatch.is_some() {
+                println!("{text}");
+                sum.mismatches.push(text);
+            } else if let Some(g) = gap {
+                sum.worst_gap = sum.worst_gap.max(g);
+                if g > 0.01 {
+                    sum.near_misses += 1;
+                    println!("{text}");
+                }
+            }
+        }
+    }
+    println!("{sum}");
+    sum
+}
