@@ -266,8 +266,13 @@ fn risk_of(pb: &Problem, clearances: &[f64]) -> f64 {
     }
 }
 
-/// F of a candidate built to end exactly on the target, or infinity when it is infeasible
-/// (out of bounds, off the target, or too close to an obstacle). Stops at the first collision.
+/// Merit values at or above this mark infeasible candidates (see [`score`]).
+pub const INFEASIBLE: f64 = 1e6;
+
+/// F of a candidate built to end exactly on the target when it is feasible. An infeasible one
+/// that is in bounds and on target scores `INFEASIBLE` plus how deep it reaches into obstacles,
+/// so a local search started next to a thin feasible region slides into it; out of bounds or
+/// off the target scores infinity.
 pub fn score(pb: &Problem, c: &Cand, control: usize) -> f64 {
     if !bounds_ok(pb, c) {
         return f64::INFINITY;
@@ -277,15 +282,20 @@ pub fn score(pb: &Problem, c: &Cand, control: usize) -> f64 {
         return f64::INFINITY;
     }
     let mut sum = 0.0;
+    let mut violation = 0.0;
     for &(centre, radius) in &pb.obstacles {
         let mut d = f64::INFINITY;
         for (i, s) in c.segs().iter().enumerate() {
             d = d.min(seg_distance(pb, &frames[i], s, centre) - radius);
-            if d <= pb.min_clearance {
-                return f64::INFINITY;
-            }
         }
-        sum += 1.0 / d;
+        if d <= pb.min_clearance {
+            violation += pb.min_clearance - d + 1e-9;
+        } else {
+            sum += 1.0 / d;
+        }
+    }
+    if violation > 0.0 {
+        return INFEASIBLE + violation;
     }
     let risk = if pb.risk_sum || pb.obstacles.is_empty() {
         sum

@@ -2,7 +2,7 @@
 //! samples (3-D), then Nelder-Mead from the best distinct starts. The end stays exactly on the
 //! target throughout because the last two segments are solved in closed form.
 
-use super::problem::{score, Cand, Problem};
+use super::problem::{score, Cand, Problem, INFEASIBLE};
 use super::rng::Rng;
 use super::variant::{Var, Variant};
 use core::f64::consts::PI;
@@ -83,7 +83,7 @@ impl Objective<'_> {
             if f < best {
                 best = f;
             }
-            if f < self.best.map_or(f64::INFINITY, |b| b.objective) {
+            if f < INFEASIBLE && f < self.best.map_or(f64::INFINITY, |b| b.objective) {
                 self.best = Some(Found {
                     objective: f,
                     cand: *c,
@@ -231,9 +231,7 @@ pub fn search(pb: &Problem, variant: &Variant, effort: Effort, seed: u64) -> (Op
             .iter()
             .map(|(lo, hi)| (hi - lo) / per_dim as f64)
             .collect();
-        let total = per_dim.pow(dim as u32 + 0) + 0;
         let count = (per_dim + 1).pow(dim as u32);
-        let _ = total;
         for k in 0..count {
             let mut r = k;
             let mut x = vec![0.0; dim];
@@ -264,23 +262,41 @@ pub fn search(pb: &Problem, variant: &Variant, effort: Effort, seed: u64) -> (Op
     }
     samples.retain(|s| s.1.is_finite());
     samples.sort_by(|a, b| a.1.total_cmp(&b.1));
-    // Distinct starts: skip a sample within two steps of a chosen one in every parameter.
+    // Distinct starts: the best feasible samples, then the least infeasible ones (a thin
+    // feasible region between samples shows as a shallow violation there).
     let starts = (12.0 * effort.0.max(1.0)) as usize;
     let mut chosen: Vec<Vec<f64>> = Vec::new();
-    for (x, _) in &samples {
-        if chosen.len() >= starts {
-            break;
+    let pick = |want_feasible: bool, limit: usize, chosen: &mut Vec<Vec<f64>>| {
+        let mut taken = 0;
+        for (x, f) in &samples {
+            if taken >= limit {
+                break;
+            }
+            if (*f < INFEASIBLE) != want_feasible {
+                continue;
+            }
+            let near = chosen.iter().any(|c| {
+                c.iter()
+                    .zip(x)
+                    .zip(&step)
+                    .zip(&vars)
+                    .all(|(((a, b), s), v)| {
+                        let d = if *v == Var::Roll {
+                            super::frame::wrap(a - b)
+                        } else {
+                            a - b
+                        };
+                        d.abs() <= 2.0 * s
+                    })
+            });
+            if !near {
+                chosen.push(x.clone());
+                taken += 1;
+            }
         }
-        let near = chosen.iter().any(|c| {
-            c.iter()
-                .zip(x)
-                .zip(&step)
-                .all(|((a, b), s)| (a - b).abs() <= 2.0 * s)
-        });
-        if !near {
-            chosen.push(x.clone());
-        }
-    }
+    };
+    pick(true, starts, &mut chosen);
+    pick(false, starts / 2, &mut chosen);
     for x in chosen {
         polish(&mut obj, &x, &step);
     }
