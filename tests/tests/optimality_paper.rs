@@ -28,7 +28,11 @@ fn every_form_planned_alone_is_globally_optimal() {
 fn paper_scenario_in_space_is_globally_optimal() {
     let mut s = Scenario::paper();
     s.options.workspace = Workspace::Space;
-    let sum = run_suite(vec![("paper in space".into(), s)], Effort(1.0), Ask::AllForms);
+    let sum = run_suite(
+        vec![("paper in space".into(), s)],
+        Effort(1.0),
+        Ask::AllForms,
+    );
     assert!(sum.mismatches.is_empty(), "{}", sum.mismatches.join("\n"));
 }
 

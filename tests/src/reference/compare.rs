@@ -46,7 +46,12 @@ fn describe(outcome: &FormOutcome) -> String {
         outcome.insertion.theta2_deg
     );
     for seg in &outcome.segments {
-        s += &format!(" {}:{:.4}@{:.2}", seg.kind.letter(), seg.length, seg.bevel_deg);
+        s += &format!(
+            " {}:{:.4}@{:.2}",
+            seg.kind.letter(),
+            seg.length,
+            seg.bevel_deg
+        );
     }
     s + " ]"
 }
@@ -84,8 +89,8 @@ pub fn compare(
             (true, Some(r)) => {
                 let f = f64::from(outcome.objective);
                 // The planner may end up to its tolerance short of the target: allow that length.
-                let slack = tolerance(r.objective)
-                    + f64::from(scenario.weights.length) * ev.target_error;
+                let slack =
+                    tolerance(r.objective) + f64::from(scenario.weights.length) * ev.target_error;
                 if f > r.objective + tolerance(r.objective) {
                     Some(Mismatch::PlannerSuboptimal)
                 } else if f < r.objective - slack {
@@ -97,7 +102,9 @@ pub fn compare(
                     let again = super::solve_problem(&moved, outcome.form, super::Effort(1.0));
                     detail += &format!(
                         "\nreference for the planner's end point: {}",
-                        again.as_ref().map_or("infeasible".into(), |a| a.to_string())
+                        again
+                            .as_ref()
+                            .map_or("infeasible".into(), |a| a.to_string())
                     );
                     match again {
                         Some(a) if f >= a.objective - tolerance(a.objective) => None,
@@ -124,7 +131,9 @@ pub struct ScenarioReport {
 
 impl ScenarioReport {
     /// The forms that disagree.
-    pub fn mismatches(&self) -> impl Iterator<Item = &(FormOutcome, Option<RefSolution>, Comparison)> {
+    pub fn mismatches(
+        &self,
+    ) -> impl Iterator<Item = &(FormOutcome, Option<RefSolution>, Comparison)> {
         self.forms.iter().filter(|f| f.2.mismatch.is_some())
     }
 }
@@ -140,13 +149,24 @@ pub enum Ask {
 
 /// Plans `scenario` with the planner and with the reference, and compares every selected form.
 pub fn compare_scenario(scenario: &Scenario, effort: super::Effort, ask: Ask) -> ScenarioReport {
-    let mut plan_error = None;
     let selected: Vec<planner_core::Form> = scenario.options.selected_forms().iter().collect();
+    compare_forms(scenario, &selected, effort, ask)
+}
+
+/// Like [`compare_scenario`] for the listed forms only (the planner still plans every selected
+/// form when asked [`Ask::AllForms`]).
+pub fn compare_forms(
+    scenario: &Scenario,
+    selected: &[planner_core::Form],
+    effort: super::Effort,
+    ask: Ask,
+) -> ScenarioReport {
+    let mut plan_error = None;
     let mut outcomes: Vec<Option<FormOutcome>> = Vec::new();
     match ask {
         Ask::AllForms => match planner_core::plan(scenario) {
             Ok(report) => {
-                for f in &selected {
+                for f in selected {
                     outcomes.push(report.forms.iter().find(|o| o.form == *f).cloned());
                 }
             }
@@ -156,12 +176,14 @@ pub fn compare_scenario(scenario: &Scenario, effort: super::Effort, ask: Ask) ->
             }
         },
         Ask::EachForm => {
-            for f in &selected {
+            for f in selected {
                 let mut one = scenario.clone();
                 one.options.forms = planner_core::FormSet::default();
                 one.options.forms.insert(*f);
                 match planner_core::plan(&one) {
-                    Ok(report) => outcomes.push(report.forms.iter().find(|o| o.form == *f).cloned()),
+                    Ok(report) => {
+                        outcomes.push(report.forms.iter().find(|o| o.form == *f).cloned())
+                    }
                     Err(e) => {
                         plan_error = Some(e);
                         outcomes.push(None);
@@ -171,7 +193,7 @@ pub fn compare_scenario(scenario: &Scenario, effort: super::Effort, ask: Ask) ->
         }
     }
     let mut forms = Vec::new();
-    for (form, outcome) in selected.into_iter().zip(outcomes) {
+    for (&form, outcome) in selected.iter().zip(outcomes) {
         let reference = super::solve_form(scenario, form, effort);
         let outcome = outcome.unwrap_or_else(|| infeasible_outcome(form));
         let cmp = compare(scenario, &outcome, reference.as_ref());
@@ -240,6 +262,8 @@ pub struct Summary {
     pub worst_gap: f64,
     /// Full text of every disagreement.
     pub mismatches: Vec<String>,
+    /// Scenarios whose overall best ("player killing") is worse than the reference's best.
+    pub best_worse: usize,
 }
 
 impl core::fmt::Display for Summary {
@@ -247,13 +271,14 @@ impl core::fmt::Display for Summary {
         write!(
             f,
             "{} scenarios, {} forms ({} feasible): {} mismatches, {} near misses (gap > 0.01), \
-             worst tolerated gap {:.4}",
+             worst tolerated gap {:.4}; overall best worse than the reference's in {} scenarios",
             self.scenarios,
             self.forms,
             self.feasible,
             self.mismatches.len(),
             self.near_misses,
-            self.worst_gap
+            self.worst_gap,
+            self.best_worse
         )
     }
 }
@@ -268,6 +293,21 @@ pub fn run_suite(
     for (name, s) in scenarios {
         let rep = compare_scenario(&s, effort, ask);
         sum.scenarios += 1;
+        let planner_best = rep
+            .forms
+            .iter()
+            .filter(|f| f.0.feasible)
+            .map(|f| f64::from(f.0.objective))
+            .fold(f64::INFINITY, f64::min);
+        let ref_best = rep
+            .forms
+            .iter()
+            .filter_map(|f| f.1.as_ref().map(|r| r.objective))
+            .fold(f64::INFINITY, f64::min);
+        if ref_best.is_finite() && planner_best > ref_best + tolerance(ref_best) {
+            sum.best_worse += 1;
+            println!("*** {name}: overall best F {planner_best:.4} (planner) vs {ref_best:.4} (reference)");
+        }
         for (o, r, c) in &rep.forms {
             sum.forms += 1;
             sum.feasible += usize::from(r.is_some());

@@ -200,7 +200,10 @@ pub fn single_arc(pb: &Problem, omega: f64, pieces: u8, out: &mut Vec<Cand>) {
     let v = c.cross(u);
     let alpha = (dist / (2.0 * rho)).min(1.0).asin();
     let around = u * omega.cos() + v * omega.sin();
-    for (cos_a, turn) in [(alpha.cos(), 2.0 * alpha), (-alpha.cos(), TAU - 2.0 * alpha)] {
+    for (cos_a, turn) in [
+        (alpha.cos(), 2.0 * alpha),
+        (-alpha.cos(), TAU - 2.0 * alpha),
+    ] {
         let h = c * cos_a + around * alpha.sin();
         let (t1, t2) = super::frame::heading_angles(&pb.basis, h.unit());
         let t2 = if pb.plane { 0.0 } else { t2 };

@@ -70,9 +70,15 @@ mod tests {
             // Sampling only overestimates, by at most half a step.
             let step = len / f64::from(n);
             let a = to_arc(&f, len, rho, c);
-            assert!(a <= arc_min + 1e-9 && a >= arc_min - step, "arc {a} vs {arc_min}");
+            assert!(
+                a <= arc_min + 1e-9 && a >= arc_min - step,
+                "arc {a} vs {arc_min}"
+            );
             let l = to_line(&f, len, c);
-            assert!(l <= line_min + 1e-9 && l >= line_min - step, "line {l} vs {line_min}");
+            assert!(
+                l <= line_min + 1e-9 && l >= line_min - step,
+                "line {l} vs {line_min}"
+            );
         }
     }
 }

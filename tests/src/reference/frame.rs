@@ -157,10 +157,7 @@ pub fn insertion(p: V3, b: &[V3; 3], theta1: f64, theta2: f64) -> Frame {
 /// In basis coordinates the heading is (sin t2, -cos t2 sin t1, cos t2 cos t1).
 pub fn heading_angles(b: &[V3; 3], h: V3) -> (f64, f64) {
     let (h1, h2, h3) = (h.dot(b[0]), h.dot(b[1]), h.dot(b[2]));
-    (
-        (-h2).atan2(h3),
-        h1.clamp(-1.0, 1.0).asin(),
-    )
+    ((-h2).atan2(h3), h1.clamp(-1.0, 1.0).asin())
 }
 
 /// Wraps an angle into (-pi, pi].

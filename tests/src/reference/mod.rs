@@ -175,7 +175,10 @@ pub fn evaluate_solution(scenario: &Scenario, sol: &RefSolution) -> Evaluation {
 
 /// Whether an evaluation is feasible for `scenario` (end within its tolerance).
 pub fn is_feasible(scenario: &Scenario, ev: &Evaluation) -> bool {
-    ev.feasible(&Problem::new(scenario), f64::from(scenario.target.tolerance))
+    ev.feasible(
+        &Problem::new(scenario),
+        f64::from(scenario.target.tolerance),
+    )
 }
 
 #[cfg(test)]

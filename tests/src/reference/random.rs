@@ -47,7 +47,9 @@ pub fn random_scenario(seed: u64, plane: bool) -> Scenario {
             t * tz + rng.range(-10.0, 10.0),
         ];
         let far = |p: [f32; 3]| {
-            let d = (0..3).map(|i| (c[i] - f64::from(p[i])).powi(2)).sum::<f64>();
+            let d = (0..3)
+                .map(|i| (c[i] - f64::from(p[i])).powi(2))
+                .sum::<f64>();
             d.sqrt() > r + MARGIN
         };
         if far(s.entry.position) && far(s.target.position) {

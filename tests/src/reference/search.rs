@@ -126,7 +126,9 @@ fn nelder_mead(obj: &mut Objective, x0: &[f64], step: &[f64], iters: usize) -> (
                     .fold(0.0, f64::max)
             })
             .fold(0.0, f64::max);
-        if fbest.is_finite() && (fworst - fbest).abs() <= 1e-12 * (1.0 + fbest.abs()) && size < 1e-10
+        if fbest.is_finite()
+            && (fworst - fbest).abs() <= 1e-12 * (1.0 + fbest.abs())
+            && size < 1e-10
         {
             break;
         }
@@ -163,7 +165,11 @@ fn nelder_mead(obj: &mut Objective, x0: &[f64], step: &[f64], iters: usize) -> (
             } else {
                 let x0 = simplex[0].0.clone();
                 for v in simplex.iter_mut().skip(1) {
-                    let x: Vec<f64> = x0.iter().zip(&v.0).map(|(b, w)| b + delta * (w - b)).collect();
+                    let x: Vec<f64> = x0
+                        .iter()
+                        .zip(&v.0)
+                        .map(|(b, w)| b + delta * (w - b))
+                        .collect();
                     let f = obj.value(&x);
                     *v = (x, f);
                 }

@@ -32,12 +32,20 @@ fn single_arc_has_the_closed_form_length() {
                 Workspace::Space
             };
             let x = if plane { 0.0 } else { rng.range(-20.0, 20.0) };
-            s.target.position = [x as f32, rng.range(-30.0, 30.0) as f32, rng.range(40.0, 110.0) as f32];
+            s.target.position = [
+                x as f32,
+                rng.range(-30.0, 30.0) as f32,
+                rng.range(40.0, 110.0) as f32,
+            ];
             let t = V3::from_f32(s.target.position).norm();
             let rho = f64::from(s.needle.curvature_radius);
             let expect = rho * 2.0 * (t / (2.0 * rho)).asin();
             let sol = solve(&s, "R").expect("an arc reaches the target");
-            assert!((sol.length - expect).abs() < 1e-6, "{} vs {expect}", sol.length);
+            assert!(
+                (sol.length - expect).abs() < 1e-6,
+                "{} vs {expect}",
+                sol.length
+            );
             // No obstacles: F = L + 2 N.
             assert!((sol.objective - expect - 2.0).abs() < 1e-6);
         }
@@ -82,8 +90,16 @@ fn reproduces_the_papers_figures() {
         .min_by(|a, b| a.objective.total_cmp(&b.objective))
         .unwrap();
     assert_eq!(overall.form, form("RL"));
-    assert!((r.length - rl.length - 8.11).abs() <= 0.05, "{}", r.length - rl.length);
-    assert!((rl.length - lrl.length - 0.66).abs() <= 0.05, "{}", rl.length - lrl.length);
+    assert!(
+        (r.length - rl.length - 8.11).abs() <= 0.05,
+        "{}",
+        r.length - rl.length
+    );
+    assert!(
+        (rl.length - lrl.length - 0.66).abs() <= 0.05,
+        "{}",
+        rl.length - lrl.length
+    );
 }
 
 fn as_plans(sol: &RefSolution) -> (Insertion, Vec<SegmentPlan>) {
@@ -120,7 +136,11 @@ fn solutions_are_consistent_with_planner_core_conventions() {
                 continue;
             };
             let ev = evaluate_solution(s, &sol);
-            assert!(ev.target_error < 1e-6, "{sol}: end error {}", ev.target_error);
+            assert!(
+                ev.target_error < 1e-6,
+                "{sol}: end error {}",
+                ev.target_error
+            );
             assert!((ev.objective - sol.objective).abs() < 1e-9);
             assert!(is_feasible(s, &ev));
             if s.options.workspace == Workspace::PlaneYz {
@@ -132,7 +152,11 @@ fn solutions_are_consistent_with_planner_core_conventions() {
             }
             let (ins, segs) = as_plans(&sol);
             let v = check(s, f, &ins, &segs);
-            assert!(v.target_error < 1e-3, "{sol}: planner-core sees end error {}", v.target_error);
+            assert!(
+                v.target_error < 1e-3,
+                "{sol}: planner-core sees end error {}",
+                v.target_error
+            );
             assert!(
                 (f64::from(v.min_clearance) - sol.min_clearance).abs() < 1e-3,
                 "{sol}: planner-core sees clearance {}",
@@ -151,7 +175,10 @@ fn space_optimum_is_no_worse_than_the_plane_optimum() {
     for w in ["R", "RL", "LR", "RR", "LRL"] {
         let p = solve(&plane, w).unwrap();
         let s = solve(&space, w).unwrap();
-        assert!(s.objective <= p.objective + 1e-6, "{w}: space {s} plane {p}");
+        assert!(
+            s.objective <= p.objective + 1e-6,
+            "{w}: space {s} plane {p}"
+        );
     }
 }
 
@@ -181,7 +208,11 @@ fn completions_end_on_the_target() {
     for i in 0..3000 {
         pb.plane = i % 2 == 0;
         pb.target = V3::new(
-            if pb.plane { 0.0 } else { rng.range(-60.0, 60.0) },
+            if pb.plane {
+                0.0
+            } else {
+                rng.range(-60.0, 60.0)
+            },
             rng.range(-80.0, 80.0),
             rng.range(-20.0, 150.0),
         );
@@ -190,7 +221,11 @@ fn completions_end_on_the_target() {
         let base = Cand::new(t1, t2);
         let f = pb.first_frame(t1, t2);
         let roll = if pb.plane {
-            if rng.unit() < 0.5 { 0.0 } else { core::f64::consts::PI }
+            if rng.unit() < 0.5 {
+                0.0
+            } else {
+                core::f64::consts::PI
+            }
         } else {
             rng.range(-3.2, 3.2)
         };
