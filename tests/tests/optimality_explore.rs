@@ -1,3 +1,6 @@
+//! A debugging aid: the reference optimum of one form of one random scenario, with timing.
+//! `SEED=3 FORM=RL [SPACE=1] [EFFORT=4] cargo test -p needle-e2e --test optimality_explore -- --ignored --nocapture`
+
 use needle_e2e::reference::random::random_scenario;
 use needle_e2e::reference::{solve_form, Effort};
 use planner_core::Form;
