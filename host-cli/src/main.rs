@@ -99,7 +99,10 @@ fn bench(args: &BenchArgs) -> Result<()> {
     let mut out = Vec::new();
     for f in &files {
         let scenario = load_scenario(f)?;
-        let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let r = needle_cli::bench::run(&scenario, 3, args.runs)?;
         if args.json {
             out.push(needle_cli::bench::to_json(&name, &r));
