@@ -242,6 +242,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             }
         }
         let Ok(sol) = qp.solve() else {
+            // Only a degenerate working set gets here; the iterate is still feasible.
             status = SolveStatus::BudgetExhausted;
             break;
         };
