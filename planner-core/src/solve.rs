@@ -282,6 +282,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
         target_error: verdict.target_error,
         insertion,
         segments,
+        kkt_residual: sol.step_norm,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
@@ -300,6 +301,7 @@ fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
         target_error: f32::NAN,
         insertion: Insertion::default(),
         segments: Segments::new(),
+        kkt_residual: f32::NAN,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
