@@ -305,6 +305,13 @@ impl<'a> Problem<'a> {
 
     /// Objective and clearances at `x`.
     pub fn value(&self, x: &Vars) -> Value {
+        self.value_or_blocked(x, false)
+    }
+
+    /// Like [`Problem::value`], but with `stop_when_blocked` the scan of the obstacles stops at the
+    /// first one the path touches (the value is then inadmissible and only `min_clearance` is
+    /// meaningful): a sweep over many seeds needs no more.
+    pub fn value_or_blocked(&self, x: &Vars, stop_when_blocked: bool) -> Value {
         let geo = self.geometry(x);
         let w = &self.scenario.weights;
         let obstacles = &self.scenario.obstacles;
@@ -332,10 +339,13 @@ impl<'a> Problem<'a> {
             let d = best - ob.radius;
             clearance[o] = d;
             min_clearance = min_clearance.min(d);
-            if d > 0.0 {
+            if d > self.min_clearance {
                 inv_sum += 1.0 / d;
             } else {
                 blocked = true;
+                if stop_when_blocked {
+                    break;
+                }
             }
         }
         let risk = if blocked {

@@ -9,14 +9,14 @@ use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::problem::{Problem, Value, Vars};
 use crate::scenario::{Scenario, Workspace};
-use crate::seeds::{seed, splits, HEADINGS};
-use crate::sqp::{self, restore, LocalSolution};
+use crate::seeds::sweep;
+use crate::sqp::{self, LocalSolution};
 use crate::verify::check;
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
 /// Distinct seeds refined per side assignment (plane) or per seed plane (3-D).
-pub const REFINED_PER_GROUP: usize = 3;
+pub const REFINED_PER_GROUP: usize = 4;
 
 /// The best few admissible seeds, kept distinct.
 struct Shortlist {
@@ -30,8 +30,19 @@ impl Shortlist {
         }
     }
 
+    fn is_full(&self) -> bool {
+        self.items.is_full()
+    }
+
+    fn worst(&self) -> f32 {
+        self.items
+            .iter()
+            .map(|(f, _)| *f)
+            .fold(f32::NEG_INFINITY, f32::max)
+    }
+
     fn offer(&mut self, e: &Value, n: usize) {
-        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.05);
+        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.2);
         if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
             if e.objective < self.items[i].0 {
                 self.items[i] = (e.objective, e.x);
@@ -74,23 +85,23 @@ fn solve_group(
     } else {
         1u16 << p.form.arc_count()
     };
+    let fixed = p.scenario.weights.control * p.form.len() as f32;
+    let a1 = p.scenario.weights.length;
     for s in 0..arc_sides {
         let s = if p.plane { sides } else { s as u8 };
-        for h in 0..HEADINGS {
-            for split in splits(p.form.len()) {
-                let Some(mut x) = seed(p, psi, h, s, split) else {
-                    continue;
-                };
-                if !restore(p, &mut x, &mut effort.evaluations) {
-                    continue;
-                }
-                let e = p.value(&x);
-                effort.evaluations += 1;
-                if e.admissible(p) {
-                    list.offer(&e, p.n);
-                }
+        sweep(p, psi, s, &mut |x: &Vars| {
+            // D >= 0, so a1 L + a4 N bounds F from below: skip what cannot enter the shortlist.
+            let length: f32 = (0..p.form.len()).map(|i| x[p.length_var(i)]).sum::<f32>() * p.radius;
+            if list.is_full() && a1 * length + fixed >= list.worst() {
+                return f32::NEG_INFINITY;
             }
-        }
+            let e = p.value_or_blocked(x, true);
+            effort.evaluations += 1;
+            if e.admissible(p) {
+                list.offer(&e, p.n);
+            }
+            e.min_clearance
+        });
     }
     let mut best: Option<LocalSolution> = None;
     for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
