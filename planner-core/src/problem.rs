@@ -158,7 +158,7 @@ impl<'a> Problem<'a> {
             m_eq: if plane { 2 } else { 3 },
             radius,
             min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
-            cos_max_tilt: libm::cosf(tilt),
+            cos_max_tilt: crate::fmath::cos(tilt),
             basis: entry_basis(scenario.entry.direction),
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
@@ -209,16 +209,16 @@ impl<'a> Problem<'a> {
     /// cos(tilt) - cos(max tilt): non-negative inside the tilt cone.
     pub fn tilt_margin(&self, x: &Vars) -> f32 {
         let (t1, t2) = self.angles(x);
-        libm::cosf(t1) * libm::cosf(t2) - self.cos_max_tilt
+        crate::fmath::cos(t1) * crate::fmath::cos(t2) - self.cos_max_tilt
     }
 
     /// Gradient of [`Problem::tilt_margin`].
     pub fn tilt_margin_grad(&self, x: &Vars) -> Vars {
         let mut g = [0.0; MAX_VARS];
         let (t1, t2) = self.angles(x);
-        g[0] = -libm::sinf(t1) * libm::cosf(t2);
+        g[0] = -crate::fmath::sin(t1) * crate::fmath::cos(t2);
         if !self.plane {
-            g[1] = -libm::cosf(t1) * libm::sinf(t2);
+            g[1] = -crate::fmath::cos(t1) * crate::fmath::sin(t2);
         }
         g
     }

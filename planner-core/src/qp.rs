@@ -178,7 +178,7 @@ impl Qp {
             let mut blocking = None;
             let mut dv = [0.0f32; MAX_VARS];
             dv[..n].copy_from_slice(d);
-            let d_norm = libm::sqrtf(self.dot(&dv, &dv));
+            let d_norm = crate::fmath::sqrt(self.dot(&dv, &dv));
             for i in 0..self.m {
                 if in_working[i] {
                     continue;
@@ -186,7 +186,7 @@ impl Qp {
                 let ad = self.dot(&self.rows[i], &dv);
                 // Rounding makes a just-released or parallel row look blocking by a hair; only a
                 // row that the step really crosses may block (this prevents cycling).
-                let row_norm = libm::sqrtf(self.dot(&self.rows[i], &self.rows[i]));
+                let row_norm = crate::fmath::sqrt(self.dot(&self.rows[i], &self.rows[i]));
                 if ad < -1e-5 * row_norm * d_norm {
                     let slack = self.rhs[i] - self.dot(&self.rows[i], &p);
                     let t = (slack / ad).max(0.0);

@@ -44,12 +44,12 @@ struct Pose {
 
 /// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
 fn bend(psi: f32, s: f32) -> (f32, f32) {
-    (s * libm::sinf(psi), -s * libm::cosf(psi))
+    (s * crate::fmath::sin(psi), -s * crate::fmath::cos(psi))
 }
 
 /// The heading at which an arc of side `s` has unit bend normal `n`.
 fn heading_of_bend(n: (f32, f32), s: f32) -> f32 {
-    libm::atan2f(s * n.0, -s * n.1)
+    crate::fmath::atan2(s * n.0, -s * n.1)
 }
 
 /// Turning angle in [0, 2 pi) from heading `from` to `to` for side `s` (right turns decrease psi).
@@ -64,8 +64,8 @@ fn turn(from: f32, to: f32, s: f32) -> f32 {
 fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
     match kind {
         SegmentKind::Line => Pose {
-            x: p.x + len * libm::cosf(p.psi),
-            y: p.y + len * libm::sinf(p.psi),
+            x: p.x + len * crate::fmath::cos(p.psi),
+            y: p.y + len * crate::fmath::sin(p.psi),
             psi: p.psi,
         },
         SegmentKind::Arc => {
@@ -101,21 +101,21 @@ fn complete(
             if q2 < r * r {
                 return;
             }
-            let line = libm::sqrtf(q2 - r * r);
-            let psi_end = libm::atan2f(qy, qx) - s * libm::atan2f(r, line);
+            let line = crate::fmath::sqrt(q2 - r * r);
+            let psi_end = crate::fmath::atan2(qy, qx) - s * crate::fmath::atan2(r, line);
             out(r * turn(p.psi, psi_end, s), line);
         }
         (SegmentKind::Line, SegmentKind::Arc) => {
             let s = sides.1;
             let (nx, ny) = bend(p.psi, s);
-            let (dx, dy) = (libm::cosf(p.psi), libm::sinf(p.psi));
+            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
             let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
             let wd = wx * dx + wy * dy;
             let disc = wd * wd - (wx * wx + wy * wy) + r * r;
             if disc < 0.0 {
                 return;
             }
-            let root = libm::sqrtf(disc);
+            let root = crate::fmath::sqrt(disc);
             for line in [wd - root, wd + root] {
                 if line < 0.0 {
                     continue;
@@ -136,12 +136,12 @@ fn complete(
             let (nx, ny) = bend(p.psi, s1);
             let (c1x, c1y) = (p.x + r * nx, p.y + r * ny);
             let (ux, uy) = (tx - c1x, -c1y);
-            let d = libm::sqrtf(ux * ux + uy * uy);
+            let d = crate::fmath::sqrt(ux * ux + uy * uy);
             if !(d >= r && d <= 3.0 * r) || d == 0.0 {
                 return;
             }
             let a = (3.0 * r * r + d * d) / (2.0 * d);
-            let h = libm::sqrtf((4.0 * r * r - a * a).max(0.0));
+            let h = crate::fmath::sqrt((4.0 * r * r - a * a).max(0.0));
             let (ex, ey) = (ux / d, uy / d);
             for sign in [-1.0f32, 1.0] {
                 let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);
@@ -181,7 +181,7 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
     let e = p.scenario.entry.position;
     let t = p.scenario.target.position;
     let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
-    let dist = libm::sqrtf(d.dot(&d));
+    let dist = crate::fmath::sqrt(d.dot(&d));
     let chord = d / dist;
     let basis = entry_basis(p.scenario.entry.direction);
     let b1: V3 = basis.column(0).into();
@@ -192,8 +192,8 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
         b2
     };
     let a = pick - chord * pick.dot(&chord);
-    let a = a / libm::sqrtf(a.dot(&a));
-    let normal = a * libm::cosf(psi) + chord.cross(&a) * libm::sinf(psi);
+    let a = a / crate::fmath::sqrt(a.dot(&a));
+    let normal = a * crate::fmath::cos(psi) + chord.cross(&a) * crate::fmath::sin(psi);
     let m = normal.cross(&chord);
     let plane = SeedPlane {
         chord,
@@ -225,7 +225,7 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
                 if dist > 2.0 * r {
                     return;
                 }
-                let off = libm::sqrtf(r * r - dist * dist / 4.0);
+                let off = crate::fmath::sqrt(r * r - dist * dist / 4.0);
                 for cy in [off, -off] {
                     let cx = dist / 2.0;
                     let h0 = heading_of_bend((cx / r, cy / r), side[0]);
@@ -329,7 +329,8 @@ struct SeedPlane {
 impl SeedPlane {
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
     fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
-        let heading = self.chord * libm::cosf(path.heading) + self.m * libm::sinf(path.heading);
+        let heading =
+            self.chord * crate::fmath::cos(path.heading) + self.m * crate::fmath::sin(path.heading);
         let basis = entry_basis(p.scenario.entry.direction);
         let b1: V3 = basis.column(0).into();
         let b2: V3 = basis.column(1).into();
@@ -338,8 +339,8 @@ impl SeedPlane {
             return None;
         }
         let mut x = [0.0f32; MAX_VARS];
-        let theta2 = libm::asinf(heading.dot(&b1).clamp(-1.0, 1.0));
-        let theta1 = libm::atan2f(-heading.dot(&b2), heading.dot(&b3));
+        let theta2 = crate::fmath::asin(heading.dot(&b1).clamp(-1.0, 1.0));
+        let theta1 = crate::fmath::atan2(-heading.dot(&b2), heading.dot(&b3));
         x[0] = theta1;
         if !p.plane {
             x[1] = theta2;
@@ -356,7 +357,7 @@ impl SeedPlane {
             // Roll the bevel so that e1 is the plane normal (the bevel faces the right of the
             // heading), then flip by pi whenever the next arc bends to the other side.
             let f0 = insertion_frame(V3::zeros(), &basis, theta1, theta2);
-            let base = libm::atan2f(self.normal.dot(&f0.e2()), self.normal.dot(&f0.e1()));
+            let base = crate::fmath::atan2(self.normal.dot(&f0.e2()), self.normal.dot(&f0.e1()));
             let mut facing_left = false;
             let mut first = true;
             for i in 0..p.form.len() {

@@ -242,7 +242,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
     let insertion = Insertion {
         theta1_deg: t1.to_degrees(),
         theta2_deg: t2.to_degrees(),
-        tilt_deg: libm::acosf(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
+        tilt_deg: crate::fmath::acos(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
         direction: [heading.x, heading.y, heading.z],
     };
     let lengths = p.lengths(x);

@@ -51,7 +51,7 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
     for _ in 0..=MAX_RESTORE {
         let (_, r, jac) = p.end_constraint(x);
         *evals += 1;
-        let norm = libm::sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        let norm = crate::fmath::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if !norm.is_finite() {
             return false;
         }
