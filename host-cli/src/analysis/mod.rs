@@ -1,0 +1,5 @@
+//! Analysis around the planner: weight sweeps, the RRT baseline and the comparison with it,
+//! polygon obstacles turned into circles, and SVG plots of all of these.
+
+pub mod approx;
+pub mod geometry;
