@@ -3,3 +3,7 @@
 
 pub mod approx;
 pub mod geometry;
+pub mod parallel;
+pub mod rng;
+pub mod rrt;
+pub mod sweep;
