@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use needle_cli::analysis::cli as analysis;
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
 use planner_core::form::FormSet;
@@ -34,12 +35,25 @@ struct PlanArgs {
     /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
     #[arg(long, value_delimiter = ',')]
     forms: Option<Vec<String>>,
+    /// Also draw every form's path (SVG).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
 enum Command {
     /// Plan a scenario on this machine.
     Plan(PlanArgs),
+    /// Re-plan for each value of one weight (robustness analysis).
+    Sweep(analysis::SweepArgs),
+    /// Plan with the RRT baseline.
+    Rrt(analysis::RrtCmd),
+    /// The optimiser against the RRT over several seeds.
+    Compare(analysis::CompareArgs),
+    /// Turn polygon obstacles into covering circles.
+    Approx(analysis::ApproxArgs),
+    /// Draw a scenario and its plan (SVG).
+    Plot(analysis::PlotArgs),
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
@@ -73,6 +87,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
     } else {
         print!("{}", plan_table(&report, stats));
     }
+    if let Some(out) = &args.plot {
+        analysis::write_plan_plot(&args.file, &scenario, &report, out)?;
+    }
     Ok(())
 }
 
@@ -80,6 +97,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan(a),
+        Command::Sweep(a) => analysis::run_sweep(a),
+        Command::Rrt(a) => analysis::run_rrt(a),
+        Command::Compare(a) => analysis::run_compare(a),
+        Command::Approx(a) => analysis::run_approx(a),
+        Command::Plot(a) => analysis::run_plot(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
