@@ -228,7 +228,7 @@ fn rrt_scene_paths(scenario: &Scenario, o: &rrt::Outcome) -> (PlotPath, Vec<Vec<
     let s = &o.score;
     let path = PlotPath {
         label: format!(
-            "RRT path: N = {}, F = {:.2}, L = {:.1} mm, end {:.2} mm off",
+            "RRT: N = {}, F = {:.2}, L = {:.1} mm, {:.2} mm off",
             s.control_degree, s.objective, s.length, s.target_error
         ),
         form: "RRT".into(),

@@ -41,7 +41,7 @@ pub struct Scene<'a> {
 }
 
 const VIEW_W: f64 = 560.0;
-const LEGEND_W: f64 = 260.0;
+const LEGEND_W: f64 = 340.0;
 const PAD: f64 = 50.0;
 
 struct View {
@@ -80,6 +80,9 @@ fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], 
         grow(o.center, o.radius);
     }
     for p in s.paths.iter().flat_map(|p| &p.points) {
+        grow(*p, 0.0);
+    }
+    for p in s.tree.iter().flatten() {
         grow(*p, 0.0);
     }
     for (lo_k, hi_k) in lo.iter_mut().zip(hi.iter_mut()) {
@@ -156,8 +159,13 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
     let width = PAD + 20.0 + VIEW_W + 30.0 + LEGEND_W;
     let mut svg = Svg::new(width, height);
     svg.text([PAD, 24.0], &scene.title, 14.0, "start", "title");
-    for (view, hi) in &views {
+    for (k, (view, hi)) in views.iter().enumerate() {
         axes(&mut svg, view, *hi);
+        // Paths and trees stay inside the frame.
+        svg.raw(&format!(
+            r#"<clipPath id="view{k}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath><g clip-path="url(#view{k})">"#,
+            view.origin[0], view.origin[1], view.size[0], view.size[1]
+        ));
         let scale = view.scale;
         if !scene.tree.is_empty() {
             let lines: Vec<Vec<[f64; 2]>> = scene
@@ -230,6 +238,7 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         let target = view.px(scenario.target.position);
         svg.circle(target, 5.0, "target", "fill:none;stroke:#000;stroke-width:2");
         svg.circle(target, 1.5, "target", "fill:#000");
+        svg.raw("</g>");
     }
     legend(&mut svg, scene, PAD + 20.0 + VIEW_W + 30.0);
     svg.finish()
