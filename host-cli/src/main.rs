@@ -54,6 +54,20 @@ enum Command {
     Approx(analysis::ApproxArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
+    /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scenario files (default: examples/paper.toml).
+    files: Vec<PathBuf>,
+    /// Measured runs per scenario.
+    #[arg(long, default_value_t = 200)]
+    runs: usize,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
@@ -93,6 +107,32 @@ fn plan(args: &PlanArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench(args: &BenchArgs) -> Result<()> {
+    let files = if args.files.is_empty() {
+        vec![PathBuf::from("examples/paper.toml")]
+    } else {
+        args.files.clone()
+    };
+    let mut out = Vec::new();
+    for f in &files {
+        let scenario = load_scenario(f)?;
+        let name = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let r = needle_cli::bench::run(&scenario, 3, args.runs)?;
+        if args.json {
+            out.push(needle_cli::bench::to_json(&name, &r));
+        } else {
+            print!("{}", needle_cli::bench::table(&name, &r));
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::Value::Array(out));
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -102,6 +142,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => analysis::run_compare(a),
         Command::Approx(a) => analysis::run_approx(a),
         Command::Plot(a) => analysis::run_plot(a),
+        Command::Bench(a) => bench(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
