@@ -211,7 +211,9 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             }
         }
         svg.end_group();
-        for p in &scene.paths {
+        // The best path last, on top of the others.
+        let order = scene.paths.iter().filter(|p| !p.best).chain(scene.paths.iter().filter(|p| p.best));
+        for p in order {
             let pts: Vec<[f64; 2]> = p.points.iter().map(|q| view.px(*q)).collect();
             let (class, width) = if p.best {
                 ("path best", 3.5)

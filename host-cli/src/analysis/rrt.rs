@@ -101,7 +101,7 @@ pub struct Score {
     pub length: f32,
     /// D: mean (or sum, per the scenario) over obstacles of 1 / clearance.
     pub risk: f32,
-    /// H: the number of obstacles the path enters (0 for every RRT path).
+    /// H: 1e6 if the path enters an obstacle, else 0 (always 0 for an RRT path).
     pub penalty: f32,
     /// N: segments after merging.
     pub control_degree: usize,
@@ -130,17 +130,19 @@ pub fn score(scenario: &Scenario, first: &Frame, pieces: &[Piece]) -> Score {
         }
         f = f.advanced(p.kind, p.length, radius);
     }
-    let entered = clear.iter().filter(|d| **d <= 0.0).count();
-    let inverse: f32 = clear.iter().map(|d| 1.0 / d.max(1e-6)).sum();
+    // As the planner's objective: D is infinite and H = 1e6 once any obstacle is entered.
+    let blocked = clear.iter().any(|d| *d <= 0.0);
+    let inverse: f32 = clear.iter().map(|d| 1.0 / d).sum();
     let risk = match (scenario.options.risk, clear.len()) {
         (_, 0) => 0.0,
+        _ if blocked => f32::INFINITY,
         (RiskMeasure::Mean, n) => inverse / n as f32,
         (RiskMeasure::Sum, _) => inverse,
     };
     let length: f32 = pieces.iter().map(|p| p.length).sum();
     let n = merge(pieces).len();
     let w = &scenario.weights;
-    let penalty = entered as f32;
+    let penalty = if blocked { 1e6 } else { 0.0 };
     Score {
         length,
         risk,
