@@ -38,6 +38,9 @@ struct PlanArgs {
     /// Also draw every form's path (SVG).
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
+    #[arg(long)]
+    approx: Option<needle_cli::analysis::approx::Method>,
 }
 
 #[derive(Subcommand)]
@@ -71,7 +74,10 @@ struct BenchArgs {
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
-    let mut scenario = load_scenario(&args.file)?;
+    let mut scenario = match args.approx {
+        None => load_scenario(&args.file)?,
+        Some(m) => needle_cli::scenario_file::load_scenario_shapes(&args.file, Some(m))?.0,
+    };
     if let Some(n) = args.max_degree {
         scenario.options.max_control_degree = n;
     }
@@ -102,7 +108,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
         print!("{}", plan_table(&report, stats));
     }
     if let Some(out) = &args.plot {
-        analysis::write_plan_plot(&args.file, &scenario, &report, out)?;
+        analysis::write_plan_plot(&args.file, args.approx, &scenario, &report, out)?;
     }
     Ok(())
 }

@@ -91,6 +91,9 @@ impl Polygon {
                 bail!("polygon vertices {i} and {} coincide", (i + 1) % pts.len());
             }
         }
+        if super::geometry::self_intersects(&pts) {
+            bail!("the polygon's outline crosses itself");
+        }
         let area = signed_area(&pts);
         let span = pts
             .iter()
@@ -98,9 +101,6 @@ impl Polygon {
             .fold(1.0f64, f64::max);
         if area.abs() <= 1e-9 * span * span {
             bail!("the polygon has no area (its vertices are collinear)");
-        }
-        if super::geometry::self_intersects(&pts) {
-            bail!("the polygon's outline crosses itself");
         }
         if area < 0.0 {
             pts.reverse();

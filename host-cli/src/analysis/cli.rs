@@ -319,7 +319,9 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
     let seeds: Vec<u64> = (0..a.runs as u64).map(|k| a.seed.wrapping_add(k)).collect();
     let bar = progress(seeds.len() + 1, "compare");
     let threads = a.threads.unwrap_or_else(parallel::default_threads).max(1);
-    let c = compare::run(&scenario, &a.rrt.options(a.seed), &seeds, threads, || bar.inc(1));
+    let c = compare::run(&scenario, &a.rrt.options(a.seed), &seeds, threads, || {
+        bar.inc(1)
+    });
     bar.finish_and_clear();
     if a.json {
         println!("{}", compare::to_json(&c));
@@ -331,7 +333,10 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
         if let Ok((report, _)) = &c.optimizer {
             if let Some(b) = report.best() {
                 paths.push(PlotPath {
-                    label: format!("optimiser {}: F = {:.2}, L = {:.1} mm", b.form, b.objective, b.length),
+                    label: format!(
+                        "optimiser {}: F = {:.2}, L = {:.1} mm",
+                        b.form, b.objective, b.length
+                    ),
                     form: b.form.to_string(),
                     colour: "#1f77b4".into(),
                     points: path_points(&scenario, b),
@@ -340,7 +345,8 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
             }
         }
         // The run whose F is the median (the lower middle for an even count).
-        let mut found: Vec<&rrt::Outcome> = c.runs.iter().filter_map(|(_, r)| r.as_ref().ok()).collect();
+        let mut found: Vec<&rrt::Outcome> =
+            c.runs.iter().filter_map(|(_, r)| r.as_ref().ok()).collect();
         found.sort_by(|x, y| x.score.objective.total_cmp(&y.score.objective));
         let mut tree = Vec::new();
         if let Some(o) = found.get(found.len().saturating_sub(1) / 2) {
@@ -425,7 +431,9 @@ pub fn run_approx(a: &ApproxArgs) -> Result<()> {
     }
     if let Some(p) = &a.plot {
         let scenario = file.to_scenario_with(&shapes)?;
-        let method = a.method.map_or("per-obstacle".to_string(), |m| m.to_string());
+        let method = a
+            .method
+            .map_or("per-obstacle".to_string(), |m| m.to_string());
         let scene = Scene {
             title: format!("{}: obstacles as circles ({method})", title_of(&a.file)),
             shapes: &shapes,
@@ -466,8 +474,16 @@ pub fn plan_scene_paths(scenario: &Scenario, report: &PlanReport) -> (Vec<PlotPa
 }
 
 /// Draws every form's path of `report` to `out` (`needle plan --plot`).
-pub fn write_plan_plot(file: &Path, scenario: &Scenario, report: &PlanReport, out: &Path) -> Result<()> {
-    let shapes = ScenarioFile::load(file)?.obstacle_shapes(None).unwrap_or_default();
+pub fn write_plan_plot(
+    file: &Path,
+    approx: Option<Method>,
+    scenario: &Scenario,
+    report: &PlanReport,
+    out: &Path,
+) -> Result<()> {
+    let shapes = ScenarioFile::load(file)?
+        .obstacle_shapes(approx)
+        .unwrap_or_default();
     let (paths, notes) = plan_scene_paths(scenario, report);
     let scene = Scene {
         title: format!("{}: optimal path of each form", title_of(file)),
@@ -503,8 +519,12 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read plan {}", p.display()))?;
-            let v: serde_json::Value = serde_json::from_str(&text)
-                .with_context(|| format!("{} is not JSON (expected `needle plan --json` output)", p.display()))?;
+            let v: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+                format!(
+                    "{} is not JSON (expected `needle plan --json` output)",
+                    p.display()
+                )
+            })?;
             super::plan_file::scene_paths(&scenario, &v)
                 .with_context(|| format!("in plan {}", p.display()))?
         }

@@ -128,8 +128,7 @@ pub fn run(
     done: impl Fn() + Sync,
 ) -> Comparison {
     let clock = Instant::now();
-    let optimizer = planner_core::plan(scenario)
-        .map(|r| (r, clock.elapsed().as_micros() as u64));
+    let optimizer = planner_core::plan(scenario).map(|r| (r, clock.elapsed().as_micros() as u64));
     done();
     // One RRT per thread at a time: each run's time is then a single-core time like the optimiser's.
     let runs = parallel::map(
@@ -205,7 +204,10 @@ pub fn to_table(c: &Comparison) -> String {
     };
     match (&c.optimizer, c.optimizer_row()) {
         (Ok((report, _)), Some(r)) => {
-            let form = report.best().map(|b| b.form.to_string()).unwrap_or_default();
+            let form = report
+                .best()
+                .map(|b| b.form.to_string())
+                .unwrap_or_default();
             s.push_str(&row(&format!("optimiser ({form})"), &r));
         }
         (Err(e), _) => s.push_str(&format!("{:<18} no plan: {e}\n", "optimiser")),

@@ -62,7 +62,10 @@ pub fn scene_paths(scenario: &Scenario, plan: &Value) -> Result<(Vec<PlotPath>, 
     let mut paths = Vec::new();
     let mut notes = Vec::new();
     let empty = Vec::new();
-    let forms = plan.get("forms").and_then(Value::as_array).unwrap_or(&empty);
+    let forms = plan
+        .get("forms")
+        .and_then(Value::as_array)
+        .unwrap_or(&empty);
     let mut entries: Vec<&Value> = forms.iter().collect();
     if entries.is_empty() {
         entries.push(best);
@@ -78,8 +81,14 @@ pub fn scene_paths(scenario: &Scenario, plan: &Value) -> Result<(Vec<PlotPath>, 
         }
         let is_best = Some(form) == best_form;
         let source = if is_best { best } else { f };
-        let objective = source.get("objective").and_then(Value::as_f64).unwrap_or(f64::NAN);
-        let length = source.get("length").and_then(Value::as_f64).unwrap_or(f64::NAN);
+        let objective = source
+            .get("objective")
+            .and_then(Value::as_f64)
+            .unwrap_or(f64::NAN);
+        let length = source
+            .get("length")
+            .and_then(Value::as_f64)
+            .unwrap_or(f64::NAN);
         let label = format!(
             "{form}{}: F = {objective:.2}, L = {length:.1} mm",
             if is_best { " (best)" } else { "" }

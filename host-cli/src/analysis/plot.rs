@@ -104,13 +104,25 @@ fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
         let x = x0 + (t - view.lo[0]) * view.scale;
         svg.line([x, y0 + hgt], [x, y0 + hgt + 4.0], "tick", "stroke:#444");
         svg.line([x, y0], [x, y0 + hgt], "grid", "stroke:#eee");
-        svg.text([x, y0 + hgt + 16.0], &format!("{t}"), 10.0, "middle", "tick-label");
+        svg.text(
+            [x, y0 + hgt + 16.0],
+            &format!("{t}"),
+            10.0,
+            "middle",
+            "tick-label",
+        );
     }
     for t in ticks(view.lo[1], hi[1], 6) {
         let y = y0 + hgt - (t - view.lo[1]) * view.scale;
         svg.line([x0 - 4.0, y], [x0, y], "tick", "stroke:#444");
         svg.line([x0, y], [x0 + w, y], "grid", "stroke:#eee");
-        svg.text([x0 - 6.0, y + 3.5], &format!("{t}"), 10.0, "end", "tick-label");
+        svg.text(
+            [x0 - 6.0, y + 3.5],
+            &format!("{t}"),
+            10.0,
+            "end",
+            "tick-label",
+        );
     }
     svg.text(
         [x0 + w / 2.0, y0 + hgt + 32.0],
@@ -212,7 +224,11 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         }
         svg.end_group();
         // The best path last, on top of the others.
-        let order = scene.paths.iter().filter(|p| !p.best).chain(scene.paths.iter().filter(|p| p.best));
+        let order = scene
+            .paths
+            .iter()
+            .filter(|p| !p.best)
+            .chain(scene.paths.iter().filter(|p| p.best));
         for p in order {
             let pts: Vec<[f64; 2]> = p.points.iter().map(|q| view.px(*q)).collect();
             let (class, width) = if p.best {
@@ -238,7 +254,12 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             "fill:#000",
         );
         let target = view.px(scenario.target.position);
-        svg.circle(target, 5.0, "target", "fill:none;stroke:#000;stroke-width:2");
+        svg.circle(
+            target,
+            5.0,
+            "target",
+            "fill:none;stroke:#000;stroke-width:2",
+        );
         svg.circle(target, 1.5, "target", "fill:#000");
         svg.raw("</g>");
     }

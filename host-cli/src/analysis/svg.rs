@@ -118,7 +118,13 @@ impl Svg {
         let mut d = String::new();
         for l in lines {
             for (i, p) in l.iter().enumerate() {
-                let _ = write!(d, "{}{},{} ", if i == 0 { 'M' } else { 'L' }, f(p[0]), f(p[1]));
+                let _ = write!(
+                    d,
+                    "{}{},{} ",
+                    if i == 0 { 'M' } else { 'L' },
+                    f(p[0]),
+                    f(p[1])
+                );
             }
         }
         self.raw(&format!(

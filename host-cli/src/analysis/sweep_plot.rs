@@ -73,10 +73,17 @@ fn panel(svg: &mut Svg, top: f64, x: &Axis, y: &Axis, label: &str, weight: Weigh
         svg.line([LEFT, py], [LEFT + W, py], "grid", "stroke:#eee");
         svg.text([LEFT - 6.0, py + 3.5], &text, 10.0, "end", "tick-label");
     }
-    svg.text([LEFT - 50.0, top + H / 2.0], label, 11.0, "middle", "axis-label");
+    let (lx, ly) = (LEFT - 48.0, top + H / 2.0);
+    svg.raw(&format!(
+        r#"<text class="axis-label" x="{lx}" y="{ly}" font-size="11" text-anchor="middle" font-family="sans-serif" transform="rotate(-90 {lx} {ly})">{label}</text>"#
+    ));
     svg.text(
         [LEFT + W / 2.0, top + H + 32.0],
-        &format!("weight {} {}", weight.name(), if x.log { "(log scale)" } else { "" }),
+        &format!(
+            "weight {} {}",
+            weight.name(),
+            if x.log { "(log scale)" } else { "" }
+        ),
         11.0,
         "middle",
         "axis-label",
@@ -87,8 +94,10 @@ fn panel(svg: &mut Svg, top: f64, x: &Axis, y: &Axis, label: &str, weight: Weigh
 pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> String {
     let forms = forms_seen(points);
     let x = Axis::of(points.iter().map(|p| p.value), log);
-    let best: Vec<(f64, &planner_core::FormOutcome)> =
-        points.iter().filter_map(|p| p.best().map(|b| (p.value, b))).collect();
+    let best: Vec<(f64, &planner_core::FormOutcome)> = points
+        .iter()
+        .filter_map(|p| p.best().map(|b| (p.value, b)))
+        .collect();
     let per_form_f = points.iter().flat_map(|p| {
         p.plan
             .iter()
@@ -97,7 +106,9 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
             .map(|o| f64::from(o.objective))
     });
     let fy = Axis::of(
-        best.iter().map(|(_, b)| f64::from(b.objective)).chain(per_form_f),
+        best.iter()
+            .map(|(_, b)| f64::from(b.objective))
+            .chain(per_form_f),
         false,
     );
     let ly = Axis::of(best.iter().map(|(_, b)| f64::from(b.length)), false);
@@ -123,7 +134,10 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
                 svg.polyline(
                     &pts,
                     "form-curve",
-                    &format!("stroke:{};stroke-width:1;stroke-opacity:0.45", form_colour(f.index())),
+                    &format!(
+                        "stroke:{};stroke-width:1;stroke-opacity:0.45",
+                        form_colour(f.index())
+                    ),
                     &format!(r#"data-form="{f}""#),
                 );
             }
@@ -148,7 +162,13 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
                 form_colour(b.form.index())
             ));
             if i % label_every == 0 || previous != Some(b.form) {
-                svg.text([at[0], at[1] - 8.0], &b.form.to_string(), 9.0, "middle", "form-label");
+                svg.text(
+                    [at[0], at[1] - 8.0],
+                    &b.form.to_string(),
+                    9.0,
+                    "middle",
+                    "form-label",
+                );
             }
             previous = Some(b.form);
         }
@@ -159,7 +179,15 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
     let mut y = TOP + 22.0;
     for f in &forms {
         let wins = best.iter().filter(|(_, b)| b.form == *f).count();
-        svg.circle([lx + 5.0, y - 4.0], 4.0, "legend-swatch", &format!("fill:{}", form_colour(f.index())));
+        if wins == 0 {
+            continue;
+        }
+        svg.circle(
+            [lx + 5.0, y - 4.0],
+            4.0,
+            "legend-swatch",
+            &format!("fill:{}", form_colour(f.index())),
+        );
         svg.text(
             [lx + 16.0, y],
             &format!("{f} (best at {wins} of {})", points.len()),
@@ -169,9 +197,23 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
         );
         y += 18.0;
     }
+    svg.text(
+        [lx, y + 6.0],
+        "faint lines: each form's F",
+        10.0,
+        "start",
+        "legend-note",
+    );
+    y += 24.0;
     let failed = points.len() - best.len();
     if failed > 0 {
-        svg.text([lx, y], &format!("{failed} value(s) without a plan"), 11.0, "start", "legend-note");
+        svg.text(
+            [lx, y],
+            &format!("{failed} value(s) without a plan"),
+            11.0,
+            "start",
+            "legend-note",
+        );
     }
     svg.end_group();
     svg.finish()
