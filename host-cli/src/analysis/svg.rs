@@ -170,7 +170,7 @@ pub fn form_colour(index: usize) -> &'static str {
 
 /// Round tick values covering `[lo, hi]` (about `count` of them).
 pub fn ticks(lo: f64, hi: f64, count: usize) -> Vec<f64> {
-    if !(hi > lo) || !lo.is_finite() || !hi.is_finite() {
+    if hi <= lo || !lo.is_finite() || !hi.is_finite() {
         return vec![lo];
     }
     let raw = (hi - lo) / count.max(1) as f64;
