@@ -175,11 +175,17 @@ pub fn ticks(lo: f64, hi: f64, count: usize) -> Vec<f64> {
     }
     let raw = (hi - lo) / count.max(1) as f64;
     let mag = 10f64.powf(raw.log10().floor());
+    // The round step whose tick count is nearest the one asked for.
+    let want = count.max(1) as f64;
     let step = [1.0, 2.0, 5.0, 10.0]
         .iter()
         .map(|m| m * mag)
-        .find(|s| *s >= raw)
-        .unwrap_or(10.0 * mag);
+        .min_by(|a, b| {
+            let da = ((hi - lo) / a - want).abs();
+            let db = ((hi - lo) / b - want).abs();
+            da.total_cmp(&db)
+        })
+        .unwrap_or(mag);
     let first = (lo / step).ceil() as i64;
     let last = (hi / step).floor() as i64;
     (first..=last).map(|k| k as f64 * step).collect()
