@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use needle_cli::analysis::cli as analysis;
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
 use planner_core::form::FormSet;
@@ -34,12 +35,28 @@ struct PlanArgs {
     /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
     #[arg(long, value_delimiter = ',')]
     forms: Option<Vec<String>>,
+    /// Also draw every form's path (SVG).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
+    #[arg(long)]
+    approx: Option<needle_cli::analysis::approx::Method>,
 }
 
 #[derive(Subcommand)]
 enum Command {
     /// Plan a scenario on this machine.
     Plan(PlanArgs),
+    /// Re-plan for each value of one weight (robustness analysis).
+    Sweep(analysis::SweepArgs),
+    /// Plan with the RRT baseline.
+    Rrt(analysis::RrtCmd),
+    /// The optimiser against the RRT over several seeds.
+    Compare(analysis::CompareArgs),
+    /// Turn polygon obstacles into covering circles.
+    Approx(analysis::ApproxArgs),
+    /// Draw a scenario and its plan (SVG).
+    Plot(analysis::PlotArgs),
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
 }
@@ -57,7 +74,10 @@ struct BenchArgs {
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
-    let mut scenario = load_scenario(&args.file)?;
+    let mut scenario = match args.approx {
+        None => load_scenario(&args.file)?,
+        Some(m) => needle_cli::scenario_file::load_scenario_shapes(&args.file, Some(m))?.0,
+    };
     if let Some(n) = args.max_degree {
         scenario.options.max_control_degree = n;
     }
@@ -86,6 +106,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
         println!("{}", plan_json(&scenario, &report, stats));
     } else {
         print!("{}", plan_table(&report, stats));
+    }
+    if let Some(out) = &args.plot {
+        analysis::write_plan_plot(&args.file, args.approx, &scenario, &report, out)?;
     }
     Ok(())
 }
@@ -120,6 +143,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan(a),
+        Command::Sweep(a) => analysis::run_sweep(a),
+        Command::Rrt(a) => analysis::run_rrt(a),
+        Command::Compare(a) => analysis::run_compare(a),
+        Command::Approx(a) => analysis::run_approx(a),
+        Command::Plot(a) => analysis::run_plot(a),
         Command::Bench(a) => bench(a),
     };
     match result {
