@@ -17,6 +17,7 @@ pub mod planner;
 pub mod scenario;
 pub mod service;
 pub mod verify;
+pub mod wire;
 
 pub use error::{Field, PlanError};
 pub use form::{Form, FormSet, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
