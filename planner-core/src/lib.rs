@@ -4,7 +4,7 @@
 //! [`scenario::Scenario`] is validated, each [`form::Form`] is optimised by [`solve`] (seeds, then
 //! a feasible-path SQP over the insertion posture and the segment parameters), every candidate is
 //! re-checked by [`verify`] independently of the optimiser, and [`planner`] keeps the best form.
-#![no_std]
+#![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -14,8 +14,13 @@ pub mod form;
 pub mod kinematics;
 pub mod plan;
 pub mod planner;
+pub mod problem;
+pub mod qp;
 pub mod scenario;
+pub mod seeds;
 pub mod service;
+pub mod solve;
+pub mod sqp;
 pub mod verify;
 pub mod wire;
 
