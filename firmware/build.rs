@@ -3,6 +3,12 @@
 use std::{env, fs, path::PathBuf};
 
 fn main() {
+    // Target and profile for the protocol's hello (a commit id would go stale: this script only
+    // reruns when the board layout changes).
+    let target = env::var("TARGET").unwrap_or_default();
+    let profile = env::var("PROFILE").unwrap_or_default();
+    println!("cargo:rustc-env=NEEDLE_FIRMWARE_BUILD={target} {profile}");
+
     let boards = [
         ("CARGO_FEATURE_MPS2_AN386", "mps2-an386"),
         ("CARGO_FEATURE_STM32F4", "stm32f4"),

@@ -24,7 +24,14 @@ mod panic;
 mod pump;
 
 use cortex_m_rt::entry;
-use planner_core::service::DeviceService;
+use planner_core::service::{DeviceIdentity, DeviceService};
+
+/// How the firmware introduces itself in the protocol's hello.
+const IDENTITY: DeviceIdentity = DeviceIdentity {
+    name: board::NAME,
+    firmware: env!("CARGO_PKG_VERSION"),
+    build: env!("NEEDLE_FIRMWARE_BUILD"),
+};
 
 // The global defmt logger: semihosting under QEMU (decoded with `defmt-print -e ELF` from QEMU's
 // stdout), RTT on a board (read by probe-rs).
@@ -40,7 +47,7 @@ use cortex_m as _;
 fn main() -> ! {
     // cortex-m-rt turns these into `&'static mut`: the service and the reply buffer live in .bss,
     // not on the stack, and there is no allocator.
-    static mut SERVICE: DeviceService = DeviceService::new();
+    static mut SERVICE: DeviceService = DeviceService::with_identity(IDENTITY);
     static mut OUTBOX: pump::Outbox = pump::Outbox::new();
 
     defmt::info!(

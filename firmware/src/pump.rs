@@ -1,10 +1,12 @@
 //! The service loop: bytes from the link into the service, reply bytes from the service out.
 //!
-//! Work is measured per request: every `poll` runs inside a marker region, and a region counts
-//! when it belongs to a request (the poll found work, or work was already pending). Idle polls
-//! while bytes trickle in are not counted, so the figure does not depend on how the host's bytes
-//! were split in time. Reply bytes are staged in [`Outbox`] and sent outside the regions, so the
-//! figure does not depend on the line either.
+//! Work is measured per plan: a `poll` runs inside a marker region, and the region counts when
+//! the service was planning before or after it, that is from the poll that takes the request's
+//! last chunk (decode the scenario, start the plan) through each form to the poll that encodes the
+//! result. The report marker fires when planning stops. Upload and fetch frames, idle polls and
+//! the time bytes take on the line are not counted; frames the host sends *during* planning
+//! (status queries) would be, so `needle device-bench` sends none. Reply bytes are staged in
+//! [`Outbox`] and sent to the link outside the regions.
 
 use crate::link::Link;
 use crate::marker;
@@ -50,22 +52,22 @@ impl Outbox {
 /// Serves requests forever.
 pub fn run(link: &mut impl Link, service: &mut DeviceService, outbox: &mut Outbox) -> ! {
     let mut rx = [0u8; 64];
-    let mut busy = false;
     loop {
         link.service();
         let n = link.read(&mut rx);
         if n > 0 {
             service.receive(&rx[..n]);
         }
+        let was_planning = service.is_planning();
         marker::begin();
-        let pending = service.poll(&mut |bytes| outbox.push(bytes, link));
-        if pending || busy {
+        service.poll(&mut |bytes| outbox.push(bytes, link));
+        let planning = service.is_planning();
+        if was_planning || planning {
             marker::end();
         }
-        if busy && !pending {
+        if was_planning && !planning {
             marker::report();
         }
-        busy = pending;
         outbox.flush(link);
     }
 }

@@ -1,5 +1,7 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
+mod device_bench;
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::report::{plan_json, plan_table, Stats};
@@ -42,6 +44,8 @@ enum Command {
     Plan(PlanArgs),
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
+    /// Measure the firmware in QEMU: flash, RAM, stack and instructions per plan.
+    DeviceBench(device_bench::Args),
 }
 
 #[derive(clap::Args)]
@@ -99,7 +103,10 @@ fn bench(args: &BenchArgs) -> Result<()> {
     let mut out = Vec::new();
     for f in &files {
         let scenario = load_scenario(f)?;
-        let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let r = needle_cli::bench::run(&scenario, 3, args.runs)?;
         if args.json {
             out.push(needle_cli::bench::to_json(&name, &r));
@@ -118,6 +125,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Plan(a) => plan(a),
         Command::Bench(a) => bench(a),
+        Command::DeviceBench(a) => device_bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
