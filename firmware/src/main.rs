@@ -45,9 +45,10 @@ use cortex_m as _;
 
 #[entry]
 fn main() -> ! {
-    // cortex-m-rt turns these into `&'static mut`: the service and the reply buffer live in .bss,
+    // cortex-m-rt turns these into `&'static mut`: the service and the byte buffers live in .bss,
     // not on the stack, and there is no allocator.
     static mut SERVICE: DeviceService = DeviceService::with_identity(IDENTITY);
+    static mut INBOX: pump::Inbox = pump::Inbox::new();
     static mut OUTBOX: pump::Outbox = pump::Outbox::new();
 
     defmt::info!(
@@ -56,5 +57,5 @@ fn main() -> ! {
         board::NAME
     );
     let mut board = board::init();
-    pump::run(&mut board, SERVICE, OUTBOX)
+    pump::run(&mut board, SERVICE, INBOX, OUTBOX)
 }

@@ -9,6 +9,7 @@
 mod artifacts;
 mod client;
 mod elf;
+mod by_function;
 mod qemu;
 
 use anyhow::{bail, Context, Result};
@@ -160,12 +161,14 @@ fn encoded(result: &PlanResult) -> Result<Vec<u8>> {
         .to_vec())
 }
 
-/// Measures one board: build, sizes, then one QEMU run planning every scenario.
+/// Measures one board: build, sizes, then one QEMU run planning every scenario. With `profile`,
+/// also prints where the instructions went, by function.
 pub fn measure(
     root: &Path,
     board: &Board,
     plugin: &Path,
     scenarios: &[NamedScenario],
+    profile: bool,
 ) -> Result<BoardFigures> {
     let image = artifacts::build_firmware(root, board.name, board.features)?;
     let footprint = elf::footprint(&image)?;
@@ -174,7 +177,7 @@ pub fn measure(
         .join("target")
         .join("device-bench")
         .join(board.name);
-    let mut qemu = qemu::Qemu::start(board.machine, &image, plugin, &dir)?;
+    let mut qemu = qemu::Qemu::start(board.machine, &image, plugin, &dir, profile)?;
     let mut device = client::Device::new(qemu.connect()?)?;
     device
         .hello(Duration::from_secs(20))
@@ -202,6 +205,10 @@ pub fn measure(
     drop(device);
     let len = footprint.stack_top - footprint.stack_bottom;
     let memory = qemu.read_memory_and_quit(footprint.stack_bottom, len)?;
+    if profile {
+        let text = by_function::report(&image, &dir.join("profile.txt"), 30)?;
+        eprintln!("{}: {text}", board.name);
+    }
     Ok(BoardFigures {
         board: board.name,
         flash_bytes: footprint.flash_bytes,
@@ -213,13 +220,17 @@ pub fn measure(
 }
 
 /// Builds the plugin, then measures every board.
-pub fn measure_all(root: &Path, scenarios: &[NamedScenario]) -> Result<Vec<BoardFigures>> {
+pub fn measure_all(
+    root: &Path,
+    scenarios: &[NamedScenario],
+    profile: bool,
+) -> Result<Vec<BoardFigures>> {
     ensure_target()?;
     ensure_qemu()?;
     let plugin = artifacts::build_plugin(root)?;
     BOARDS
         .iter()
-        .map(|b| measure(root, b, &plugin, scenarios))
+        .map(|b| measure(root, b, &plugin, scenarios, profile))
         .collect()
 }
 
@@ -260,6 +271,9 @@ pub struct Args {
     /// < 50 M instructions) or a device plan differs from the host's.
     #[arg(long)]
     check: bool,
+    /// Also print, per board, the functions the measured instructions were spent in (slower).
+    #[arg(long)]
+    profile: bool,
     /// The needle-planner checkout holding firmware/ and tools/ (default: where `needle` was built).
     #[arg(long)]
     root: Option<PathBuf>,
@@ -286,7 +300,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.files.clone()
     };
     let scenarios = load_scenarios(&files)?;
-    let figures = measure_all(&root, &scenarios)?;
+    let figures = measure_all(&root, &scenarios, args.profile)?;
     if args.json {
         let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();
         println!("{}", serde_json::to_string_pretty(&all)?);

@@ -80,6 +80,81 @@ fn symbol(b: &[u8], sections: &[Section], name: &str) -> Result<u32> {
     bail!("symbol {name} not found (is this a cortex-m-rt image?)")
 }
 
+const STT_FUNC: u8 = 2;
+
+/// A function of the image: start address (Thumb bit cleared), size, demangled path.
+pub struct Function {
+    /// First byte.
+    pub addr: u32,
+    /// Bytes.
+    pub size: u32,
+    /// Readable name.
+    pub name: String,
+}
+
+/// The image's functions, sorted by address.
+pub fn functions(path: &Path) -> Result<Vec<Function>> {
+    let b = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let sections = sections(&b)?;
+    let mut out = Vec::new();
+    for symtab in sections.iter().filter(|s| s.kind == SHT_SYMTAB) {
+        let strtab = sections
+            .get(symtab.link)
+            .context("symbol table without strings")?;
+        for entry in (symtab.offset..symtab.offset + symtab.size).step_by(16) {
+            if b.get(entry + 12).map(|i| i & 0xF) != Some(STT_FUNC) {
+                continue;
+            }
+            let name_at = strtab.offset + u32_at(&b, entry)? as usize;
+            let end = b[name_at..]
+                .iter()
+                .position(|&c| c == 0)
+                .context("bad symbol name")?;
+            out.push(Function {
+                addr: u32_at(&b, entry + 4)? & !1,
+                size: u32_at(&b, entry + 8)?,
+                name: demangle(&String::from_utf8_lossy(&b[name_at..name_at + end])),
+            });
+        }
+    }
+    out.sort_by_key(|f| f.addr);
+    Ok(out)
+}
+
+/// Legacy Rust mangling (`_ZN` length-prefixed parts, a trailing hash) to `a::b::c`.
+fn demangle(name: &str) -> String {
+    let Some(mut rest) = name.strip_prefix("_ZN") else {
+        return name.to_owned();
+    };
+    let mut parts = Vec::new();
+    while let Some(digits) = rest.find(|c: char| !c.is_ascii_digit()).filter(|&d| d > 0) {
+        let Ok(len) = rest[..digits].parse::<usize>() else {
+            break;
+        };
+        let Some(part) = rest.get(digits..digits + len) else {
+            break;
+        };
+        parts.push(
+            part.replace("$LT$", "<")
+                .replace("$GT$", ">")
+                .replace("$u20$", " ")
+                .replace("..", "::"),
+        );
+        rest = &rest[digits + len..];
+    }
+    if parts
+        .last()
+        .is_some_and(|p| p.len() == 17 && p.starts_with('h'))
+    {
+        parts.pop();
+    }
+    if parts.is_empty() {
+        name.to_owned()
+    } else {
+        parts.join("::")
+    }
+}
+
 /// Reads the footprint of the image at `path`.
 pub fn footprint(path: &Path) -> Result<Footprint> {
     let b = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
@@ -127,6 +202,15 @@ mod tests {
         assert_eq!(peak_stack(&mem, paint), 0);
         mem[13] = 0; // word 3 scrubbed: words 3..8 were used
         assert_eq!(peak_stack(&mem, paint), 20);
+    }
+
+    #[test]
+    fn demangles_legacy_rust_names() {
+        assert_eq!(
+            demangle("_ZN12planner_core3sqp5solve17h0123456789abcdefE"),
+            "planner_core::sqp::solve"
+        );
+        assert_eq!(demangle("memcpy"), "memcpy");
     }
 
     #[test]

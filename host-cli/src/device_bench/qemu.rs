@@ -26,13 +26,24 @@ fn free_port() -> Result<u16> {
 
 impl Qemu {
     /// Starts `machine` running `elf` with `plugin`; scratch files go to `dir`.
-    pub fn start(machine: &str, elf: &Path, plugin: &Path, dir: &Path) -> Result<Qemu> {
+    /// With `profile`, the plugin also writes per-block counts to `dir/profile.txt` at exit.
+    pub fn start(
+        machine: &str,
+        elf: &Path,
+        plugin: &Path,
+        dir: &Path,
+        profile: bool,
+    ) -> Result<Qemu> {
         std::fs::create_dir_all(dir)?;
         let port = free_port()?;
         let monitor = dir.join("monitor.sock");
         let counts = dir.join("insn-count.txt");
         let _ = std::fs::remove_file(&monitor);
         let _ = std::fs::remove_file(&counts);
+        let mut plugin_arg = format!("{},out={}", plugin.display(), counts.display());
+        if profile {
+            plugin_arg.push_str(&format!(",profile={}", dir.join("profile.txt").display()));
+        }
         let stdout = std::fs::File::create(dir.join("qemu-stdout.defmt"))?;
         let stderr = std::fs::File::create(dir.join("qemu-stderr.txt"))?;
         let child = Command::new("qemu-system-arm")
@@ -44,7 +55,7 @@ impl Qemu {
             .arg("-monitor")
             .arg(format!("unix:{},server=on,wait=off", monitor.display()))
             .arg("-plugin")
-            .arg(format!("{},out={}", plugin.display(), counts.display()))
+            .arg(plugin_arg)
             .args(["-d", "plugin", "-D"])
             .arg(dir.join("qemu-log.txt"))
             .stdin(Stdio::null())
@@ -110,6 +121,7 @@ impl Qemu {
         writeln!(writer, "pmemsave {addr:#x} {len:#x} \"{}\"", dump.display())?;
         wait_prompt(&mut reader)?;
         writeln!(writer, "quit")?;
+        // QEMU writes the plugin's exit report (and profile) as it quits.
         let _ = self.child.wait();
         let memory = std::fs::read(&dump).context("QEMU wrote no memory dump")?;
         if memory.len() != len as usize {

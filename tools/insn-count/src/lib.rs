@@ -11,17 +11,21 @@
 //! instructions executed between markers, whatever the translation-block boundaries, interrupts or
 //! `-icount` setting.
 //!
-//! Usage: `qemu-system-arm ... -plugin libinsn_count.so[,out=FILE] -d plugin [-D LOG]`. Each report
-//! is a line `insn-count: <sum> instructions in <regions> regions`, appended to FILE when given (and
-//! flushed at once, so a reader sees it while QEMU runs), else written to QEMU's plugin log.
+//! Usage: `qemu-system-arm ... -plugin libinsn_count.so[,out=FILE][,profile=FILE] -d plugin [-D LOG]`.
+//! Each report is a line `insn-count: <sum> instructions in <regions> regions`, appended to the
+//! `out` FILE when given (and flushed at once, so a reader sees it while QEMU runs), else written
+//! to QEMU's plugin log. With `profile=FILE`, the instructions inside regions are also attributed
+//! to the translation block that executed them, and written at exit as `<hex address> <count>`
+//! lines (map them to functions with the firmware's symbol table; slower).
 
 use qemu_plugin_sys::{
     qemu_info_t, qemu_plugin_cb_flags, qemu_plugin_id_t, qemu_plugin_insn_data,
     qemu_plugin_insn_size, qemu_plugin_op, qemu_plugin_outs, qemu_plugin_register_atexit_cb,
     qemu_plugin_register_vcpu_insn_exec_cb, qemu_plugin_register_vcpu_insn_exec_inline,
-    qemu_plugin_register_vcpu_tb_trans_cb, qemu_plugin_tb, qemu_plugin_tb_get_insn,
-    qemu_plugin_tb_n_insns, QEMU_PLUGIN_VERSION,
+    qemu_plugin_register_vcpu_tb_exec_cb, qemu_plugin_register_vcpu_tb_trans_cb, qemu_plugin_tb,
+    qemu_plugin_tb_get_insn, qemu_plugin_tb_n_insns, qemu_plugin_tb_vaddr, QEMU_PLUGIN_VERSION,
 };
+use std::collections::HashMap;
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::fs::{File, OpenOptions};
 use std::io::Write;
@@ -48,12 +52,18 @@ enum Marker {
 /// Guest instructions executed so far, markers excluded (TCG adds to it inline).
 static EXECUTED: AtomicU64 = AtomicU64::new(0);
 
+/// Instructions by translation-block address.
+type Histogram = HashMap<u64, u64>;
+
 struct Regions {
     open_at: Option<u64>,
     sum: u64,
     regions: u64,
     reports: u64,
     out: Option<File>,
+    /// Profile file, the histogram of counted regions, and that of the region now open (merged
+    /// at `end`, dropped at a `begin` that restarts it).
+    profile: Option<(File, Histogram, Histogram)>,
 }
 
 static STATE: Mutex<Regions> = Mutex::new(Regions {
@@ -62,6 +72,7 @@ static STATE: Mutex<Regions> = Mutex::new(Regions {
     regions: 0,
     reports: 0,
     out: None,
+    profile: None,
 });
 
 fn emit(state: &mut Regions, line: &str) {
@@ -84,11 +95,21 @@ unsafe extern "C" fn on_marker(_vcpu: c_uint, userdata: *mut c_void) {
     let now = EXECUTED.load(Ordering::Relaxed);
     let Ok(mut state) = STATE.lock() else { return };
     match userdata as usize {
-        m if m == Marker::Begin as usize => state.open_at = Some(now),
+        m if m == Marker::Begin as usize => {
+            state.open_at = Some(now);
+            if let Some((_, _, open)) = state.profile.as_mut() {
+                open.clear();
+            }
+        }
         m if m == Marker::End as usize => {
             if let Some(start) = state.open_at.take() {
                 state.sum += now - start;
                 state.regions += 1;
+                if let Some((_, counted, open)) = state.profile.as_mut() {
+                    for (addr, n) in open.drain() {
+                        *counted.entry(addr).or_insert(0) += n;
+                    }
+                }
             }
         }
         m if m == Marker::Report as usize => {
@@ -114,10 +135,41 @@ fn marker_of(bytes: &[u8]) -> Option<Marker> {
     }
 }
 
+/// Translation-block execution while profiling: `userdata` packs the block's address (high 32
+/// bits) and its non-marker instruction count (low 32 bits).
+unsafe extern "C" fn on_block(_vcpu: c_uint, userdata: *mut c_void) {
+    let packed = userdata as usize as u64;
+    let Ok(mut state) = STATE.lock() else { return };
+    if state.open_at.is_none() {
+        return;
+    }
+    if let Some((_, _, open)) = state.profile.as_mut() {
+        *open.entry(packed >> 32).or_insert(0) += packed & 0xFFFF_FFFF;
+    }
+}
+
 unsafe extern "C" fn on_translate(_id: qemu_plugin_id_t, tb: *mut qemu_plugin_tb) {
     // SAFETY (whole function): QEMU passes a TB handle valid for this callback; instruction
     // handles and their bytes are valid for the same duration and are not kept.
     let n = qemu_plugin_tb_n_insns(tb);
+    let profiling = STATE.lock().is_ok_and(|s| s.profile.is_some());
+    if profiling {
+        let plain = (0..n)
+            .filter(|&i| {
+                let insn = qemu_plugin_tb_get_insn(tb, i);
+                let data = qemu_plugin_insn_data(insn) as *const u8;
+                let size = qemu_plugin_insn_size(insn);
+                data.is_null() || marker_of(std::slice::from_raw_parts(data, size)).is_none()
+            })
+            .count() as u64;
+        let packed = (qemu_plugin_tb_vaddr(tb) << 32) | plain;
+        qemu_plugin_register_vcpu_tb_exec_cb(
+            tb,
+            Some(on_block),
+            qemu_plugin_cb_flags::QEMU_PLUGIN_CB_NO_REGS,
+            packed as usize as *mut c_void,
+        );
+    }
     for i in 0..n {
         let insn = qemu_plugin_tb_get_insn(tb, i);
         let size = qemu_plugin_insn_size(insn);
@@ -152,6 +204,13 @@ unsafe extern "C" fn on_exit(_id: qemu_plugin_id_t, _userdata: *mut c_void) {
             EXECUTED.load(Ordering::Relaxed)
         );
         emit(&mut state, &line);
+        if let Some((mut file, hist, _)) = state.profile.take() {
+            let mut rows: Vec<_> = hist.into_iter().collect();
+            rows.sort_by_key(|r| std::cmp::Reverse(r.1));
+            for (addr, count) in rows {
+                let _ = writeln!(file, "{addr:#010x} {count}");
+            }
+        }
     }
 }
 
@@ -169,21 +228,30 @@ pub unsafe extern "C" fn qemu_plugin_install(
     for i in 0..usize::try_from(argc).unwrap_or(0) {
         let arg = CStr::from_ptr(*argv.add(i)).to_string_lossy();
         match arg.split_once('=') {
-            Some(("out", path)) => {
-                match OpenOptions::new().create(true).append(true).open(path) {
-                    Ok(f) => {
-                        if let Ok(mut state) = STATE.lock() {
-                            state.out = Some(f);
-                        }
-                    }
-                    Err(e) => {
-                        eprintln!("insn-count: cannot open {path}: {e}");
-                        return -1;
+            Some(("out", path)) => match OpenOptions::new().create(true).append(true).open(path) {
+                Ok(f) => {
+                    if let Ok(mut state) = STATE.lock() {
+                        state.out = Some(f);
                     }
                 }
-            }
+                Err(e) => {
+                    eprintln!("insn-count: cannot open {path}: {e}");
+                    return -1;
+                }
+            },
+            Some(("profile", path)) => match File::create(path) {
+                Ok(f) => {
+                    if let Ok(mut state) = STATE.lock() {
+                        state.profile = Some((f, HashMap::new(), HashMap::new()));
+                    }
+                }
+                Err(e) => {
+                    eprintln!("insn-count: cannot create {path}: {e}");
+                    return -1;
+                }
+            },
             _ => {
-                eprintln!("insn-count: unknown argument {arg} (expected out=FILE)");
+                eprintln!("insn-count: unknown argument {arg} (expected out=FILE or profile=FILE)");
                 return -1;
             }
         }
