@@ -195,8 +195,7 @@ mod tests {
     #[test]
     fn peak_stack_counts_from_the_first_scrubbed_word() {
         let paint = 0xCCCC_CCCCu32;
-        let mut mem: Vec<u8> = std::iter::repeat(paint.to_le_bytes())
-            .take(8)
+        let mut mem: Vec<u8> = std::iter::repeat_n(paint.to_le_bytes(), 8)
             .flatten()
             .collect();
         assert_eq!(peak_stack(&mem, paint), 0);
