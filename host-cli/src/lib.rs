@@ -1,4 +1,5 @@
 //! Host-side library behind the `needle` command: scenario files, plan rendering, commands.
 
+pub mod device;
 pub mod report;
 pub mod scenario_file;
