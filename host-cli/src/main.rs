@@ -61,6 +61,8 @@ enum Command {
     },
     /// List serial ports with their USB vendor and product ids.
     Ports,
+    /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
+    Bench(BenchArgs),
 }
 
 /// `needle send`: the options of `plan` plus where the device is.
@@ -70,6 +72,18 @@ struct SendArgs {
     plan: PlanArgs,
     #[command(flatten)]
     link: LinkArgs,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scenario files (default: examples/paper.toml).
+    files: Vec<PathBuf>,
+    /// Measured runs per scenario.
+    #[arg(long, default_value_t = 200)]
+    runs: usize,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
@@ -121,6 +135,32 @@ fn send(args: &SendArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench(args: &BenchArgs) -> Result<()> {
+    let files = if args.files.is_empty() {
+        vec![PathBuf::from("examples/paper.toml")]
+    } else {
+        args.files.clone()
+    };
+    let mut out = Vec::new();
+    for f in &files {
+        let scenario = load_scenario(f)?;
+        let name = f
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let r = needle_cli::bench::run(&scenario, 3, args.runs)?;
+        if args.json {
+            out.push(needle_cli::bench::to_json(&name, &r));
+        } else {
+            print!("{}", needle_cli::bench::table(&name, &r));
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::Value::Array(out));
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -129,6 +169,7 @@ fn main() -> ExitCode {
         Command::Ping { link, count } => device::commands::ping(link, *count),
         Command::Info { link, json } => device::commands::info(link, *json),
         Command::Ports => device::commands::ports(),
+        Command::Bench(a) => bench(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

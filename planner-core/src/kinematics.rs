@@ -141,6 +141,8 @@ pub struct PathGeometry {
     pub form: Form,
     /// Frame at the start of segment `i` (after its bevel rotation); `starts[len]` is the end frame.
     pub starts: [Frame; MAX_CONTROL_DEGREE + 1],
+    /// Frame at the end of segment `i`, before the next segment's bevel rotation.
+    pub ends: [Frame; MAX_CONTROL_DEGREE],
     /// Segment lengths (mm).
     pub lengths: [f32; MAX_CONTROL_DEGREE],
     /// Arc radius (mm).
@@ -158,16 +160,19 @@ impl PathGeometry {
         radius: f32,
     ) -> PathGeometry {
         let mut starts = [first; MAX_CONTROL_DEGREE + 1];
+        let mut ends = [first; MAX_CONTROL_DEGREE];
         let mut f = first;
         for i in 0..form.len() {
             f = f.rolled(bevels[i]);
             starts[i] = f;
             f = f.advanced(form.kind(i), lengths[i], radius);
+            ends[i] = f;
         }
         starts[form.len()] = f;
         PathGeometry {
             form,
             starts,
+            ends,
             lengths: *lengths,
             radius,
         }
@@ -186,8 +191,8 @@ impl PathGeometry {
     /// Screw of a unit change of segment `i`'s length: the downstream path turns about the
     /// segment's end (arcs) or slides along its end heading (lines).
     pub fn length_screw(&self, i: usize) -> Screw {
-        let end = &self.starts[i + 1];
-        let e3 = self.starts[i + 1].e3();
+        let end = &self.ends[i];
+        let e3 = end.e3();
         match self.form.kind(i) {
             SegmentKind::Line => Screw::about(V3::zeros(), end.p, e3),
             // The heading turns towards e2 at rate 1/radius, i.e. about -e1.

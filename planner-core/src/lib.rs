@@ -4,9 +4,13 @@
 //! [`scenario::Scenario`] is validated, each [`form::Form`] is optimised by [`solve`] (seeds, then
 //! a feasible-path SQP over the insertion posture and the segment parameters), every candidate is
 //! re-checked by [`verify`] independently of the optimiser, and [`planner`] keeps the best form.
-#![no_std]
+#![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// Small dense linear algebra on fixed arrays reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+// `!(x > 0.0)` is deliberate: it is also true for NaN, which must be rejected.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod clearance;
 pub mod error;
@@ -14,8 +18,13 @@ pub mod form;
 pub mod kinematics;
 pub mod plan;
 pub mod planner;
+pub mod problem;
+pub mod qp;
 pub mod scenario;
+pub mod seeds;
 pub mod service;
+pub mod solve;
+pub mod sqp;
 pub mod verify;
 pub mod wire;
 

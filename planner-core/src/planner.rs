@@ -4,9 +4,10 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
-use crate::form::{Form, FormSet};
-use crate::plan::{FormOutcome, FormOutcomes, Insertion, PlanReport, Segments, SolveStatus};
+use crate::form::FormSet;
+use crate::plan::{FormOutcome, FormOutcomes, PlanReport};
 use crate::scenario::Scenario;
+use crate::solve::solve_form;
 
 /// A planning run in progress.
 pub struct PlanSession {
@@ -40,7 +41,7 @@ impl PlanSession {
     pub fn step(&mut self) -> Option<&FormOutcome> {
         let form = self.remaining.iter().next()?;
         self.remaining.0 &= !(1 << form.index());
-        let outcome = solve_form(&self.scenario, form);
+        let outcome = solve_form(&self.scenario, form, &self.outcomes);
         // Capacity is the catalogue size and each form is planned once.
         self.outcomes.push(outcome).ok()?;
         self.outcomes.last()
@@ -72,22 +73,4 @@ impl PlanSession {
 /// Plans every selected form of `scenario` and returns the per-form table and the best plan.
 pub fn plan(scenario: &Scenario) -> Result<PlanReport, PlanError> {
     PlanSession::new(scenario.clone())?.finish()
-}
-
-fn solve_form(_scenario: &Scenario, form: Form) -> FormOutcome {
-    FormOutcome {
-        form,
-        status: SolveStatus::Infeasible,
-        feasible: false,
-        length: f32::NAN,
-        risk: f32::NAN,
-        penalty: f32::NAN,
-        objective: f32::INFINITY,
-        min_clearance: f32::NAN,
-        target_error: f32::NAN,
-        insertion: Insertion::default(),
-        segments: Segments::new(),
-        iterations: 0,
-        evaluations: 0,
-    }
 }

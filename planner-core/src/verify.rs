@@ -6,7 +6,7 @@ use crate::clearance::closest;
 use crate::form::{Form, SegmentKind};
 use crate::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
 use crate::plan::{Insertion, SegmentPlan};
-use crate::scenario::Scenario;
+use crate::scenario::{RiskMeasure, Scenario};
 use crate::MAX_CONTROL_DEGREE;
 
 /// What the check measured.
@@ -16,6 +16,10 @@ pub struct Verdict {
     pub target_error: f32,
     /// Smallest clearance to any obstacle surface (mm; infinite without obstacles).
     pub min_clearance: f32,
+    /// Total length L (mm).
+    pub length: f32,
+    /// Risk degree D of the rebuilt path (infinite when it touches or enters an obstacle).
+    pub risk: f32,
     /// Every segment within its length bounds and the posture within the tilt bound.
     pub within_bounds: bool,
     /// All three conditions hold: end within tolerance, clearance above the minimum, bounds.
@@ -76,13 +80,27 @@ pub fn check(
     let target = V3::new(t[0], t[1], t[2]);
     let target_error = (geo.end() - target).norm();
     let mut min_clearance = f32::INFINITY;
+    let mut inverse_sum = 0.0f32;
     for ob in &scenario.obstacles {
         let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
+        let mut clearance = f32::INFINITY;
         for i in 0..form.len() {
             let d = closest(&geo.starts[i], form.kind(i), geo.lengths[i], geo.radius, &c);
-            min_clearance = min_clearance.min(d.distance - ob.radius);
+            clearance = clearance.min(d.distance - ob.radius);
         }
+        min_clearance = min_clearance.min(clearance);
+        inverse_sum += if clearance > 0.0 {
+            1.0 / clearance
+        } else {
+            f32::INFINITY
+        };
     }
+    let risk = match scenario.options.risk {
+        RiskMeasure::Mean if !scenario.obstacles.is_empty() => {
+            inverse_sum / scenario.obstacles.len() as f32
+        }
+        _ => inverse_sum,
+    };
     let max_arc = scenario.needle.curvature_radius * scenario.needle.max_arc_deg.to_radians();
     let max_line = max_line_length(scenario);
     // Bounds are checked with a relative slack of one part in 10^5 (f32 rounding of the report).
@@ -119,6 +137,8 @@ pub fn check(
     Verdict {
         target_error,
         min_clearance,
+        length: geo.total_length(),
+        risk,
         within_bounds,
         feasible,
     }

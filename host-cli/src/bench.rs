@@ -1,0 +1,90 @@
+//! `needle bench`: how long planning a scenario takes on this machine, and the solver's effort
+//! per form. Runs are sequential on one thread; the figure reported is the median.
+
+use planner_core::{plan, PlanReport, Scenario};
+use serde_json::{json, Value};
+use std::time::Instant;
+
+/// Timing of repeated plans of one scenario.
+pub struct BenchResult {
+    /// Wall-clock time of each run (µs), sorted.
+    pub times_us: Vec<f64>,
+    /// The (identical) report of every run.
+    pub report: PlanReport,
+}
+
+impl BenchResult {
+    /// Median run time (µs).
+    pub fn median_us(&self) -> f64 {
+        let t = &self.times_us;
+        let n = t.len();
+        if n % 2 == 1 {
+            t[n / 2]
+        } else {
+            (t[n / 2 - 1] + t[n / 2]) / 2.0
+        }
+    }
+}
+
+/// Plans `scenario` `runs` times (after `warmup` unmeasured runs).
+pub fn run(scenario: &Scenario, warmup: usize, runs: usize) -> anyhow::Result<BenchResult> {
+    let mut report = plan(scenario)?;
+    for _ in 0..warmup {
+        report = plan(scenario)?;
+    }
+    let mut times_us = Vec::with_capacity(runs.max(1));
+    for _ in 0..runs.max(1) {
+        let t = Instant::now();
+        let r = plan(scenario)?;
+        times_us.push(t.elapsed().as_secs_f64() * 1e6);
+        std::hint::black_box(&r);
+    }
+    times_us.sort_by(f64::total_cmp);
+    Ok(BenchResult { times_us, report })
+}
+
+/// Human-readable summary.
+pub fn table(name: &str, r: &BenchResult) -> String {
+    let mut s = format!(
+        "{name}: {} runs, median {:.1} us, min {:.1} us, max {:.1} us\n",
+        r.times_us.len(),
+        r.median_us(),
+        r.times_us[0],
+        r.times_us[r.times_us.len() - 1]
+    );
+    s.push_str(&format!(
+        "{:<5} {:>10} {:>12}\n",
+        "form", "iterations", "evaluations"
+    ));
+    for o in &r.report.forms {
+        s.push_str(&format!(
+            "{:<5} {:>10} {:>12}\n",
+            o.form.to_string(),
+            o.iterations,
+            o.evaluations
+        ));
+    }
+    s.push_str(&format!(
+        "{:<5} {:>10} {:>12}\n",
+        "total",
+        r.report.iterations(),
+        r.report.evaluations()
+    ));
+    s
+}
+
+/// JSON summary.
+pub fn to_json(name: &str, r: &BenchResult) -> Value {
+    json!({
+        "scenario": name,
+        "runs": r.times_us.len(),
+        "median_us": r.median_us(),
+        "min_us": r.times_us[0],
+        "max_us": r.times_us[r.times_us.len() - 1],
+        "forms": r.report.forms.iter().map(|o| json!({
+            "form": o.form.to_string(),
+            "iterations": o.iterations,
+            "evaluations": o.evaluations,
+        })).collect::<Vec<_>>(),
+    })
+}

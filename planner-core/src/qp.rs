@@ -1,0 +1,295 @@
+//! A small dense convex QP solver (primal active set) on fixed-size buffers:
+//!
+//! minimise ½ pᵀBp + gᵀp  subject to  Aₑ p = 0  and  aᵢᵀp ≥ bᵢ,
+//!
+//! started from the feasible point p = 0 (the SQP keeps its iterate feasible, so every bᵢ ≤ 0).
+//! Each iteration solves the equality-constrained KKT system of the working set by Gaussian
+//! elimination with partial pivoting (Nocedal & Wright, Algorithm 16.3).
+
+use crate::problem::{Vars, MAX_VARS};
+
+/// Inequality rows the QP can hold: two bounds per variable, the tilt cone and clearances.
+pub const MAX_ROWS: usize = 2 * MAX_VARS + 1 + 12;
+
+const MAX_EQ: usize = 3;
+const KKT: usize = MAX_VARS + MAX_EQ + MAX_VARS;
+
+/// A QP instance.
+#[derive(Clone, Debug)]
+pub struct Qp {
+    /// Number of variables.
+    pub n: usize,
+    /// Hessian (positive definite).
+    pub h: [Vars; MAX_VARS],
+    /// Linear term.
+    pub g: Vars,
+    /// Equality rows (`p` must be orthogonal to them).
+    pub eq: [Vars; MAX_EQ],
+    /// Number of equality rows.
+    pub m_eq: usize,
+    /// Inequality rows aᵢ.
+    pub rows: [Vars; MAX_ROWS],
+    /// Right-hand sides bᵢ (≤ 0).
+    pub rhs: [f32; MAX_ROWS],
+    /// Number of inequality rows.
+    pub m: usize,
+}
+
+/// A QP solution.
+#[derive(Clone, Debug)]
+pub struct QpSolution {
+    /// The step.
+    pub p: Vars,
+    /// Multipliers of the equality rows.
+    pub eq_mult: [f32; MAX_EQ],
+    /// Multipliers of the inequality rows (zero for inactive rows).
+    pub mult: [f32; MAX_ROWS],
+}
+
+/// Why the QP could not be solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QpError {
+    /// The KKT matrix of a working set was singular (dependent constraints).
+    Singular,
+    /// The active-set iteration budget ran out.
+    Budget,
+}
+
+impl Qp {
+    /// An empty QP over `n` variables with Hessian `h` and gradient `g`.
+    pub fn new(n: usize, h: [Vars; MAX_VARS], g: Vars) -> Qp {
+        Qp {
+            n,
+            h,
+            g,
+            eq: [[0.0; MAX_VARS]; MAX_EQ],
+            m_eq: 0,
+            rows: [[0.0; MAX_VARS]; MAX_ROWS],
+            rhs: [0.0; MAX_ROWS],
+            m: 0,
+        }
+    }
+
+    /// Adds an equality row; returns false when full.
+    pub fn push_eq(&mut self, a: &Vars) -> bool {
+        if self.m_eq >= MAX_EQ {
+            return false;
+        }
+        self.eq[self.m_eq] = *a;
+        self.m_eq += 1;
+        true
+    }
+
+    /// Adds an inequality row aᵀp ≥ b (b is clamped to ≤ 0); returns false when full.
+    pub fn push_row(&mut self, a: &Vars, b: f32) -> bool {
+        if self.m >= MAX_ROWS {
+            return false;
+        }
+        self.rows[self.m] = *a;
+        self.rhs[self.m] = b.min(0.0);
+        self.m += 1;
+        true
+    }
+
+    fn dot(&self, a: &Vars, b: &Vars) -> f32 {
+        let mut s = 0.0;
+        for k in 0..self.n {
+            s += a[k] * b[k];
+        }
+        s
+    }
+
+    /// Solves the QP from p = 0.
+    pub fn solve(&self) -> Result<QpSolution, QpError> {
+        let n = self.n;
+        let mut p = [0.0f32; MAX_VARS];
+        let mut working = [0usize; MAX_VARS];
+        let mut w_len = 0usize;
+        let mut in_working = [false; MAX_ROWS];
+        for _ in 0..4 * MAX_ROWS {
+            // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
+            let dim = n + self.m_eq + w_len;
+            let mut k = [[0.0f32; KKT]; KKT];
+            let mut rhs = [0.0f32; KKT];
+            for i in 0..n {
+                for j in 0..n {
+                    k[i][j] = self.h[i][j];
+                }
+                let mut hp = 0.0;
+                for j in 0..n {
+                    hp += self.h[i][j] * p[j];
+                }
+                rhs[i] = -(hp + self.g[i]);
+            }
+            for r in 0..self.m_eq + w_len {
+                let a = if r < self.m_eq {
+                    &self.eq[r]
+                } else {
+                    &self.rows[working[r - self.m_eq]]
+                };
+                for j in 0..n {
+                    k[n + r][j] = a[j];
+                    k[j][n + r] = -a[j];
+                }
+            }
+            let sol = solve_dense(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
+            let d = &sol[..n];
+            let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+            let scale = p.iter().take(n).fold(1.0f32, |m, v| m.max(libm::fabsf(*v)));
+            if step_norm <= 1e-7 * scale {
+                // Stationary on the working set: check the inequality multipliers.
+                let mut worst: Option<(usize, f32)> = None;
+                for w in 0..w_len {
+                    let mu = sol[n + self.m_eq + w];
+                    if mu < 0.0 && worst.is_none_or(|(_, m)| mu < m) {
+                        worst = Some((w, mu));
+                    }
+                }
+                match worst {
+                    None => {
+                        let mut out = QpSolution {
+                            p,
+                            eq_mult: [0.0; MAX_EQ],
+                            mult: [0.0; MAX_ROWS],
+                        };
+                        out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
+                        for w in 0..w_len {
+                            out.mult[working[w]] = sol[n + self.m_eq + w];
+                        }
+                        return Ok(out);
+                    }
+                    Some((w, _)) => {
+                        in_working[working[w]] = false;
+                        for i in w..w_len - 1 {
+                            working[i] = working[i + 1];
+                        }
+                        w_len -= 1;
+                    }
+                }
+                continue;
+            }
+            // Longest step along d that keeps every inequality.
+            let mut alpha = 1.0f32;
+            let mut blocking = None;
+            let mut dv = [0.0f32; MAX_VARS];
+            dv[..n].copy_from_slice(d);
+            for i in 0..self.m {
+                if in_working[i] {
+                    continue;
+                }
+                let ad = self.dot(&self.rows[i], &dv);
+                if ad < 0.0 {
+                    let slack = self.rhs[i] - self.dot(&self.rows[i], &p);
+                    let t = (slack / ad).max(0.0);
+                    if t < alpha {
+                        alpha = t;
+                        blocking = Some(i);
+                    }
+                }
+            }
+            for j in 0..n {
+                p[j] += alpha * dv[j];
+            }
+            if let Some(i) = blocking {
+                if w_len < n {
+                    working[w_len] = i;
+                    w_len += 1;
+                    in_working[i] = true;
+                } else {
+                    return Err(QpError::Singular);
+                }
+            }
+        }
+        Err(QpError::Budget)
+    }
+}
+
+/// Solves the `dim`-square system in place; `None` when a pivot vanishes.
+fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Option<[f32; KKT]> {
+    let mut scale = 0.0f32;
+    for row in a.iter().take(dim) {
+        for v in row.iter().take(dim) {
+            scale = scale.max(libm::fabsf(*v));
+        }
+    }
+    let tiny = scale * 1e-9;
+    for col in 0..dim {
+        let mut piv = col;
+        for r in col + 1..dim {
+            if libm::fabsf(a[r][col]) > libm::fabsf(a[piv][col]) {
+                piv = r;
+            }
+        }
+        if !(libm::fabsf(a[piv][col]) > tiny) {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in col + 1..dim {
+            let f = a[r][col] / a[col][col];
+            if f != 0.0 {
+                for c in col..dim {
+                    a[r][c] -= f * a[col][c];
+                }
+                b[r] -= f * b[col];
+            }
+        }
+    }
+    let mut x = [0.0f32; KKT];
+    for r in (0..dim).rev() {
+        let mut s = b[r];
+        for c in r + 1..dim {
+            s -= a[r][c] * x[c];
+        }
+        x[r] = s / a[r][r];
+    }
+    if x[..dim].iter().all(|v| v.is_finite()) {
+        Some(x)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn identity(n: usize) -> [Vars; MAX_VARS] {
+        let mut h = [[0.0; MAX_VARS]; MAX_VARS];
+        for (i, row) in h.iter_mut().enumerate().take(n) {
+            row[i] = 1.0;
+        }
+        h
+    }
+
+    #[test]
+    fn unconstrained_step_is_newton() {
+        let mut g = [0.0; MAX_VARS];
+        g[0] = 2.0;
+        g[1] = -4.0;
+        let s = Qp::new(2, identity(2), g).solve().unwrap();
+        assert!((s.p[0] + 2.0).abs() < 1e-6 && (s.p[1] - 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn bound_and_equality_are_respected() {
+        // min ½|p|² + g·p with g = (-1, -1, 0), p0 + p1 + p2 = 0, p0 ≤ 0.25.
+        let mut g = [0.0; MAX_VARS];
+        g[0] = -1.0;
+        g[1] = -1.0;
+        let mut qp = Qp::new(3, identity(3), g);
+        let mut eq = [0.0; MAX_VARS];
+        eq[..3].copy_from_slice(&[1.0, 1.0, 1.0]);
+        qp.push_eq(&eq);
+        let mut row = [0.0; MAX_VARS];
+        row[0] = -1.0;
+        qp.push_row(&row, -0.25);
+        let s = qp.solve().unwrap();
+        // Without the bound: p = (1/3, 1/3, -2/3); with it p0 = 0.25 and p1 - p2 = 1 - ... :
+        // minimise over p1: ½(p1² + (0.25 + p1)²) - p1 -> p1 = 0.375, p2 = -0.625.
+        assert!((s.p[0] - 0.25).abs() < 1e-5, "{:?}", &s.p[..3]);
+        assert!((s.p[1] - 0.375).abs() < 1e-5);
+        assert!((s.p[2] + 0.625).abs() < 1e-5);
+        assert!(s.mult[0] > 0.0);
+    }
+}

@@ -1,0 +1,322 @@
+//! "Path classification": the best path of one form.
+//!
+//! For every side assignment of the arcs (plane mode) or every seed plane (3-D), seeds are moved
+//! onto the target and scored; the best distinct ones are refined by the SQP; the best refined
+//! path is re-checked by [`crate::verify`] and reported with the numbers the check measured.
+
+use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
+use crate::kinematics::{entry_basis, insertion_frame, V3};
+use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
+use crate::problem::{Evaluation, Problem, Vars};
+use crate::scenario::{Scenario, Workspace};
+use crate::seeds::{seed, splits, HEADINGS};
+use crate::sqp::{self, restore, LocalSolution};
+use crate::verify::check;
+
+/// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
+pub const SPACE_PLANES: usize = 8;
+/// Distinct seeds refined per side assignment (plane) or per seed plane (3-D).
+pub const REFINED_PER_GROUP: usize = 3;
+
+/// The best few admissible seeds, kept distinct.
+struct Shortlist {
+    items: heapless::Vec<(f32, Vars), REFINED_PER_GROUP>,
+}
+
+impl Shortlist {
+    fn new() -> Self {
+        Shortlist {
+            items: heapless::Vec::new(),
+        }
+    }
+
+    fn offer(&mut self, e: &Evaluation, n: usize) {
+        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.05);
+        if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
+            if e.objective < self.items[i].0 {
+                self.items[i] = (e.objective, e.x);
+            }
+            return;
+        }
+        if self.items.is_full() {
+            let worst = (0..self.items.len())
+                .max_by(|&a, &b| self.items[a].0.total_cmp(&self.items[b].0))
+                .unwrap_or(0);
+            if e.objective >= self.items[worst].0 {
+                return;
+            }
+            self.items.swap_remove(worst);
+        }
+        // Room was made above.
+        let _ = self.items.push((e.objective, e.x));
+    }
+}
+
+/// Effort spent on a form.
+#[derive(Default)]
+struct Effort {
+    iterations: u32,
+    evaluations: u32,
+}
+
+/// Scores every seed of one group and refines the shortlist and the `extra` starts; returns the
+/// best local solution.
+fn solve_group(
+    p: &Problem,
+    psi: f32,
+    sides: u8,
+    extra: &[Vars],
+    effort: &mut Effort,
+) -> Option<LocalSolution> {
+    let mut list = Shortlist::new();
+    let arc_sides = if p.plane {
+        1
+    } else {
+        1u16 << p.form.arc_count()
+    };
+    for s in 0..arc_sides {
+        let s = if p.plane { sides } else { s as u8 };
+        for h in 0..HEADINGS {
+            for split in splits(p.form.len()) {
+                let Some(mut x) = seed(p, psi, h, s, split) else {
+                    continue;
+                };
+                if !restore(p, &mut x, &mut effort.evaluations) {
+                    continue;
+                }
+                let e = p.evaluate(&x);
+                effort.evaluations += 1;
+                if e.admissible(p) {
+                    list.offer(&e, p.n);
+                }
+            }
+        }
+    }
+    let mut best: Option<LocalSolution> = None;
+    for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
+        if let Some(sol) = sqp::solve(p, x) {
+            effort.iterations += sol.iterations;
+            effort.evaluations += sol.evaluations;
+            if best
+                .as_ref()
+                .is_none_or(|b| sol.eval.objective < b.eval.objective)
+            {
+                best = Some(sol);
+            }
+        }
+    }
+    best
+}
+
+/// Starts for `form` made from the best paths of the forms one segment shorter: the missing
+/// segment is inserted with zero length, so a form never reports a worse path than a sub-form
+/// it contains. Each start comes with its plane-mode side assignment.
+fn extension_starts(
+    scenario: &Scenario,
+    form: Form,
+    previous: &[FormOutcome],
+) -> heapless::Vec<(u8, Vars), EXTENSIONS> {
+    let mut out = heapless::Vec::new();
+    for o in previous
+        .iter()
+        .filter(|o| o.feasible && o.form.len() + 1 == form.len())
+    {
+        for gap in 0..form.len() {
+            let shorter = (0..form.len()).filter(|&i| i != gap).map(|i| form.kind(i));
+            if !shorter.eq((0..o.form.len()).map(|i| o.form.kind(i))) {
+                continue;
+            }
+            let mut lengths = [0.0; MAX_CONTROL_DEGREE];
+            let mut bevels = [0.0; MAX_CONTROL_DEGREE];
+            for (k, i) in (0..form.len()).filter(|&i| i != gap).enumerate() {
+                lengths[i] = o.segments[k].length;
+                bevels[i] = o.segments[k].bevel_deg.to_radians();
+            }
+            let mut sides = 0u8;
+            let mut facing_negative = false;
+            let mut arc = 0;
+            for i in 0..form.len() {
+                if form.kind(i) == SegmentKind::Arc {
+                    if libm::fabsf(bevels[i]) > 1.0 {
+                        facing_negative = !facing_negative;
+                    }
+                    if facing_negative {
+                        sides |= 1 << arc;
+                    }
+                    arc += 1;
+                }
+            }
+            let p = Problem::new(scenario, form, sides);
+            let mut x = [0.0; crate::problem::MAX_VARS];
+            x[0] = o.insertion.theta1_deg.to_radians();
+            if !p.plane {
+                x[1] = o.insertion.theta2_deg.to_radians();
+            }
+            for i in 0..form.len() {
+                x[p.length_var(i)] = lengths[i] / p.radius;
+                if let Some(k) = p.bevel_var(i) {
+                    x[k] = bevels[i];
+                }
+            }
+            if out.push((sides, x)).is_err() {
+                return out;
+            }
+        }
+    }
+    out
+}
+
+/// Extension starts kept per form (forms one shorter times insertion places).
+const EXTENSIONS: usize = 16;
+
+/// Plans one form of `scenario`; `previous` holds the outcomes of forms already planned.
+pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> FormOutcome {
+    let mut effort = Effort::default();
+    let mut best: Option<(Problem, LocalSolution)> = None;
+    let extensions = extension_starts(scenario, form, previous);
+    let mut extra: heapless::Vec<Vars, EXTENSIONS> = heapless::Vec::new();
+    if scenario.options.workspace == Workspace::PlaneYz {
+        for sides in 0..(1u16 << form.arc_count()) {
+            let p = Problem::new(scenario, form, sides as u8);
+            extra.clear();
+            for (s, x) in extensions.iter() {
+                if u16::from(*s) == sides {
+                    // Same capacity as `extensions`.
+                    let _ = extra.push(*x);
+                }
+            }
+            let sol = solve_group(&p, 0.0, sides as u8, &extra, &mut effort);
+            consider(p, sol, &mut best);
+        }
+    } else {
+        for k in 0..SPACE_PLANES {
+            let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
+            let p = Problem::new(scenario, form, 0);
+            let sol = solve_group(&p, psi, 0, &[], &mut effort);
+            consider(p, sol, &mut best);
+        }
+        for (_, x) in extensions.iter() {
+            let p = Problem::new(scenario, form, 0);
+            let sol = sqp::solve(&p, x);
+            if let Some(s) = &sol {
+                effort.iterations += s.iterations;
+                effort.evaluations += s.evaluations;
+            }
+            consider(p, sol, &mut best);
+        }
+    }
+    match best {
+        Some((p, sol)) => report(&p, &sol, &effort),
+        None => infeasible(form, &effort),
+    }
+}
+
+fn wrap_degrees(rad: f32) -> f32 {
+    let mut d = rad.to_degrees() % 360.0;
+    if d > 180.0 {
+        d -= 360.0;
+    } else if d <= -180.0 {
+        d += 360.0;
+    }
+    d
+}
+
+/// The outcome of a refined path, with the numbers measured by the independent check.
+fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
+    let x = &sol.eval.x;
+    let (t1, t2) = p.angles(x);
+    let basis = entry_basis(p.scenario.entry.direction);
+    let heading = insertion_frame(V3::zeros(), &basis, t1, t2).e3();
+    let nominal: V3 = basis.column(2).into();
+    let insertion = Insertion {
+        theta1_deg: t1.to_degrees(),
+        theta2_deg: t2.to_degrees(),
+        tilt_deg: libm::acosf(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
+        direction: [heading.x, heading.y, heading.z],
+    };
+    let lengths = p.lengths(x);
+    let bevels = p.bevels(x);
+    let mut segments = Segments::new();
+    for i in 0..p.form.len() {
+        let bevel = if p.form.kind(i) == SegmentKind::Arc {
+            wrap_degrees(bevels[i])
+        } else {
+            0.0
+        };
+        // Capacity equals the longest form.
+        let _ = segments.push(SegmentPlan {
+            kind: p.form.kind(i),
+            length: lengths[i],
+            bevel_deg: bevel,
+        });
+    }
+    let verdict = check(p.scenario, p.form, &insertion, &segments);
+    let w = &p.scenario.weights;
+    let penalty = if verdict.min_clearance > 0.0 {
+        0.0
+    } else {
+        1e6
+    };
+    let objective = w.length * verdict.length
+        + w.risk * verdict.risk
+        + w.penalty * penalty
+        + w.control * p.form.len() as f32;
+    let status = if verdict.feasible {
+        sol.status
+    } else {
+        SolveStatus::Infeasible
+    };
+    FormOutcome {
+        form: p.form,
+        status,
+        feasible: verdict.feasible,
+        length: verdict.length,
+        risk: verdict.risk,
+        penalty,
+        objective: if verdict.feasible {
+            objective
+        } else {
+            f32::INFINITY
+        },
+        min_clearance: verdict.min_clearance,
+        target_error: verdict.target_error,
+        insertion,
+        segments,
+        iterations: effort.iterations,
+        evaluations: effort.evaluations,
+    }
+}
+
+fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
+    FormOutcome {
+        form,
+        status: SolveStatus::Infeasible,
+        feasible: false,
+        length: f32::NAN,
+        risk: f32::NAN,
+        penalty: f32::NAN,
+        objective: f32::INFINITY,
+        min_clearance: f32::NAN,
+        target_error: f32::NAN,
+        insertion: Insertion::default(),
+        segments: Segments::new(),
+        iterations: effort.iterations,
+        evaluations: effort.evaluations,
+    }
+}
+
+/// Keeps the better of `best` and the solution of problem `p`.
+fn consider<'a>(
+    p: Problem<'a>,
+    sol: Option<LocalSolution>,
+    best: &mut Option<(Problem<'a>, LocalSolution)>,
+) {
+    if let Some(sol) = sol {
+        if best
+            .as_ref()
+            .is_none_or(|(_, b)| sol.eval.objective < b.eval.objective)
+        {
+            *best = Some((p, sol));
+        }
+    }
+}

@@ -1,0 +1,340 @@
+//! A bounded feasible-path SQP for one form.
+//!
+//! The iterate always reaches the target: after every trial step the end-point equality is
+//! restored by min-norm Gauss–Newton ([`restore`]), so the merit function is the objective itself
+//! and the QP only needs the tangent step (Aₑ p = 0). Bounds, the tilt cone and the nearest
+//! clearances enter the QP linearised; the risk term 1/d keeps iterates away from obstacles.
+//! The Hessian of the Lagrangian is a damped BFGS approximation (Powell's damping keeps it
+//! positive definite). Work is bounded: at most [`MAX_ITERATIONS`] iterations, each with at most
+//! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
+
+use crate::plan::SolveStatus;
+use crate::problem::{Evaluation, Problem, Vars, MAX_VARS};
+use crate::qp::{Qp, MAX_ROWS};
+use crate::scenario::MAX_OBSTACLES;
+
+/// Iteration budget of one local solve.
+pub const MAX_ITERATIONS: u32 = 40;
+/// Trial points per line search.
+pub const MAX_BACKTRACKS: u32 = 8;
+/// Gauss–Newton steps per restoration.
+pub const MAX_RESTORE: u32 = 8;
+/// Largest change of any variable in one step (radians or radius-lengths).
+const TRUST: f32 = 0.5;
+/// Clearance rows given to the QP: the nearest obstacles only.
+const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
+
+/// Result of a local solve.
+#[derive(Clone, Debug)]
+pub struct LocalSolution {
+    /// The best point (feasible, on target).
+    pub eval: Evaluation,
+    /// How the solve ended.
+    pub status: SolveStatus,
+    /// Iterations taken.
+    pub iterations: u32,
+    /// Evaluations made (full and restoration).
+    pub evaluations: u32,
+    /// Size of the last QP step (a KKT residual: zero at a stationary point).
+    pub step_norm: f32,
+}
+
+/// End-point tolerance the optimiser solves to (mm).
+pub fn equality_tolerance(p: &Problem) -> f32 {
+    (p.scenario.target.tolerance * 0.01).min(1e-3)
+}
+
+/// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that
+/// keep the bounds. Returns whether the end is within the tolerance; `evals` counts kinematics.
+pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
+    let tol = equality_tolerance(p);
+    for _ in 0..=MAX_RESTORE {
+        let (_, r, jac) = p.end_constraint(x);
+        *evals += 1;
+        let norm = libm::sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        if !norm.is_finite() {
+            return false;
+        }
+        if norm <= tol {
+            return true;
+        }
+        // Variables pinned at a bound that the step would push further out are held fixed.
+        let mut free = [true; MAX_VARS];
+        let mut delta = [0.0f32; MAX_VARS];
+        for _ in 0..p.n {
+            if !min_norm_step(p, &jac, &r, &free, &mut delta) {
+                return false;
+            }
+            let mut changed = false;
+            for k in 0..p.n {
+                let out_low = x[k] <= p.lower[k] && delta[k] < 0.0;
+                let out_high = x[k] >= p.upper[k] && delta[k] > 0.0;
+                if free[k] && (out_low || out_high) {
+                    free[k] = false;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        // Limit the step so that Gauss–Newton stays in its region of validity.
+        let big = delta
+            .iter()
+            .take(p.n)
+            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+        let shrink = if big > TRUST { TRUST / big } else { 1.0 };
+        for k in 0..p.n {
+            x[k] = (x[k] + shrink * delta[k]).clamp(p.lower[k], p.upper[k]);
+        }
+    }
+    false
+}
+
+/// delta = -Jᶠᵀ (Jᶠ Jᶠᵀ)⁻¹ r over the free columns (with a tiny Tikhonov term).
+fn min_norm_step(
+    p: &Problem,
+    jac: &[Vars; 3],
+    r: &[f32; 3],
+    free: &[bool; MAX_VARS],
+    delta: &mut Vars,
+) -> bool {
+    let m = p.m_eq;
+    let mut a = [[0.0f32; 3]; 3];
+    for i in 0..m {
+        for j in 0..m {
+            for k in 0..p.n {
+                if free[k] {
+                    a[i][j] += jac[i][k] * jac[j][k];
+                }
+            }
+        }
+    }
+    let trace = (0..m).map(|i| a[i][i]).sum::<f32>();
+    for (i, row) in a.iter_mut().enumerate().take(m) {
+        row[i] += 1e-7 * trace + 1e-12;
+    }
+    let mut y = [r[0], r[1], r[2]];
+    if !solve_small(&mut a, &mut y, m) {
+        return false;
+    }
+    for k in 0..MAX_VARS {
+        delta[k] = 0.0;
+        if k < p.n && free[k] {
+            for i in 0..m {
+                delta[k] -= jac[i][k] * y[i];
+            }
+        }
+    }
+    true
+}
+
+/// Cholesky-free Gaussian elimination for the 2×2 / 3×3 normal equations.
+fn solve_small(a: &mut [[f32; 3]; 3], b: &mut [f32; 3], m: usize) -> bool {
+    for col in 0..m {
+        let mut piv = col;
+        for r in col + 1..m {
+            if libm::fabsf(a[r][col]) > libm::fabsf(a[piv][col]) {
+                piv = r;
+            }
+        }
+        if !(libm::fabsf(a[piv][col]) > 0.0) {
+            return false;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in col + 1..m {
+            let f = a[r][col] / a[col][col];
+            for c in col..m {
+                a[r][c] -= f * a[col][c];
+            }
+            b[r] -= f * b[col];
+        }
+    }
+    for r in (0..m).rev() {
+        let mut s = b[r];
+        for c in r + 1..m {
+            s -= a[r][c] * b[c];
+        }
+        b[r] = s / a[r][r];
+    }
+    b.iter().take(m).all(|v| v.is_finite())
+}
+
+/// Gradient of the Lagrangian for the nonlinear constraints (end point, clearances, tilt).
+fn lagrangian_grad(
+    p: &Problem,
+    e: &Evaluation,
+    eq: &[f32; 3],
+    clear: &[(usize, f32)],
+    tilt_mult: f32,
+) -> Vars {
+    let mut g = e.grad;
+    let tg = p.tilt_margin_grad(&e.x);
+    for k in 0..p.n {
+        for (r, mu) in eq.iter().enumerate().take(p.m_eq) {
+            g[k] -= mu * e.jac[r][k];
+        }
+        for &(o, mu) in clear {
+            g[k] -= mu * e.clearance_grad[o][k];
+        }
+        g[k] -= tilt_mult * tg[k];
+    }
+    g
+}
+
+/// Runs the SQP from `x0` (restored onto the target first). `None` when the start cannot be made
+/// feasible.
+pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
+    let mut evals = 0u32;
+    let mut x = *x0;
+    if !restore(p, &mut x, &mut evals) {
+        return None;
+    }
+    let mut cur = p.evaluate(&x);
+    evals += 1;
+    if !cur.admissible(p) {
+        return None;
+    }
+    let n = p.n;
+    let gamma = p.scenario.weights.length * p.radius + 1.0;
+    let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
+    for (i, row) in h.iter_mut().enumerate().take(n) {
+        row[i] = gamma;
+    }
+    let mut status = SolveStatus::BudgetExhausted;
+    let mut iterations = 0;
+    let mut step_norm = f32::INFINITY;
+    while iterations < MAX_ITERATIONS {
+        iterations += 1;
+        // Build the QP of the tangent step.
+        let mut qp = Qp::new(n, h, cur.grad);
+        for r in 0..p.m_eq {
+            qp.push_eq(&cur.jac[r]);
+        }
+        for k in 0..n {
+            let mut unit = [0.0; MAX_VARS];
+            unit[k] = 1.0;
+            qp.push_row(&unit, (p.lower[k] - cur.x[k]).max(-TRUST));
+            unit[k] = -1.0;
+            qp.push_row(&unit, -(p.upper[k] - cur.x[k]).min(TRUST));
+        }
+        let tilt_row = qp.m;
+        if !p.plane {
+            qp.push_row(&p.tilt_margin_grad(&cur.x), -p.tilt_margin(&cur.x));
+        }
+        let mut clear_rows = [(0usize, 0usize); QP_CLEARANCES];
+        let mut n_clear = 0;
+        let mut taken = [false; MAX_OBSTACLES];
+        for _ in 0..QP_CLEARANCES.min(p.scenario.obstacles.len()) {
+            let mut best: Option<usize> = None;
+            for o in 0..p.scenario.obstacles.len() {
+                if !taken[o] && best.is_none_or(|b| cur.clearance[o] < cur.clearance[b]) {
+                    best = Some(o);
+                }
+            }
+            let Some(o) = best else { break };
+            taken[o] = true;
+            let row = qp.m;
+            if qp.push_row(&cur.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
+                clear_rows[n_clear] = (o, row);
+                n_clear += 1;
+            }
+        }
+        let Ok(sol) = qp.solve() else {
+            status = SolveStatus::BudgetExhausted;
+            break;
+        };
+        let mut slope = 0.0;
+        step_norm = 0.0f32;
+        for k in 0..n {
+            slope += cur.grad[k] * sol.p[k];
+            step_norm = step_norm.max(libm::fabsf(sol.p[k]));
+        }
+        if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
+            status = SolveStatus::Converged;
+            break;
+        }
+        // Backtracking line search on the restored objective.
+        let mut t = 1.0f32;
+        let mut next: Option<Evaluation> = None;
+        for _ in 0..MAX_BACKTRACKS {
+            let mut xt = cur.x;
+            for k in 0..n {
+                xt[k] = (cur.x[k] + t * sol.p[k]).clamp(p.lower[k], p.upper[k]);
+            }
+            if restore(p, &mut xt, &mut evals) {
+                let e = p.evaluate(&xt);
+                evals += 1;
+                if e.admissible(p) && e.objective <= cur.objective + 1e-4 * t * slope {
+                    next = Some(e);
+                    break;
+                }
+            }
+            t *= 0.5;
+        }
+        let Some(next) = next else {
+            // No decrease along a descent direction: stationary to f32 resolution.
+            status = SolveStatus::Converged;
+            break;
+        };
+        let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = clear_rows[..n_clear]
+            .iter()
+            .map(|&(o, row)| (o, sol.mult[row]))
+            .collect();
+        let tilt_mult = if p.plane { 0.0 } else { sol.mult[tilt_row] };
+        let g_old = lagrangian_grad(p, &cur, &sol.eq_mult, &clear, tilt_mult);
+        let g_new = lagrangian_grad(p, &next, &sol.eq_mult, &clear, tilt_mult);
+        let mut s = [0.0f32; MAX_VARS];
+        let mut y = [0.0f32; MAX_VARS];
+        for k in 0..n {
+            s[k] = next.x[k] - cur.x[k];
+            y[k] = g_new[k] - g_old[k];
+        }
+        bfgs_update(&mut h, &s, &y, n);
+        cur = next;
+    }
+    Some(LocalSolution {
+        eval: cur,
+        status,
+        iterations,
+        evaluations: evals,
+        step_norm,
+    })
+}
+
+/// Powell-damped BFGS update of `h` with step `s` and gradient change `y`.
+fn bfgs_update(h: &mut [Vars; MAX_VARS], s: &Vars, y: &Vars, n: usize) {
+    let mut hs = [0.0f32; MAX_VARS];
+    let mut shs = 0.0f32;
+    let mut sy = 0.0f32;
+    for i in 0..n {
+        for j in 0..n {
+            hs[i] += h[i][j] * s[j];
+        }
+        shs += s[i] * hs[i];
+        sy += s[i] * y[i];
+    }
+    if !(shs > 1e-12) {
+        return;
+    }
+    let theta = if sy >= 0.2 * shs {
+        1.0
+    } else {
+        0.8 * shs / (shs - sy)
+    };
+    let mut r = [0.0f32; MAX_VARS];
+    let mut sr = 0.0f32;
+    for i in 0..n {
+        r[i] = theta * y[i] + (1.0 - theta) * hs[i];
+        sr += s[i] * r[i];
+    }
+    if !(sr > 1e-12) {
+        return;
+    }
+    for i in 0..n {
+        for j in 0..n {
+            h[i][j] += r[i] * r[j] / sr - hs[i] * hs[j] / shs;
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! Every kind of bad input gets its typed error (and never a panic).
+
+use planner_core::scenario::{Obstacle, Workspace};
+use planner_core::{plan, Field, Form, PlanError, Scenario};
+
+fn err(s: &Scenario) -> PlanError {
+    plan(s).unwrap_err()
+}
+
+#[test]
+fn non_finite_numbers() {
+    let mut s = Scenario::paper();
+    s.needle.curvature_radius = f32::NAN;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::CurvatureRadius));
+    let mut s = Scenario::paper();
+    s.target.position[2] = f32::INFINITY;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::TargetPosition));
+    let mut s = Scenario::paper();
+    s.obstacles[1].center[0] = f32::NAN;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::ObstacleCenter(1)));
+    let mut s = Scenario::paper();
+    s.weights.risk = f32::NEG_INFINITY;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::Weights));
+    let mut s = Scenario::paper();
+    s.entry.direction[1] = f32::NAN;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::EntryDirection));
+}
+
+#[test]
+fn non_positive_sizes() {
+    let mut s = Scenario::paper();
+    s.needle.curvature_radius = 0.0;
+    assert_eq!(err(&s), PlanError::NotPositive(Field::CurvatureRadius));
+    let mut s = Scenario::paper();
+    s.obstacles[2].radius = -1.0;
+    assert_eq!(err(&s), PlanError::NotPositive(Field::ObstacleRadius(2)));
+    let mut s = Scenario::paper();
+    s.target.tolerance = 0.0;
+    assert_eq!(err(&s), PlanError::NotPositive(Field::TargetTolerance));
+}
+
+#[test]
+fn out_of_range_settings() {
+    let mut s = Scenario::paper();
+    s.entry.max_tilt_deg = 95.0;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::MaxTilt));
+    let mut s = Scenario::paper();
+    s.weights.control = -1.0;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::Weights));
+    let mut s = Scenario::paper();
+    s.options.min_clearance = -0.5;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::MinClearance));
+    let mut s = Scenario::paper();
+    s.entry.direction = [0.0; 3];
+    assert_eq!(err(&s), PlanError::ZeroDirection);
+}
+
+#[test]
+fn control_degree_and_form_selection() {
+    let mut s = Scenario::paper();
+    s.options.max_control_degree = 0;
+    assert!(matches!(
+        err(&s),
+        PlanError::ControlDegreeOutOfRange { requested: 0, .. }
+    ));
+    s.options.max_control_degree = 9;
+    assert!(matches!(
+        err(&s),
+        PlanError::ControlDegreeOutOfRange {
+            requested: 9,
+            max: 4
+        }
+    ));
+    s.options.max_control_degree = 2;
+    s.options.forms.insert(Form::parse("LRL").unwrap());
+    assert_eq!(err(&s), PlanError::NoForms);
+}
+
+#[test]
+fn entry_or_target_inside_an_obstacle() {
+    let mut s = Scenario::paper();
+    s.obstacles[0].center = [0.0, 0.0, 5.0];
+    assert_eq!(err(&s), PlanError::EntryInsideObstacle(0));
+    let mut s = Scenario::paper();
+    s.obstacles[2].center = [0.0, 3.0, 88.0];
+    assert_eq!(err(&s), PlanError::TargetInsideObstacle(2));
+    let mut s = Scenario::paper();
+    s.target.position = s.entry.position;
+    assert_eq!(err(&s), PlanError::TargetAtEntry);
+}
+
+#[test]
+fn plane_mode_needs_a_planar_scenario() {
+    let mut s = Scenario::paper();
+    s.target.position[0] = 3.0;
+    assert_eq!(err(&s), PlanError::NotInPlane(Field::TargetPosition));
+    let mut s = Scenario::paper();
+    s.entry.direction = [0.2, 0.0, 1.0];
+    assert_eq!(err(&s), PlanError::NotInPlane(Field::EntryDirection));
+    s.options.workspace = Workspace::Space;
+    assert!(plan(&s).is_ok());
+}
+
+#[test]
+fn an_enclosed_target_is_unreachable() {
+    let mut s = Scenario::paper();
+    s.obstacles.clear();
+    // A ring of circles around the target, touching each other, leaves no way in.
+    for k in 0..16 {
+        let a = k as f32 * core::f32::consts::TAU / 16.0;
+        s.obstacles
+            .push(Obstacle {
+                center: [0.0, 15.0 * a.sin(), 90.0 + 15.0 * a.cos()],
+                radius: 4.0,
+            })
+            .unwrap();
+    }
+    assert_eq!(err(&s), PlanError::Unreachable);
+}
