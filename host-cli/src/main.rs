@@ -4,6 +4,7 @@ mod device_bench;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
 use planner_core::form::FormSet;
@@ -42,10 +43,39 @@ struct PlanArgs {
 enum Command {
     /// Plan a scenario on this machine.
     Plan(PlanArgs),
+    /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
+    Send(SendArgs),
+    /// Check that a device answers, and how fast.
+    Ping {
+        #[command(flatten)]
+        link: LinkArgs,
+        /// Pings to send.
+        #[arg(long, default_value_t = 4)]
+        count: u32,
+    },
+    /// Show a device's firmware, protocol version and capacities.
+    Info {
+        #[command(flatten)]
+        link: LinkArgs,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// List serial ports with their USB vendor and product ids.
+    Ports,
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
     /// Measure the firmware in QEMU: flash, RAM, stack and instructions per plan.
     DeviceBench(device_bench::Args),
+}
+
+/// `needle send`: the options of `plan` plus where the device is.
+#[derive(clap::Args)]
+struct SendArgs {
+    #[command(flatten)]
+    plan: PlanArgs,
+    #[command(flatten)]
+    link: LinkArgs,
 }
 
 #[derive(clap::Args)]
@@ -94,6 +124,21 @@ fn plan(args: &PlanArgs) -> Result<()> {
     Ok(())
 }
 
+fn send(args: &SendArgs) -> Result<()> {
+    let scenario = load(&args.plan)?;
+    let (result, device) = device::commands::plan_on_device(&scenario, &args.link)?;
+    let report = result.context("planning failed")?;
+    let stats = Stats {
+        time_us: device.time_us,
+    };
+    if args.plan.json {
+        println!("{}", plan_json(&scenario, &report, stats));
+    } else {
+        print!("{}", plan_table(&report, stats));
+    }
+    Ok(())
+}
+
 fn bench(args: &BenchArgs) -> Result<()> {
     let files = if args.files.is_empty() {
         vec![PathBuf::from("examples/paper.toml")]
@@ -124,6 +169,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan(a),
+        Command::Send(a) => send(a),
+        Command::Ping { link, count } => device::commands::ping(link, *count),
+        Command::Info { link, json } => device::commands::info(link, *json),
+        Command::Ports => device::commands::ports(),
         Command::Bench(a) => bench(a),
         Command::DeviceBench(a) => device_bench::run(a),
     };

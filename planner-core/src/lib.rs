@@ -7,6 +7,10 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// Small dense linear algebra on fixed arrays reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+// `!(x > 0.0)` is deliberate: it is also true for NaN, which must be rejected.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod clearance;
 pub mod error;

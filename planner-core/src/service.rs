@@ -68,11 +68,13 @@ enum Job {
     Uploading {
         id: u16,
         total: u16,
+        crc: u32,
         received: u16,
     },
     Planning {
         id: u16,
         total_bytes: u16,
+        request_crc: u32,
         session: PlanSession,
         done: u8,
         forms: u8,
@@ -81,9 +83,18 @@ enum Job {
     Finished {
         id: u16,
         total_bytes: u16,
+        request_crc: u32,
         len: u16,
         crc: u32,
     },
+}
+
+/// What identifies an upload: its length and CRC (with the request id).
+#[derive(Clone, Copy)]
+struct Upload {
+    offset: u16,
+    total: u16,
+    crc: u32,
 }
 
 /// Fixed-size receive queue (a ring); `const`-constructible so the service can live in a static.
@@ -291,8 +302,9 @@ impl Core {
             RequestBody::Upload {
                 offset,
                 total,
+                crc,
                 data,
-            } => self.upload(id, offset, total, &data, tx),
+            } => self.upload(id, Upload { offset, total, crc }, &data, tx),
             RequestBody::Status => self.status(id, tx),
             RequestBody::Fetch { offset, max_len } => self.fetch(id, offset, max_len, tx),
             RequestBody::Cancel => {
@@ -322,17 +334,24 @@ impl Core {
         }
     }
 
-    fn upload(&mut self, id: u16, offset: u16, total: u16, data: &[u8], tx: &mut dyn FnMut(&[u8])) {
+    fn upload(&mut self, id: u16, up: Upload, data: &[u8], tx: &mut dyn FnMut(&[u8])) {
+        let Upload { offset, total, crc } = up;
         let ack = |received, total| ReplyBody::Uploaded { received, total };
         match self.job {
             // A repeated chunk of an upload already complete: the ack was lost.
             Job::Planning {
-                id: a, total_bytes, ..
+                id: a,
+                total_bytes,
+                request_crc,
+                ..
             }
             | Job::Finished {
-                id: a, total_bytes, ..
-            } if a == id => {
-                return self.send(id, ack(total_bytes, total_bytes), tx);
+                id: a,
+                total_bytes,
+                request_crc,
+                ..
+            } if a == id && total_bytes == total && request_crc == crc => {
+                return self.send(id, ack(total, total), tx);
             }
             Job::Planning { id: active, .. } => {
                 return self.fault(id, Fault::Busy { active }, tx);
@@ -340,8 +359,9 @@ impl Core {
             Job::Uploading {
                 id: a,
                 total: t,
+                crc: c,
                 received,
-            } if a == id && t == total => {
+            } if a == id && t == total && c == crc => {
                 if offset != received {
                     // A repeat or a gap: tell the host where to continue.
                     return self.send(id, ack(received, total), tx);
@@ -362,11 +382,6 @@ impl Core {
                         tx,
                     );
                 }
-                self.job = Job::Uploading {
-                    id,
-                    total,
-                    received: 0,
-                };
             }
         }
         let start = usize::from(offset);
@@ -380,15 +395,23 @@ impl Core {
         self.job = Job::Uploading {
             id,
             total,
+            crc,
             received,
         };
-        self.send(id, ack(received, total), tx);
-        if received == total {
-            self.start_plan(id, total, tx);
+        if received < total {
+            return self.send(id, ack(received, total), tx);
         }
+        let whole = &self.upload[..usize::from(total)];
+        if crate::wire::crc::crc32(whole) != crc {
+            self.job = Job::Idle;
+            return self.fault(id, Fault::BadUploadCrc, tx);
+        }
+        self.send(id, ack(received, total), tx);
+        self.start_plan(id, up, tx);
     }
 
-    fn start_plan(&mut self, id: u16, total: u16, tx: &mut dyn FnMut(&[u8])) {
+    fn start_plan(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
+        let total = up.total;
         let request =
             match postcard::take_from_bytes::<PlanRequest>(&self.upload[..usize::from(total)]) {
                 Ok((r, [])) => r,
@@ -404,6 +427,7 @@ impl Core {
                 self.job = Job::Planning {
                     id,
                     total_bytes: total,
+                    request_crc: up.crc,
                     session,
                     done: 0,
                     forms,
@@ -411,7 +435,7 @@ impl Core {
                 };
                 self.status(id, tx);
             }
-            Err(e) => self.store_result(id, total, &Err(e), tx),
+            Err(e) => self.store_result(id, up, &Err(e), tx),
         }
     }
 
@@ -420,6 +444,7 @@ impl Core {
         let Job::Planning {
             id,
             total_bytes,
+            request_crc,
             session,
             done,
             last,
@@ -428,7 +453,12 @@ impl Core {
         else {
             return false;
         };
-        let (id, total_bytes) = (*id, *total_bytes);
+        let id = *id;
+        let up = Upload {
+            offset: 0,
+            total: *total_bytes,
+            crc: *request_crc,
+        };
         match session.step() {
             Some(o) => {
                 *last = Some((o.form, o.feasible));
@@ -440,7 +470,7 @@ impl Core {
                 {
                     let result = session.finish();
                     self.stats.plans += 1;
-                    self.store_result(id, total_bytes, &result, tx);
+                    self.store_result(id, up, &result, tx);
                 }
             }
         }
@@ -450,7 +480,7 @@ impl Core {
     fn store_result(
         &mut self,
         id: u16,
-        total_bytes: u16,
+        up: Upload,
         result: &PlanResult,
         tx: &mut dyn FnMut(&[u8]),
     ) {
@@ -460,7 +490,8 @@ impl Core {
                 let crc = crate::wire::crc::crc32(bytes);
                 self.job = Job::Finished {
                     id,
-                    total_bytes,
+                    total_bytes: up.total,
+                    request_crc: up.crc,
                     len,
                     crc,
                 };
@@ -480,6 +511,7 @@ impl Core {
                 id: a,
                 total,
                 received,
+                ..
             } if *a == id => ReplyBody::Uploaded {
                 received: *received,
                 total: *total,

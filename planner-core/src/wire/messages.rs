@@ -52,6 +52,8 @@ pub struct Request {
 }
 
 /// What the host asks.
+// A chunk makes `Upload` the large variant: one message lives at a time, boxing needs a heap.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum RequestBody {
     /// Identify yourself: answered by [`ReplyBody::Hello`].
@@ -62,12 +64,16 @@ pub enum RequestBody {
         nonce: u32,
     },
     /// Part of an encoded [`PlanRequest`] starting at `offset`; the plan starts once all `total`
-    /// bytes are in. Answered by [`ReplyBody::Uploaded`] (the host continues from `received`).
+    /// bytes are in and their CRC-32 is `crc`. Answered by [`ReplyBody::Uploaded`] (the host
+    /// continues from `received`). A repeat of a finished upload (same id, length and CRC: the
+    /// same scenario) is acknowledged without planning again.
     Upload {
         /// Position of `data` in the encoded request.
         offset: u16,
         /// Length of the whole encoded request.
         total: u16,
+        /// CRC-32 of the whole encoded request.
+        crc: u32,
         /// The bytes.
         data: Chunk,
     },
@@ -190,6 +196,8 @@ pub enum Fault {
     Overrun,
     /// The complete plan request did not decode as a scenario.
     BadScenario,
+    /// The complete plan request does not match the CRC-32 its chunks announced.
+    BadUploadCrc,
 }
 
 /// What a device reports about itself.
@@ -268,7 +276,10 @@ impl MaxSize for Header {
 impl MaxSize for RequestBody {
     const MAX_SIZE: usize = 1 + max(
         u32::MAX_SIZE,
-        max(2 * u16::MAX_SIZE + Chunk::MAX_SIZE, 2 * u16::MAX_SIZE),
+        max(
+            2 * u16::MAX_SIZE + u32::MAX_SIZE + Chunk::MAX_SIZE,
+            2 * u16::MAX_SIZE,
+        ),
     );
 }
 

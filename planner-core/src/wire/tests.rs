@@ -101,6 +101,7 @@ fn bounds_are_exact_for_worst_case_values() {
         body: RequestBody::Upload {
             offset: u16::MAX,
             total: u16::MAX,
+            crc: u32::MAX,
             data: chunk.clone(),
         },
     };
