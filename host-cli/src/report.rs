@@ -63,6 +63,7 @@ pub fn outcome_json(scenario: &Scenario, o: &FormOutcome, with_points: bool) -> 
             "direction": o.insertion.direction,
         },
         "segments": segments,
+        "kkt_residual": num(o.kkt_residual),
         "iterations": o.iterations,
         "evaluations": o.evaluations,
     });
@@ -88,6 +89,7 @@ pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> Valu
                 "objective": if f { num(o.objective) } else { Value::Null },
                 "min_clearance": if f { num(o.min_clearance) } else { Value::Null },
                 "target_error": if f { num(o.target_error) } else { Value::Null },
+                "kkt_residual": if f { num(o.kkt_residual) } else { Value::Null },
                 "iterations": o.iterations,
                 "evaluations": o.evaluations,
             })

@@ -124,14 +124,18 @@ pub fn rotate(v: V3, axis: V3, angle: f32) -> V3 {
     v * c + axis.cross(&v) * s + axis * (axis.dot(&v) * (1.0 - c))
 }
 
-/// The first frame of the path: the entry basis turned by `theta1` about its e1, after `theta2`
-/// about its e2. `tilt` from the nominal axis satisfies cos(tilt) = cos(theta1) cos(theta2).
+/// The first frame of the path: the entry basis turned by `theta2` about its e2, then by
+/// `theta1` about its (fixed) e1. The tilt from the nominal axis satisfies
+/// cos(tilt) = cos(theta1) cos(theta2).
 pub fn insertion_frame(position: V3, basis: &Matrix3<f32>, theta1: f32, theta2: f32) -> Frame {
-    let b1: V3 = basis.column(0).into();
-    let b2: V3 = basis.column(1).into();
-    let b3: V3 = basis.column(2).into();
-    let turn = |v: V3| rotate(rotate(v, b2, theta2), b1, theta1);
-    Frame::from_columns(position, turn(b1), turn(b2), turn(b3))
+    let (s1, c1) = (libm::sinf(theta1), libm::cosf(theta1));
+    let (s2, c2) = (libm::sinf(theta2), libm::cosf(theta2));
+    // Rx(theta1) * Ry(theta2) in basis coordinates.
+    let turn = Matrix3::new(c2, 0.0, s2, s1 * s2, c1, -s1 * c2, -c1 * s2, s1, c1 * c2);
+    Frame {
+        p: position,
+        r: basis * turn,
+    }
 }
 
 /// Geometry of one path: the frame at the start of every segment and at the end.

@@ -7,7 +7,7 @@
 use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
-use crate::problem::{Evaluation, Problem, Vars};
+use crate::problem::{Problem, Value, Vars};
 use crate::scenario::{Scenario, Workspace};
 use crate::seeds::{seed, splits, HEADINGS};
 use crate::sqp::{self, restore, LocalSolution};
@@ -30,7 +30,7 @@ impl Shortlist {
         }
     }
 
-    fn offer(&mut self, e: &Evaluation, n: usize) {
+    fn offer(&mut self, e: &Value, n: usize) {
         let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.05);
         if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
             if e.objective < self.items[i].0 {
@@ -84,7 +84,7 @@ fn solve_group(
                 if !restore(p, &mut x, &mut effort.evaluations) {
                     continue;
                 }
-                let e = p.evaluate(&x);
+                let e = p.value(&x);
                 effort.evaluations += 1;
                 if e.admissible(p) {
                     list.offer(&e, p.n);
@@ -282,6 +282,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
         target_error: verdict.target_error,
         insertion,
         segments,
+        kkt_residual: sol.step_norm,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
@@ -300,6 +301,7 @@ fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
         target_error: f32::NAN,
         insertion: Insertion::default(),
         segments: Segments::new(),
+        kkt_residual: f32::NAN,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
