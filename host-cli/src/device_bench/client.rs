@@ -108,6 +108,7 @@ impl Device {
         let total = postcard::to_slice(&PlanRequest::new(scenario), &mut encoded)
             .map_err(|e| anyhow!("cannot encode the scenario: {e}"))?
             .len();
+        let crc = planner_core::wire::crc::crc32(&encoded[..total]);
         let step = Duration::from_secs(5);
         for (i, chunk) in encoded[..total].chunks(MAX_CHUNK).enumerate() {
             let offset = (i * MAX_CHUNK) as u16;
@@ -117,6 +118,7 @@ impl Device {
                 RequestBody::Upload {
                     offset,
                     total: total as u16,
+                    crc,
                     data,
                 },
             )?;
