@@ -3,6 +3,53 @@
 
 use crate::line::{FaultyLine, LineConfig, LineStats};
 use planner_core::service::{DeviceService, DeviceStats};
+use planner_core::wire::{FrameDecoder, MAX_FRAME};
+use std::collections::HashSet;
+
+/// Checks that no frame damaged on the line is ever accepted: every payload a receiver's decoder
+/// accepts must be one the other side actually sent.
+#[derive(Default)]
+struct Audit {
+    sent: HashSet<Vec<u8>>,
+    clean: Box<FrameDecoder<MAX_FRAME>>,
+    line: Box<FrameDecoder<MAX_FRAME>>,
+    accepted: u64,
+    forged: u64,
+}
+
+impl Audit {
+    fn sent(&mut self, clean: &[u8]) {
+        for &b in clean {
+            if let Some(Ok(p)) = self.clean.push(b) {
+                self.sent.insert(p.to_vec());
+            }
+        }
+    }
+
+    fn arrived(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if let Some(Ok(p)) = self.line.push(b) {
+                self.accepted += 1;
+                if !self.sent.contains(p) {
+                    self.forged += 1;
+                }
+            }
+        }
+    }
+}
+
+/// What the audit found, per direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AuditReport {
+    /// Frames the device's decoder accepted.
+    pub accepted_by_device: u64,
+    /// Of those, frames the host never sent (damaged frames that got through).
+    pub forged_to_device: u64,
+    /// Frames the host's decoder accepted.
+    pub accepted_by_host: u64,
+    /// Of those, frames the device never sent.
+    pub forged_to_host: u64,
+}
 
 /// A simulated device reached through a (possibly faulty) line in each direction.
 pub struct InProcess {
@@ -11,6 +58,7 @@ pub struct InProcess {
     to_host: FaultyLine,
     inbox: Vec<u8>,
     scratch: Vec<u8>,
+    audit: Option<Box<(Audit, Audit)>>,
 }
 
 impl InProcess {
@@ -27,6 +75,26 @@ impl InProcess {
             to_host: FaultyLine::new(to_host),
             inbox: Vec::new(),
             scratch: Vec::new(),
+            audit: None,
+        }
+    }
+
+    /// Starts checking every frame accepted in either direction against the frames sent.
+    pub fn audited(mut self) -> Self {
+        self.audit = Some(Box::default());
+        self
+    }
+
+    /// What the audit found (zeros if it is off).
+    pub fn audit_report(&self) -> AuditReport {
+        match &self.audit {
+            None => AuditReport::default(),
+            Some(a) => AuditReport {
+                accepted_by_device: a.0.accepted,
+                forged_to_device: a.0.forged,
+                accepted_by_host: a.1.accepted,
+                forged_to_host: a.1.forged,
+            },
         }
     }
 
@@ -34,6 +102,10 @@ impl InProcess {
     pub fn write(&mut self, bytes: &[u8]) {
         self.scratch.clear();
         self.to_device.carry(bytes, &mut self.scratch);
+        if let Some(a) = &mut self.audit {
+            a.0.sent(bytes);
+            a.0.arrived(&self.scratch);
+        }
         self.device.receive(&self.scratch);
     }
 
@@ -44,12 +116,18 @@ impl InProcess {
                 device,
                 to_host,
                 inbox,
+                audit,
                 ..
             } = self;
             let mut sent = Vec::new();
             // Bounded: every poll consumes input or plans a form, and both run out.
             while device.poll(&mut |b: &[u8]| sent.extend_from_slice(b)) {}
+            let before = inbox.len();
             to_host.carry(&sent, inbox);
+            if let Some(a) = audit {
+                a.1.sent(&sent);
+                a.1.arrived(&inbox[before..]);
+            }
         }
         let n = buf.len().min(self.inbox.len());
         buf[..n].copy_from_slice(&self.inbox[..n]);

@@ -10,7 +10,7 @@ pub mod in_process;
 pub mod line;
 pub mod serve;
 
-pub use in_process::InProcess;
+pub use in_process::{AuditReport, InProcess};
 pub use line::{FaultyLine, LineConfig, LineStats, Pacer};
 pub use planner_core::service::{DeviceIdentity, DeviceService};
 pub use serve::serve;

@@ -159,6 +159,7 @@ pub struct Client<T: Transport> {
     chunk: usize,
     max_chunk: usize,
     finished: Option<(u16, u16, u32)>,
+    abandoned: Option<u16>,
 }
 
 impl<T: Transport> Client<T> {
@@ -180,6 +181,7 @@ impl<T: Transport> Client<T> {
             chunk: MAX_CHUNK,
             max_chunk: MAX_CHUNK,
             finished: None,
+            abandoned: None,
         }
     }
 
@@ -267,49 +269,27 @@ impl<T: Transport> Client<T> {
         body: &RequestBody,
         mut accept: impl FnMut(&ReplyBody) -> Option<R>,
     ) -> Result<R, LinkError> {
+        self.exchange_with(what, id, |_| body.clone(), &mut accept)
+    }
+
+    /// Like `exchange`, but the body is rebuilt for each attempt from the current chunk size,
+    /// which halves after every failed attempt and grows back after every answered one.
+    fn exchange_with<R>(
+        &mut self,
+        what: &'static str,
+        id: u16,
+        mut make: impl FnMut(usize) -> RequestBody,
+        accept: &mut dyn FnMut(&ReplyBody) -> Option<R>,
+    ) -> Result<R, LinkError> {
         for attempt in 0..=self.config.retries {
             if attempt > 0 {
                 self.stats.retried += 1;
+                self.chunk = (self.chunk / 2).max(MIN_CHUNK);
             }
-            self.send(id, body)?;
-            let deadline = Instant::now() + self.config.timeout;
-            loop {
-                let reply = match self.next_event(deadline)? {
-                    None => {
-                        self.stats.timeouts += 1;
-                        break;
-                    }
-                    Some(Event::Damaged) => {
-                        self.stats.detected += 1;
-                        break;
-                    }
-                    Some(Event::Reply(r)) => r,
-                };
-                if let ReplyBody::Fault(Fault::UnsupportedVersion { supported, .. }) = reply.body {
-                    return Err(LinkError::Version { device: supported });
-                }
-                if reply.header.version != PROTOCOL_VERSION {
-                    return Err(LinkError::Version {
-                        device: reply.header.version,
-                    });
-                }
-                if let ReplyBody::Fault(f) = reply.body {
-                    if is_line_fault(f) && (reply.header.id == 0 || f == Fault::Undecodable) {
-                        self.stats.detected += 1;
-                        break;
-                    }
-                }
-                if reply.header.id != id {
-                    continue;
-                }
-                if let Some(r) = accept(&reply.body) {
-                    return Ok(r);
-                }
-                match reply.body {
-                    ReplyBody::Fault(f) => return Err(LinkError::Device(f)),
-                    ReplyBody::Finished { len, crc } => self.finished = Some((id, len, crc)),
-                    _ => {}
-                }
+            let body = make(self.chunk);
+            if let Some(r) = self.attempt(id, &body, accept)? {
+                self.chunk = (self.chunk + MIN_CHUNK).min(self.max_chunk);
+                return Ok(r);
             }
         }
         Err(LinkError::NoAnswer {
@@ -319,22 +299,54 @@ impl<T: Transport> Client<T> {
         })
     }
 
-    /// Runs `exchange` and adapts the chunk size to how it went.
-    fn chunked_exchange<R>(
+    /// Sends `body` once and waits for an answer; `None` after silence or a damaged frame.
+    fn attempt<R>(
         &mut self,
-        what: &'static str,
         id: u16,
         body: &RequestBody,
-        accept: impl FnMut(&ReplyBody) -> Option<R>,
-    ) -> Result<R, LinkError> {
-        let before = self.stats.retried;
-        let r = self.exchange(what, id, body, accept);
-        if self.stats.retried > before {
-            self.chunk = (self.chunk / 2).max(MIN_CHUNK);
-        } else {
-            self.chunk = (self.chunk + MIN_CHUNK).min(self.max_chunk);
+        accept: &mut dyn FnMut(&ReplyBody) -> Option<R>,
+    ) -> Result<Option<R>, LinkError> {
+        self.send(id, body)?;
+        let deadline = Instant::now() + self.config.timeout;
+        loop {
+            let reply = match self.next_event(deadline)? {
+                None => {
+                    self.stats.timeouts += 1;
+                    return Ok(None);
+                }
+                Some(Event::Damaged) => {
+                    self.stats.detected += 1;
+                    return Ok(None);
+                }
+                Some(Event::Reply(r)) => r,
+            };
+            if let ReplyBody::Fault(Fault::UnsupportedVersion { supported, .. }) = reply.body {
+                return Err(LinkError::Version { device: supported });
+            }
+            if reply.header.version != PROTOCOL_VERSION {
+                return Err(LinkError::Version {
+                    device: reply.header.version,
+                });
+            }
+            if let ReplyBody::Fault(f) = reply.body {
+                if is_line_fault(f) && (reply.header.id == 0 || f == Fault::Undecodable) {
+                    // The device saw a damaged frame, most likely this request.
+                    self.stats.detected += 1;
+                    return Ok(None);
+                }
+            }
+            if reply.header.id != id {
+                continue;
+            }
+            if let Some(r) = accept(&reply.body) {
+                return Ok(Some(r));
+            }
+            match reply.body {
+                ReplyBody::Fault(f) => return Err(LinkError::Device(f)),
+                ReplyBody::Finished { len, crc } => self.finished = Some((id, len, crc)),
+                _ => {}
+            }
         }
-        r
     }
 
     /// Asks the device who it is; fails on a protocol version mismatch.
@@ -386,10 +398,22 @@ impl<T: Transport> Client<T> {
     ) -> Result<PlanResult, LinkError> {
         let id = self.new_id();
         self.finished = None;
-        self.upload(id, request)?;
-        let (len, crc) = self.await_plan(id, progress)?;
-        let bytes = self.fetch(id, len, crc)?;
-        postcard::from_bytes::<PlanResult>(&bytes).map_err(|_| LinkError::CorruptResult)
+        let result = self.upload(id, request).and_then(|()| {
+            let (len, crc) = self.await_plan(id, progress)?;
+            self.fetch(id, len, crc)
+        });
+        match result {
+            Ok(bytes) => {
+                postcard::from_bytes::<PlanResult>(&bytes).map_err(|_| LinkError::CorruptResult)
+            }
+            Err(e) => {
+                // Leave the device free for the next request: one cancel, without waiting (the
+                // line may be dead), and remember the id in case it never arrived.
+                self.abandoned = Some(id);
+                let _ = self.send(id, &RequestBody::Cancel);
+                Err(e)
+            }
+        }
     }
 
     /// Stops request `id` on the device; true if something was running.
@@ -407,19 +431,31 @@ impl<T: Transport> Client<T> {
         let mut offset = 0u16;
         let mut stalls = 0;
         while offset < total {
-            let n = self.chunk.min(usize::from(total - offset));
-            let start = usize::from(offset);
-            let data = Chunk::from_slice(&bytes[start..start + n]).unwrap_or_default();
-            let body = RequestBody::Upload {
-                offset,
-                total,
-                crc,
-                data,
+            let make = |chunk: usize| {
+                let start = usize::from(offset);
+                let n = chunk.min(usize::from(total - offset));
+                RequestBody::Upload {
+                    offset,
+                    total,
+                    crc,
+                    data: Chunk::from_slice(&bytes[start..start + n]).unwrap_or_default(),
+                }
             };
-            let received = self.chunked_exchange("upload", id, &body, |b| match b {
+            let answer = self.exchange_with("upload", id, make, &mut |b| match b {
                 ReplyBody::Uploaded { received, total: t } if *t == total => Some(*received),
                 _ => None,
-            })?;
+            });
+            let received = match answer {
+                // Still planning a request this client gave up on: stop it and go on.
+                Err(LinkError::Device(Fault::Busy { active }))
+                    if Some(active) == self.abandoned =>
+                {
+                    self.cancel(active)?;
+                    self.abandoned = None;
+                    continue;
+                }
+                other => other?,
+            };
             if received <= offset {
                 stalls += 1;
                 if stalls > self.config.retries {
@@ -507,11 +543,11 @@ impl<T: Transport> Client<T> {
             let mut out = Vec::with_capacity(usize::from(len));
             while out.len() < usize::from(len) {
                 let offset = out.len() as u16;
-                let body = RequestBody::Fetch {
+                let make = |chunk: usize| RequestBody::Fetch {
                     offset,
-                    max_len: self.chunk as u16,
+                    max_len: chunk as u16,
                 };
-                let data = self.chunked_exchange("fetch", id, &body, |b| match b {
+                let data = self.exchange_with("fetch", id, make, &mut |b| match b {
                     ReplyBody::Part {
                         offset: o,
                         total,
