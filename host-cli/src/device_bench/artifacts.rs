@@ -95,19 +95,26 @@ fn cargo_in(dir: &Path) -> Command {
     cmd
 }
 
-/// Builds the firmware for `features` (release) and returns a copy of the image named after
-/// `board`, so images of several boards can sit side by side.
+/// The image of `board` built by [`build_firmware`].
+pub fn firmware_image(root: &Path, board: &str) -> PathBuf {
+    root.join("firmware/target")
+        .join(board)
+        .join(TARGET)
+        .join("release/needle-firmware")
+}
+
+/// Builds the release firmware of `board` with `features`. Each board has its own target
+/// directory, so builds of different boards (by tests running at once, say) never overwrite
+/// each other's image.
 pub fn build_firmware(root: &Path, board: &str, features: &str) -> Result<PathBuf> {
     let dir = root.join("firmware");
     run(
-        cargo_in(&dir).args(["build", "--release", "--features", features]),
+        cargo_in(&dir)
+            .args(["build", "--release", "--features", features, "--target-dir"])
+            .arg(dir.join("target").join(board)),
         &format!("cargo build (firmware, {features})"),
     )?;
-    let out = dir.join("target").join(TARGET).join("release");
-    let image = out.join(format!("needle-firmware-{board}.elf"));
-    std::fs::copy(out.join("needle-firmware"), &image)
-        .with_context(|| format!("copying the {board} image"))?;
-    Ok(image)
+    Ok(firmware_image(root, board))
 }
 
 /// Builds the instruction-count plugin and returns the shared library's path.
