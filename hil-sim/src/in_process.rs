@@ -58,6 +58,7 @@ pub struct InProcess {
     to_host: FaultyLine,
     inbox: Vec<u8>,
     scratch: Vec<u8>,
+    outbox: Vec<u8>,
     audit: Option<Box<(Audit, Audit)>>,
 }
 
@@ -75,6 +76,7 @@ impl InProcess {
             to_host: FaultyLine::new(to_host),
             inbox: Vec::new(),
             scratch: Vec::new(),
+            outbox: Vec::new(),
             audit: None,
         }
     }
@@ -106,7 +108,16 @@ impl InProcess {
             a.0.sent(bytes);
             a.0.arrived(&self.scratch);
         }
-        self.device.receive(&self.scratch);
+        // Like a UART driver with flow control: when the queue is full the device works first.
+        let mut rest = &self.scratch[..];
+        while !rest.is_empty() {
+            let n = self.device.receive_partial(rest);
+            rest = &rest[n..];
+            if n == 0 {
+                let out = &mut self.outbox;
+                self.device.poll(&mut |b: &[u8]| out.extend_from_slice(b));
+            }
+        }
     }
 
     /// Runs the device until it is idle and moves what it sent into `buf`; 0 means silence.
@@ -117,9 +128,10 @@ impl InProcess {
                 to_host,
                 inbox,
                 audit,
+                outbox,
                 ..
             } = self;
-            let mut sent = Vec::new();
+            let mut sent = std::mem::take(outbox);
             // Bounded: every poll consumes input or plans a form, and both run out.
             while device.poll(&mut |b: &[u8]| sent.extend_from_slice(b)) {}
             let before = inbox.len();

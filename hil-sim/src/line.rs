@@ -144,7 +144,10 @@ mod tests {
         assert_eq!(out_a, out_b, "same seed, same faults");
         let s = a.stats();
         assert_eq!(out_a.len() as u64, s.bytes - s.dropped);
-        assert_eq!(out_a.iter().filter(|&&x| x != 0x5A).count() as u64, s.flipped);
+        assert_eq!(
+            out_a.iter().filter(|&&x| x != 0x5A).count() as u64,
+            s.flipped
+        );
         for n in [s.flipped, s.dropped] {
             assert!((1700..2300).contains(&n), "{s:?}");
         }

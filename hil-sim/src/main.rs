@@ -48,7 +48,8 @@ fn main() -> Result<()> {
     let mut device = Box::new(DeviceService::with_identity(IDENTITY));
     let mut out = std::io::stdout();
     if let Some(addr) = &a.tcp {
-        let listener = TcpListener::bind(addr).with_context(|| format!("cannot listen on {addr}"))?;
+        let listener =
+            TcpListener::bind(addr).with_context(|| format!("cannot listen on {addr}"))?;
         writeln!(out, "{}", listener.local_addr()?)?;
         out.flush()?;
         for conn in listener.incoming() {
@@ -60,7 +61,8 @@ fn main() -> Result<()> {
         }
         return Ok(());
     }
-    let (mut master, slave) = serialport::TTYPort::pair().context("cannot open a pseudo-terminal")?;
+    let (mut master, slave) =
+        serialport::TTYPort::pair().context("cannot open a pseudo-terminal")?;
     let path = serialport::SerialPort::name(&slave).context("the pseudo-terminal has no name")?;
     writeln!(out, "{path}")?;
     out.flush()?;

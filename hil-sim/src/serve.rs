@@ -62,7 +62,16 @@ pub fn serve(
                 rx_pace.wait(n);
                 carried.clear();
                 to_device.carry(&buf[..n], &mut carried);
-                device.receive(&carried);
+                let mut rest = &carried[..];
+                while !rest.is_empty() {
+                    let taken = device.receive_partial(rest);
+                    rest = &rest[taken..];
+                    if taken == 0 {
+                        sent.clear();
+                        device.poll(&mut |b: &[u8]| sent.extend_from_slice(b));
+                        send_out(stream, &mut to_host, &mut tx_pace, &sent)?;
+                    }
+                }
             }
             Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => {}
             Err(e) if e.kind() == ErrorKind::Interrupted => continue,
@@ -70,12 +79,22 @@ pub fn serve(
         }
         sent.clear();
         busy = device.poll(&mut |b: &[u8]| sent.extend_from_slice(b));
-        if !sent.is_empty() {
-            carried.clear();
-            to_host.carry(&sent, &mut carried);
-            tx_pace.wait(sent.len());
-            stream.write_all(&carried)?;
-            stream.flush()?;
-        }
+        send_out(stream, &mut to_host, &mut tx_pace, &sent)?;
     }
+}
+
+fn send_out(
+    stream: &mut dyn Stream,
+    line: &mut FaultyLine,
+    pace: &mut Pacer,
+    sent: &[u8],
+) -> io::Result<()> {
+    if sent.is_empty() {
+        return Ok(());
+    }
+    let mut carried = Vec::with_capacity(sent.len());
+    line.carry(sent, &mut carried);
+    pace.wait(sent.len());
+    stream.write_all(&carried)?;
+    stream.flush()
 }

@@ -209,6 +209,14 @@ impl DeviceService {
         }
     }
 
+    /// Takes as many of `bytes` as the receive queue has room for and returns how many; the
+    /// caller polls and offers the rest again (flow control for transports that can wait).
+    pub fn receive_partial(&mut self, bytes: &[u8]) -> usize {
+        let n = bytes.len().min(RX_QUEUE - self.rx.len);
+        self.rx.extend(&bytes[..n]);
+        n
+    }
+
     /// Does one bounded unit of work, writing reply bytes to `tx`; `true` while work is pending.
     pub fn poll(&mut self, tx: &mut dyn FnMut(&[u8])) -> bool {
         if core::mem::take(&mut self.overrun) {
