@@ -7,9 +7,9 @@
 //! device plan is also checked against the host's plan, bit for bit.
 
 mod artifacts;
+mod by_function;
 mod client;
 mod elf;
-mod by_function;
 mod qemu;
 
 use anyhow::{bail, Context, Result};
