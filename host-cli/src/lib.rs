@@ -2,5 +2,6 @@
 
 pub mod analysis;
 pub mod bench;
+pub mod device;
 pub mod report;
 pub mod scenario_file;

@@ -1,8 +1,11 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
+mod device_bench;
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
+use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
 use planner_core::form::FormSet;
@@ -57,8 +60,39 @@ enum Command {
     Approx(analysis::ApproxArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
+    /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
+    Send(SendArgs),
+    /// Check that a device answers, and how fast.
+    Ping {
+        #[command(flatten)]
+        link: LinkArgs,
+        /// Pings to send.
+        #[arg(long, default_value_t = 4)]
+        count: u32,
+    },
+    /// Show a device's firmware, protocol version and capacities.
+    Info {
+        #[command(flatten)]
+        link: LinkArgs,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// List serial ports with their USB vendor and product ids.
+    Ports,
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
+    /// Measure the firmware in QEMU: flash, RAM, stack and instructions per plan.
+    DeviceBench(device_bench::Args),
+}
+
+/// `needle send`: the options of `plan` plus where the device is.
+#[derive(clap::Args)]
+struct SendArgs {
+    #[command(flatten)]
+    plan: PlanArgs,
+    #[command(flatten)]
+    link: LinkArgs,
 }
 
 #[derive(clap::Args)]
@@ -113,6 +147,21 @@ fn plan(args: &PlanArgs) -> Result<()> {
     Ok(())
 }
 
+fn send(args: &SendArgs) -> Result<()> {
+    let scenario = load(&args.plan)?;
+    let (result, device) = device::commands::plan_on_device(&scenario, &args.link)?;
+    let report = result.context("planning failed")?;
+    let stats = Stats {
+        time_us: device.time_us,
+    };
+    if args.plan.json {
+        println!("{}", plan_json(&scenario, &report, stats));
+    } else {
+        print!("{}", plan_table(&report, stats));
+    }
+    Ok(())
+}
+
 fn bench(args: &BenchArgs) -> Result<()> {
     let files = if args.files.is_empty() {
         vec![PathBuf::from("examples/paper.toml")]
@@ -148,7 +197,12 @@ fn main() -> ExitCode {
         Command::Compare(a) => analysis::run_compare(a),
         Command::Approx(a) => analysis::run_approx(a),
         Command::Plot(a) => analysis::run_plot(a),
+        Command::Send(a) => send(a),
+        Command::Ping { link, count } => device::commands::ping(link, *count),
+        Command::Info { link, json } => device::commands::info(link, *json),
+        Command::Ports => device::commands::ports(),
         Command::Bench(a) => bench(a),
+        Command::DeviceBench(a) => device_bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

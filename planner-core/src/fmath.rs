@@ -20,7 +20,7 @@ pub fn sincos(x: f32) -> (f32, f32) {
     let k = round(x * (2.0 / PI));
     let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
     let z = r * r;
-    let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_160_9e-3) * z - 1.666_665_5e-1);
+    let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
     let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
     // Quadrant from k mod 4 (saturating cast: only reached for |x| far beyond any angle here).
     match (k as i64).rem_euclid(4) {

@@ -27,6 +27,7 @@ pub mod service;
 pub mod solve;
 pub mod sqp;
 pub mod verify;
+pub mod wire;
 
 pub use error::{Field, PlanError};
 pub use form::{Form, FormSet, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
