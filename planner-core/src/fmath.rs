@@ -22,8 +22,8 @@ pub fn sincos(x: f32) -> (f32, f32) {
     let z = r * r;
     let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
     let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    // Quadrant from k mod 4 (saturating cast: only reached for |x| far beyond any angle here).
-    match (k as i64).rem_euclid(4) {
+    // Quadrant from k mod 4 (the cast saturates: only for |x| far beyond any angle here).
+    match (k as i32) & 3 {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),
@@ -113,9 +113,45 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     }
 }
 
-/// Square root (libm's, correctly rounded and computed with integer and f32 operations only).
+/// Square root to about one ulp: an integer estimate of 1/sqrt refined by three Newton steps,
+/// then one correction of the root (the soft-float `sqrtf` cost a tenth of the device's time).
 pub fn sqrt(x: f32) -> f32 {
-    libm::sqrtf(x)
+    if !(x > 0.0) || x.is_infinite() {
+        // 0 -> 0, +inf -> inf, negative or NaN -> NaN.
+        return if x == 0.0 || x == f32::INFINITY {
+            x
+        } else {
+            f32::NAN
+        };
+    }
+    // Scale subnormals into the normal range, where the bit estimate holds.
+    let (x, scale) = if x < 1e-30 {
+        (x * 1e30, 1e-15)
+    } else {
+        (x, 1.0)
+    };
+    let mut y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y *= 1.5 - 0.5 * x * y * y;
+    }
+    let s = x * y;
+    (s + 0.5 * y * (x - s * s)) * scale
+}
+
+/// `a` wrapped into [0, 2 pi).
+pub fn wrap_positive(a: f32) -> f32 {
+    if !a.is_finite() {
+        return f32::NAN;
+    }
+    let tau = core::f32::consts::TAU;
+    let mut r = a - tau * ((a / tau) as i32) as f32;
+    if r < 0.0 {
+        r += tau;
+    }
+    if r >= tau {
+        r -= tau;
+    }
+    r
 }
 
 /// asin of `x` in [-1, 1] (clamped).
@@ -160,6 +196,26 @@ mod tests {
         assert_eq!(atan2(0.0, 0.0), 0.0);
         assert!(atan2(f32::NAN, 1.0).is_nan());
         assert!(atan2(1.0, f32::INFINITY).abs() < 1e-6);
+    }
+
+    #[test]
+    fn sqrt_is_within_an_ulp_or_two() {
+        for i in 0..100_000 {
+            let x = (i as f32 * 0.731).powi(2) * 1e-3 + 1e-6 * i as f32;
+            let got = sqrt(x);
+            let want = (x as f64).sqrt();
+            assert!(
+                (got as f64 - want).abs() <= 2.5e-7 * want,
+                "{x}: {got} vs {want}"
+            );
+        }
+        assert_eq!(sqrt(0.0), 0.0);
+        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
+        assert_eq!(sqrt(f32::INFINITY), f32::INFINITY);
+        let tiny = 1e-40f32;
+        assert!((sqrt(tiny) as f64 - (tiny as f64).sqrt()).abs() < 1e-6 * (tiny as f64).sqrt());
+        assert!((wrap_positive(-0.5) - (core::f32::consts::TAU - 0.5)).abs() < 1e-6);
+        assert!((wrap_positive(7.0) - (7.0 - core::f32::consts::TAU)).abs() < 1e-6);
     }
 
     #[test]

@@ -313,16 +313,55 @@ impl<'a> Problem<'a> {
     /// meaningful): a sweep over many seeds needs no more.
     pub fn value_or_blocked(&self, x: &Vars, stop_when_blocked: bool) -> Value {
         let geo = self.geometry(x);
-        let w = &self.scenario.weights;
-        let obstacles = &self.scenario.obstacles;
         let mut clearance = [f32::INFINITY; MAX_OBSTACLES];
         let mut nearest_segment = [0u8; MAX_OBSTACLES];
+        let (risk, min_clearance) = self.scan(&geo, stop_when_blocked, |o, d, seg| {
+            clearance[o] = d;
+            nearest_segment[o] = seg;
+        });
+        let w = &self.scenario.weights;
+        let length = geo.total_length();
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective = w.length * length + risk_term + w.control * self.form.len() as f32;
+        Value {
+            x: *x,
+            geo,
+            length,
+            risk,
+            objective,
+            clearance,
+            nearest_segment,
+            min_clearance,
+        }
+    }
+
+    /// Objective and smallest clearance only (what a sweep over many seeds needs), stopping at
+    /// the first obstacle the path touches.
+    pub fn score(&self, x: &Vars) -> (f32, f32) {
+        let geo = self.geometry(x);
+        let (risk, min_clearance) = self.scan(&geo, true, |_, _, _| {});
+        let w = &self.scenario.weights;
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective =
+            w.length * geo.total_length() + risk_term + w.control * self.form.len() as f32;
+        (objective, min_clearance)
+    }
+
+    /// Clearance of every obstacle (`record(obstacle, clearance, nearest segment)`); returns D
+    /// (infinite once an obstacle is within the clearance floor) and the smallest clearance.
+    fn scan(
+        &self,
+        geo: &PathGeometry,
+        stop_when_blocked: bool,
+        mut record: impl FnMut(usize, f32, u8),
+    ) -> (f32, f32) {
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
         let mut blocked = false;
-        for (o, ob) in obstacles.iter().enumerate() {
+        for (o, ob) in self.scenario.obstacles.iter().enumerate() {
             let c = v3(ob.center);
             let mut best = f32::INFINITY;
+            let mut nearest = 0u8;
             for seg in 0..self.form.len() {
                 let cl = closest(
                     &geo.starts[seg],
@@ -333,12 +372,14 @@ impl<'a> Problem<'a> {
                 );
                 if cl.distance < best {
                     best = cl.distance;
-                    nearest_segment[o] = seg as u8;
+                    nearest = seg as u8;
                 }
             }
             let d = best - ob.radius;
-            clearance[o] = d;
-            min_clearance = min_clearance.min(d);
+            record(o, d, nearest);
+            if d < min_clearance {
+                min_clearance = d;
+            }
             if d > self.min_clearance {
                 inv_sum += 1.0 / d;
             } else {
@@ -353,19 +394,7 @@ impl<'a> Problem<'a> {
         } else {
             inv_sum * self.risk_scale()
         };
-        let length = geo.total_length();
-        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
-        let objective = w.length * length + risk_term + w.control * self.form.len() as f32;
-        Value {
-            x: *x,
-            geo,
-            length,
-            risk,
-            objective,
-            clearance,
-            nearest_segment,
-            min_clearance,
-        }
+        (risk, min_clearance)
     }
 
     fn risk_scale(&self) -> f32 {

@@ -107,11 +107,18 @@ impl Qp {
         let mut w_len = 0usize;
         let mut in_working = [false; MAX_ROWS];
         let mut stationary = false;
+        // Reused each iteration: every entry of the leading dim × dim block is written below.
+        let mut k = [[0.0f32; KKT]; KKT];
+        let mut rhs = [0.0f32; KKT];
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
             let dim = n + self.m_eq + w_len;
-            let mut k = [[0.0f32; KKT]; KKT];
-            let mut rhs = [0.0f32; KKT];
+            for row in k.iter_mut().take(dim).skip(n) {
+                for v in row.iter_mut().take(dim).skip(n) {
+                    *v = 0.0;
+                }
+                rhs[n..dim].iter_mut().for_each(|r| *r = 0.0);
+            }
             for i in 0..n {
                 for j in 0..n {
                     k[i][j] = self.h[i][j];

@@ -14,7 +14,6 @@ use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::problem::{Problem, Vars, MAX_VARS};
 use crate::MAX_CONTROL_DEGREE;
 
-const TAU: f32 = core::f32::consts::TAU;
 /// Widest heading from the chord swept (radians, about 86 degrees).
 const HEADING_SPAN: f32 = 1.5;
 
@@ -54,11 +53,7 @@ fn heading_of_bend(n: (f32, f32), s: f32) -> f32 {
 
 /// Turning angle in [0, 2 pi) from heading `from` to `to` for side `s` (right turns decrease psi).
 fn turn(from: f32, to: f32, s: f32) -> f32 {
-    let mut a = s * (from - to) % TAU;
-    if a < 0.0 {
-        a += TAU;
-    }
-    a
+    crate::fmath::wrap_positive(s * (from - to))
 }
 
 fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {

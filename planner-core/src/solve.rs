@@ -7,7 +7,7 @@
 use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
-use crate::problem::{Problem, Value, Vars};
+use crate::problem::{Problem, Vars};
 use crate::scenario::{Scenario, Workspace};
 use crate::seeds::sweep;
 use crate::sqp::{self, LocalSolution};
@@ -41,11 +41,11 @@ impl Shortlist {
             .fold(f32::NEG_INFINITY, f32::max)
     }
 
-    fn offer(&mut self, e: &Value, n: usize) {
-        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.2);
+    fn offer(&mut self, objective: f32, at: &Vars, n: usize) {
+        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - at[k]) < 0.2);
         if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
-            if e.objective < self.items[i].0 {
-                self.items[i] = (e.objective, e.x);
+            if objective < self.items[i].0 {
+                self.items[i] = (objective, *at);
             }
             return;
         }
@@ -53,13 +53,13 @@ impl Shortlist {
             let worst = (0..self.items.len())
                 .max_by(|&a, &b| self.items[a].0.total_cmp(&self.items[b].0))
                 .unwrap_or(0);
-            if e.objective >= self.items[worst].0 {
+            if objective >= self.items[worst].0 {
                 return;
             }
             self.items.swap_remove(worst);
         }
         // Room was made above.
-        let _ = self.items.push((e.objective, e.x));
+        let _ = self.items.push((objective, *at));
     }
 }
 
@@ -95,12 +95,12 @@ fn solve_group(
             if list.is_full() && a1 * length + fixed >= list.worst() {
                 return f32::NEG_INFINITY;
             }
-            let e = p.value_or_blocked(x, true);
+            let (objective, min_clearance) = p.score(x);
             effort.evaluations += 1;
-            if e.admissible(p) {
-                list.offer(&e, p.n);
+            if min_clearance > p.min_clearance && objective.is_finite() && p.tilt_margin(x) >= 0.0 {
+                list.offer(objective, x, p.n);
             }
-            e.min_clearance
+            min_clearance
         });
     }
     let mut best: Option<LocalSolution> = None;
