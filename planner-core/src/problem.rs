@@ -47,7 +47,8 @@ pub struct Problem<'a> {
     pub min_clearance: f32,
     /// cos of the tilt bound.
     pub cos_max_tilt: f32,
-    basis: Matrix3<f32>,
+    /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
+    pub basis: Matrix3<f32>,
     entry: V3,
     target: V3,
 }

@@ -10,7 +10,7 @@
 //! its spacing. Seeds are handed on as problem variables.
 
 use crate::form::SegmentKind;
-use crate::kinematics::{entry_basis, insertion_frame, V3};
+use crate::kinematics::{insertion_frame, V3};
 use crate::problem::{Problem, Vars, MAX_VARS};
 use crate::MAX_CONTROL_DEGREE;
 
@@ -21,7 +21,7 @@ const HEADING_SPAN: f32 = 1.5;
 pub fn grid(len: usize) -> (usize, usize) {
     match len {
         0..=2 => (96, 1),
-        3 => (40, 16),
+        3 => (32, 12),
         _ => (14, 6),
     }
 }
@@ -178,9 +178,8 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
     let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
     let dist = crate::fmath::sqrt(d.dot(&d));
     let chord = d / dist;
-    let basis = entry_basis(p.scenario.entry.direction);
-    let b1: V3 = basis.column(0).into();
-    let b2: V3 = basis.column(1).into();
+    let b1: V3 = p.basis.column(0).into();
+    let b2: V3 = p.basis.column(1).into();
     let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
         b1
     } else {
@@ -326,7 +325,7 @@ impl SeedPlane {
     fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
         let heading =
             self.chord * crate::fmath::cos(path.heading) + self.m * crate::fmath::sin(path.heading);
-        let basis = entry_basis(p.scenario.entry.direction);
+        let basis = &p.basis;
         let b1: V3 = basis.column(0).into();
         let b2: V3 = basis.column(1).into();
         let b3: V3 = basis.column(2).into();
@@ -351,7 +350,7 @@ impl SeedPlane {
         if !p.plane {
             // Roll the bevel so that e1 is the plane normal (the bevel faces the right of the
             // heading), then flip by pi whenever the next arc bends to the other side.
-            let f0 = insertion_frame(V3::zeros(), &basis, theta1, theta2);
+            let f0 = insertion_frame(V3::zeros(), basis, theta1, theta2);
             let base = crate::fmath::atan2(self.normal.dot(&f0.e2()), self.normal.dot(&f0.e1()));
             let mut facing_left = false;
             let mut first = true;
