@@ -80,7 +80,10 @@ pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> Valu
         .iter()
         .map(|o| {
             let f = o.feasible;
+            let full = outcome_json(scenario, o, false);
             json!({
+                "insertion": if f { full["insertion"].clone() } else { Value::Null },
+                "segments": if f { full["segments"].clone() } else { Value::Null },
                 "form": o.form.to_string(),
                 "feasible": f,
                 "status": format!("{:?}", o.status),
