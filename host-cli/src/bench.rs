@@ -52,9 +52,17 @@ pub fn table(name: &str, r: &BenchResult) -> String {
         r.times_us[0],
         r.times_us[r.times_us.len() - 1]
     );
-    s.push_str(&format!("{:<5} {:>10} {:>12}\n", "form", "iterations", "evaluations"));
+    s.push_str(&format!(
+        "{:<5} {:>10} {:>12}\n",
+        "form", "iterations", "evaluations"
+    ));
     for o in &r.report.forms {
-        s.push_str(&format!("{:<5} {:>10} {:>12}\n", o.form.to_string(), o.iterations, o.evaluations));
+        s.push_str(&format!(
+            "{:<5} {:>10} {:>12}\n",
+            o.form.to_string(),
+            o.iterations,
+            o.evaluations
+        ));
     }
     s.push_str(&format!(
         "{:<5} {:>10} {:>12}\n",

@@ -1,5 +1,7 @@
 //! Host-side library behind the `needle` command: scenario files, plan rendering, commands.
 
+pub mod analysis;
 pub mod bench;
+pub mod device;
 pub mod report;
 pub mod scenario_file;

@@ -7,9 +7,14 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// Small dense linear algebra on fixed arrays reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+// `!(x > 0.0)` is deliberate: it is also true for NaN, which must be rejected.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod clearance;
 pub mod error;
+pub mod fmath;
 pub mod form;
 pub mod kinematics;
 pub mod plan;
@@ -22,6 +27,7 @@ pub mod service;
 pub mod solve;
 pub mod sqp;
 pub mod verify;
+pub mod wire;
 
 pub use error::{Field, PlanError};
 pub use form::{Form, FormSet, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};

@@ -1,4 +1,64 @@
-//! End-to-end tests live in `tests/`; this crate also holds the independent reference planner
-//! that the optimality tests compare `planner-core` against.
+//! Helpers for the end-to-end tests in `tests/`: finding (and if needed building) the `needle`
+//! binary of the same build profile, and the paths of the example scenarios. Also the
+//! independent reference planner that the optimality tests compare `planner-core` against.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
 
 pub mod reference;
+
+/// The workspace root.
+pub fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ sits in the workspace")
+        .to_path_buf()
+}
+
+/// An example scenario file by name (`paper`, `space`).
+pub fn example(name: &str) -> PathBuf {
+    workspace().join("examples").join(format!("{name}.toml"))
+}
+
+/// Path of the `needle` binary built with the profile running these tests; built on first use.
+pub fn needle_bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        // Test executables live in target/<profile-dir>/deps/.
+        let exe = std::env::current_exe().expect("test executable path");
+        let profile_dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("target/<profile>/deps layout")
+            .to_path_buf();
+        let profile = match profile_dir.file_name().and_then(|n| n.to_str()) {
+            Some("debug") => "dev".to_string(),
+            Some(other) => other.to_string(),
+            None => "dev".to_string(),
+        };
+        let status = Command::new(env!("CARGO"))
+            .args([
+                "build",
+                "--quiet",
+                "-p",
+                "needle-cli",
+                "--bin",
+                "needle",
+                "--profile",
+            ])
+            .arg(&profile)
+            .current_dir(workspace())
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "building needle failed");
+        profile_dir.join(format!("needle{}", std::env::consts::EXE_SUFFIX))
+    })
+}
+
+/// A `needle` command ready for arguments, run from the workspace root.
+pub fn needle() -> Command {
+    let mut c = Command::new(needle_bin());
+    c.current_dir(workspace());
+    c
+}

@@ -1,0 +1,23 @@
+//! A simulated needle-planner device: the very [`DeviceService`] the firmware runs, behind a line
+//! that can corrupt and lose bytes and take the time a real UART takes.
+//!
+//! Use [`InProcess`] in tests (no threads, no clock), or [`serve`] on any byte stream (the
+//! `hil-sim` binary serves a pseudo-terminal or a TCP socket).
+
+#![forbid(unsafe_code)]
+
+pub mod in_process;
+pub mod line;
+pub mod serve;
+
+pub use in_process::{AuditReport, InProcess};
+pub use line::{FaultyLine, LineConfig, LineStats, Pacer};
+pub use planner_core::service::{DeviceIdentity, DeviceService};
+pub use serve::serve;
+
+/// How the simulator introduces itself.
+pub const IDENTITY: DeviceIdentity = DeviceIdentity {
+    name: "hil-sim",
+    firmware: env!("CARGO_PKG_VERSION"),
+    build: concat!("host ", env!("CARGO_PKG_NAME")),
+};

@@ -1,0 +1,167 @@
+//! A faulty serial line: flips and drops bytes at given rates (seeded, so runs repeat), and a
+//! pacer that makes bytes take the time they take at a baud rate (8N1: 10 bits a byte).
+
+use std::time::{Duration, Instant};
+
+/// Fault rates of one direction of the line.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LineConfig {
+    /// Fraction of bytes replaced by a different byte.
+    pub flip_rate: f64,
+    /// Fraction of bytes lost.
+    pub drop_rate: f64,
+    /// Seed of the fault pattern.
+    pub seed: u64,
+}
+
+/// What the line did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LineStats {
+    /// Bytes offered.
+    pub bytes: u64,
+    /// Bytes changed.
+    pub flipped: u64,
+    /// Bytes lost.
+    pub dropped: u64,
+}
+
+/// One direction of a line.
+#[derive(Clone, Debug)]
+pub struct FaultyLine {
+    config: LineConfig,
+    state: u64,
+    stats: LineStats,
+}
+
+impl FaultyLine {
+    /// A line with these rates.
+    pub fn new(config: LineConfig) -> Self {
+        FaultyLine {
+            config,
+            // splitmix64 of the seed, so seeds 0, 1, 2 give unrelated streams (and never 0).
+            state: splitmix(config.seed) | 1,
+            stats: LineStats::default(),
+        }
+    }
+
+    /// A perfect line.
+    pub fn clean() -> Self {
+        Self::new(LineConfig::default())
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> LineStats {
+        self.stats
+    }
+
+    fn next(&mut self) -> u64 {
+        // xorshift64*: enough for fault patterns, and reproducible everywhere.
+        let mut x = self.state;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.state = x;
+        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    fn chance(&mut self, p: f64) -> bool {
+        p > 0.0 && ((self.next() >> 11) as f64 / (1u64 << 53) as f64) < p
+    }
+
+    /// Carries `bytes` across the line, appending what arrives to `out`.
+    pub fn carry(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
+        for &b in bytes {
+            self.stats.bytes += 1;
+            if self.chance(self.config.drop_rate) {
+                self.stats.dropped += 1;
+                continue;
+            }
+            if self.chance(self.config.flip_rate) {
+                self.stats.flipped += 1;
+                // XOR with a non-zero mask: the byte always changes.
+                out.push(b ^ ((self.next() % 255) as u8 + 1));
+                continue;
+            }
+            out.push(b);
+        }
+    }
+}
+
+fn splitmix(seed: u64) -> u64 {
+    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Makes bytes take their time on the line: `wait(n)` returns when `n` more bytes would have
+/// been shifted out at the baud rate, back to back with the previous ones.
+#[derive(Clone, Debug)]
+pub struct Pacer {
+    byte_time: Option<Duration>,
+    free_at: Instant,
+}
+
+impl Pacer {
+    /// Pacing at `baud` (8N1), or none.
+    pub fn new(baud: Option<u32>) -> Self {
+        Pacer {
+            byte_time: baud
+                .filter(|&b| b > 0)
+                .map(|b| Duration::from_secs_f64(10.0 / f64::from(b))),
+            free_at: Instant::now(),
+        }
+    }
+
+    /// Sleeps until `n` bytes have been carried.
+    pub fn wait(&mut self, n: usize) {
+        let Some(t) = self.byte_time else { return };
+        let now = Instant::now();
+        let start = self.free_at.max(now);
+        self.free_at = start + t * n as u32;
+        if self.free_at > now {
+            std::thread::sleep(self.free_at - now);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rates_and_seeds_are_honoured() {
+        let cfg = LineConfig {
+            flip_rate: 0.01,
+            drop_rate: 0.01,
+            seed: 7,
+        };
+        let data = vec![0x5A; 200_000];
+        let (mut a, mut b) = (FaultyLine::new(cfg), FaultyLine::new(cfg));
+        let (mut out_a, mut out_b) = (Vec::new(), Vec::new());
+        a.carry(&data, &mut out_a);
+        b.carry(&data, &mut out_b);
+        assert_eq!(out_a, out_b, "same seed, same faults");
+        let s = a.stats();
+        assert_eq!(out_a.len() as u64, s.bytes - s.dropped);
+        assert_eq!(
+            out_a.iter().filter(|&&x| x != 0x5A).count() as u64,
+            s.flipped
+        );
+        for n in [s.flipped, s.dropped] {
+            assert!((1700..2300).contains(&n), "{s:?}");
+        }
+        let mut c = FaultyLine::new(LineConfig { seed: 8, ..cfg });
+        let mut out_c = Vec::new();
+        c.carry(&data, &mut out_c);
+        assert_ne!(out_a, out_c);
+    }
+
+    #[test]
+    fn a_clean_line_is_clean() {
+        let mut l = FaultyLine::clean();
+        let mut out = Vec::new();
+        l.carry(b"hello", &mut out);
+        assert_eq!(out, b"hello");
+    }
+}

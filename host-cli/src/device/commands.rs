@@ -1,0 +1,203 @@
+//! The device commands of `needle`: `send`, `ping`, `info`, `ports`.
+
+use super::client::{Client, ClientConfig, LinkStats, Progress};
+use super::transport::{open, LinkTarget, Transport};
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use planner_core::wire::{DeviceInfo, PlanResult};
+use planner_core::Scenario;
+use std::time::{Duration, Instant};
+
+/// How to reach the device, shared by `send`, `ping` and `info`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct LinkArgs {
+    /// Serial port of the device (see `needle ports`; hil-sim prints a /dev/pts path).
+    #[arg(long, required_unless_present = "tcp", conflicts_with = "tcp")]
+    pub port: Option<String>,
+    /// Baud rate of the serial port.
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// TCP address of the device instead of a serial port (QEMU, `hil-sim --tcp`).
+    #[arg(long)]
+    pub tcp: Option<String>,
+    /// Seconds to wait for each answer (and longest silence while planning).
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
+    /// Times a request is repeated after silence or a damaged frame before giving up.
+    #[arg(long, default_value_t = 5)]
+    pub retries: u32,
+}
+
+impl LinkArgs {
+    /// Where the device is.
+    pub fn target(&self) -> LinkTarget {
+        match (&self.tcp, &self.port) {
+            (Some(addr), _) => LinkTarget::Tcp(addr.clone()),
+            (None, Some(path)) => LinkTarget::Serial {
+                path: path.clone(),
+                baud: self.baud,
+            },
+            // clap requires one of the two.
+            (None, None) => LinkTarget::Tcp(String::new()),
+        }
+    }
+
+    /// Opens the link and greets the device (the protocol version is checked here).
+    pub fn connect(&self) -> Result<(Client<Box<dyn Transport>>, DeviceInfo)> {
+        if !(self.timeout > 0.0 && self.timeout.is_finite()) {
+            bail!("--timeout must be a positive number of seconds");
+        }
+        let target = self.target();
+        let link = open(&target)?;
+        let config = ClientConfig {
+            timeout: Duration::from_secs_f64(self.timeout),
+            retries: self.retries,
+        };
+        let mut client = Client::new(link, config);
+        let info = client
+            .hello()
+            .with_context(|| format!("no planner device on {target}"))?;
+        Ok((client, info))
+    }
+}
+
+impl<T: Transport + ?Sized> Transport for Box<T> {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        (**self).send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        (**self).recv(buf, timeout)
+    }
+}
+
+/// What a plan on the device took.
+#[derive(Clone, Copy, Debug)]
+pub struct DevicePlanStats {
+    /// Wall-clock time from upload to the fetched result (µs).
+    pub time_us: u64,
+    /// Link counters.
+    pub link: LinkStats,
+}
+
+/// Plans `scenario` on the device, with a progress bar on a terminal.
+pub fn plan_on_device(
+    scenario: &Scenario,
+    link: &LinkArgs,
+) -> Result<(PlanResult, DevicePlanStats)> {
+    let (mut client, info) = link.connect()?;
+    if scenario.obstacles.len() > usize::from(info.max_obstacles) {
+        bail!(
+            "the scenario has {} obstacles but the device holds at most {}",
+            scenario.obstacles.len(),
+            info.max_obstacles
+        );
+    }
+    // Hidden when stderr is not a terminal, so piped output stays exactly `needle plan`'s.
+    let bar = ProgressBar::new(scenario.options.selected_forms().iter().count() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} planning on the device [{bar:30}] {pos}/{len} forms {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let start = Instant::now();
+    let mut on_progress = |p: Progress| {
+        bar.set_length(u64::from(p.total));
+        bar.set_position(u64::from(p.done));
+        if let Some(f) = p.form {
+            bar.set_message(format!(
+                "{f}: {}",
+                if p.feasible { "feasible" } else { "infeasible" }
+            ));
+        }
+    };
+    let result = client.plan(scenario, &mut on_progress);
+    bar.finish_and_clear();
+    let result = result.context("planning on the device failed")?;
+    let stats = DevicePlanStats {
+        time_us: start.elapsed().as_micros() as u64,
+        link: client.stats(),
+    };
+    Ok((result, stats))
+}
+
+/// `needle ping`: round-trip times.
+pub fn ping(link: &LinkArgs, count: u32) -> Result<()> {
+    let (mut client, info) = link.connect()?;
+    for i in 0..count.max(1) {
+        let rtt = client.ping()?;
+        println!(
+            "pong from {} ({}): seq={} time={:.3} ms",
+            info.name,
+            link.target(),
+            i + 1,
+            rtt.as_secs_f64() * 1e3
+        );
+    }
+    let s = client.stats();
+    if s.retried > 0 {
+        println!(
+            "{} frames sent again, {} damaged frames detected",
+            s.retried, s.detected
+        );
+    }
+    Ok(())
+}
+
+/// `needle info`: who the device is and what it holds.
+pub fn info(link: &LinkArgs, json: bool) -> Result<()> {
+    let (_, info) = link.connect()?;
+    if json {
+        let v = serde_json::json!({
+            "protocol": info.protocol,
+            "name": info.name.as_str(),
+            "firmware": info.firmware.as_str(),
+            "build": info.build.as_str(),
+            "max_obstacles": info.max_obstacles,
+            "max_control_degree": info.max_control_degree,
+            "form_count": info.form_count,
+            "max_chunk": info.max_chunk,
+            "upload_capacity": info.upload_capacity,
+        });
+        println!("{v}");
+    } else {
+        println!("device:             {}", info.name);
+        println!("firmware:           {}", info.firmware);
+        println!("build:              {}", info.build);
+        println!("protocol:           {}", info.protocol);
+        println!("max obstacles:      {}", info.max_obstacles);
+        println!("max control degree: {}", info.max_control_degree);
+        println!("path forms:         {}", info.form_count);
+        println!("chunk size:         {} bytes", info.max_chunk);
+        println!("upload capacity:    {} bytes", info.upload_capacity);
+    }
+    Ok(())
+}
+
+/// `needle ports`: serial ports with their USB ids.
+pub fn ports() -> Result<()> {
+    let ports = serialport::available_ports().context("cannot list serial ports")?;
+    if ports.is_empty() {
+        println!("no serial ports found");
+    }
+    for p in ports {
+        match p.port_type {
+            serialport::SerialPortType::UsbPort(u) => println!(
+                "{}  usb {:04x}:{:04x}  {}  {}{}",
+                p.port_name,
+                u.vid,
+                u.pid,
+                u.manufacturer.as_deref().unwrap_or("-"),
+                u.product.as_deref().unwrap_or("-"),
+                u.serial_number
+                    .map(|s| format!("  serial {s}"))
+                    .unwrap_or_default()
+            ),
+            serialport::SerialPortType::PciPort => println!("{}  pci", p.port_name),
+            serialport::SerialPortType::BluetoothPort => println!("{}  bluetooth", p.port_name),
+            serialport::SerialPortType::Unknown => println!("{}  unknown", p.port_name),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,328 @@
+//! The message types shared by the device and the host.
+//!
+//! Every frame carries a [`Header`] (protocol version, request id) and one body. Large data (the
+//! scenario going up, the plan coming back) travels in chunks the host asks for, so on a noisy
+//! line only the damaged chunk is sent again, and every frame stays small.
+
+use super::max_size::{max, MaxSize};
+use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
+use crate::error::PlanError;
+use crate::form::Form;
+use crate::plan::PlanReport;
+use crate::scenario::{Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights};
+use serde::{Deserialize, Serialize};
+
+/// Version of this message set. A device answers any other version with
+/// [`Fault::UnsupportedVersion`] and nothing else.
+pub const PROTOCOL_VERSION: u8 = 1;
+
+/// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
+pub const MAX_CHUNK: usize = 192;
+
+/// Data of one chunk.
+pub type Chunk = heapless::Vec<u8, MAX_CHUNK>;
+
+/// Starts every message: who speaks which version, and which request this belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Header {
+    /// [`PROTOCOL_VERSION`] of the sender.
+    pub version: u8,
+    /// Chosen by the host; replies echo it (0 for faults about frames that could not be read).
+    pub id: u16,
+}
+
+impl Header {
+    /// A header of this protocol version.
+    pub const fn new(id: u16) -> Header {
+        Header {
+            version: PROTOCOL_VERSION,
+            id,
+        }
+    }
+}
+
+/// Host to device.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Request {
+    /// Version and id.
+    pub header: Header,
+    /// What is asked.
+    pub body: RequestBody,
+}
+
+/// What the host asks.
+// A chunk makes `Upload` the large variant: one message lives at a time, boxing needs a heap.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum RequestBody {
+    /// Identify yourself: answered by [`ReplyBody::Hello`].
+    Hello,
+    /// Answered by [`ReplyBody::Pong`] with the same nonce.
+    Ping {
+        /// Echoed back.
+        nonce: u32,
+    },
+    /// Part of an encoded [`PlanRequest`] starting at `offset`; the plan starts once all `total`
+    /// bytes are in and their CRC-32 is `crc`. Answered by [`ReplyBody::Uploaded`] (the host
+    /// continues from `received`). A repeat of a finished upload (same id, length and CRC: the
+    /// same scenario) is acknowledged without planning again.
+    Upload {
+        /// Position of `data` in the encoded request.
+        offset: u16,
+        /// Length of the whole encoded request.
+        total: u16,
+        /// CRC-32 of the whole encoded request.
+        crc: u32,
+        /// The bytes.
+        data: Chunk,
+    },
+    /// Where is request `id`? Answered by `Uploaded`, `Progress` or `Finished`.
+    Status,
+    /// Send part of the finished plan's encoded [`PlanResult`]: answered by [`ReplyBody::Part`].
+    Fetch {
+        /// First byte wanted.
+        offset: u16,
+        /// Most bytes wanted (the device caps it at [`MAX_CHUNK`]).
+        max_len: u16,
+    },
+    /// Stop request `id` (uploading or planning). Always answered by [`ReplyBody::Cancelled`].
+    Cancel,
+}
+
+/// Device to host.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Reply {
+    /// Version and the id of the request answered.
+    pub header: Header,
+    /// The answer.
+    pub body: ReplyBody,
+}
+
+/// What the device says.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ReplyBody {
+    /// Who the device is and what it can hold.
+    Hello(DeviceInfo),
+    /// Answer to a ping.
+    Pong {
+        /// The ping's nonce.
+        nonce: u32,
+    },
+    /// Bytes of the plan request received so far (contiguous from 0).
+    Uploaded {
+        /// Received.
+        received: u16,
+        /// Expected in all.
+        total: u16,
+    },
+    /// Sent once per form finished (and in answer to `Status` while planning).
+    Progress {
+        /// Forms done.
+        done: u8,
+        /// Forms to plan.
+        total: u8,
+        /// The form just finished (absent before the first).
+        form: Option<Form>,
+        /// Whether that form gave a feasible path.
+        feasible: bool,
+    },
+    /// The plan is done: fetch `len` bytes of encoded [`PlanResult`] whose CRC-32 is `crc`.
+    Finished {
+        /// Length of the encoded result.
+        len: u16,
+        /// CRC-32 of the whole encoded result (checks the reassembly).
+        crc: u32,
+    },
+    /// Part of the encoded result.
+    Part {
+        /// Position of `data`.
+        offset: u16,
+        /// Length of the whole encoded result.
+        total: u16,
+        /// The bytes.
+        data: Chunk,
+    },
+    /// Answer to `Cancel`.
+    Cancelled {
+        /// Whether an upload or a plan was stopped.
+        was_active: bool,
+    },
+    /// A protocol fault.
+    Fault(Fault),
+}
+
+/// Protocol faults, reported in place of an answer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// A frame failed its CRC-32 (it was corrupted on the line).
+    BadCrc,
+    /// A frame was longer than the largest message; it was dropped up to the next delimiter.
+    FrameTooLong,
+    /// A frame was too short to hold a checksum, or its byte stuffing was cut.
+    Truncated,
+    /// A frame passed its CRC but is not a message of this protocol.
+    Undecodable,
+    /// The request speaks another protocol version.
+    UnsupportedVersion {
+        /// The device's version.
+        supported: u8,
+        /// The request's version.
+        got: u8,
+    },
+    /// Another request is being planned; cancel it or wait.
+    Busy {
+        /// Its id.
+        active: u16,
+    },
+    /// No upload, plan or result with this id.
+    UnknownRequest,
+    /// The plan request is larger than the device's upload buffer.
+    TooLarge {
+        /// Bytes announced.
+        len: u16,
+        /// Bytes the device holds.
+        capacity: u16,
+    },
+    /// A fetch past the end of the result.
+    BadOffset {
+        /// Offset asked for.
+        offset: u16,
+        /// Length of the result.
+        len: u16,
+    },
+    /// Bytes arrived faster than they were processed and some were lost.
+    Overrun,
+    /// The complete plan request did not decode as a scenario.
+    BadScenario,
+    /// The complete plan request does not match the CRC-32 its chunks announced.
+    BadUploadCrc,
+}
+
+/// What a device reports about itself.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceInfo {
+    /// [`PROTOCOL_VERSION`] of the device.
+    pub protocol: u8,
+    /// Board or simulator name.
+    pub name: heapless::String<16>,
+    /// Firmware version.
+    pub firmware: heapless::String<16>,
+    /// Build details (commit, target, profile).
+    pub build: heapless::String<32>,
+    /// Obstacles the planner holds.
+    pub max_obstacles: u16,
+    /// Largest control degree.
+    pub max_control_degree: u8,
+    /// Forms in the catalogue.
+    pub form_count: u8,
+    /// Largest chunk per frame.
+    pub max_chunk: u16,
+    /// Largest encoded plan request.
+    pub upload_capacity: u16,
+}
+
+/// The planning problem as uploaded: the scenario with a counted obstacle list.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanRequest {
+    /// Needle mechanics.
+    pub needle: Needle,
+    /// Entry.
+    pub entry: Entry,
+    /// Target.
+    pub target: Target,
+    /// Obstacles.
+    pub obstacles: WireObstacles,
+    /// Weights.
+    pub weights: Weights,
+    /// Planner options.
+    pub options: PlannerOptions,
+}
+
+impl PlanRequest {
+    /// The request for a scenario.
+    pub fn new(s: &Scenario) -> Self {
+        PlanRequest {
+            needle: s.needle,
+            entry: s.entry,
+            target: s.target,
+            obstacles: WireObstacles::from_obstacles(&s.obstacles),
+            weights: s.weights,
+            options: s.options,
+        }
+    }
+
+    /// The scenario, or the typed error for more obstacles than the planner holds.
+    pub fn into_scenario(self) -> Result<Scenario, PlanError> {
+        Ok(Scenario {
+            needle: self.needle,
+            entry: self.entry,
+            target: self.target,
+            obstacles: self.obstacles.into_obstacles()?,
+            weights: self.weights,
+            options: self.options,
+        })
+    }
+}
+
+/// What a plan ends with: the report, or the planner's typed error.
+pub type PlanResult = Result<PlanReport, PlanError>;
+
+impl MaxSize for Header {
+    const MAX_SIZE: usize = u8::MAX_SIZE + u16::MAX_SIZE;
+}
+
+impl MaxSize for RequestBody {
+    const MAX_SIZE: usize = 1 + max(
+        u32::MAX_SIZE,
+        max(
+            2 * u16::MAX_SIZE + u32::MAX_SIZE + Chunk::MAX_SIZE,
+            2 * u16::MAX_SIZE,
+        ),
+    );
+}
+
+impl MaxSize for Request {
+    const MAX_SIZE: usize = Header::MAX_SIZE + RequestBody::MAX_SIZE;
+}
+
+impl MaxSize for Fault {
+    const MAX_SIZE: usize = 1 + 2 * u16::MAX_SIZE;
+}
+
+impl MaxSize for DeviceInfo {
+    const MAX_SIZE: usize = u8::MAX_SIZE
+        + 2 * heapless::String::<16>::MAX_SIZE
+        + heapless::String::<32>::MAX_SIZE
+        + u16::MAX_SIZE
+        + u8::MAX_SIZE
+        + u8::MAX_SIZE
+        + 2 * u16::MAX_SIZE;
+}
+
+impl MaxSize for ReplyBody {
+    const MAX_SIZE: usize = 1 + max(
+        DeviceInfo::MAX_SIZE,
+        max(
+            2 * u16::MAX_SIZE + Chunk::MAX_SIZE,
+            max(
+                u16::MAX_SIZE + u32::MAX_SIZE,
+                max(2 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
+            ),
+        ),
+    );
+}
+
+impl MaxSize for Reply {
+    const MAX_SIZE: usize = Header::MAX_SIZE + ReplyBody::MAX_SIZE;
+}
+
+impl MaxSize for PlanRequest {
+    const MAX_SIZE: usize = Needle::MAX_SIZE
+        + Entry::MAX_SIZE
+        + Target::MAX_SIZE
+        + heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::MAX_SIZE
+        + Weights::MAX_SIZE
+        + PlannerOptions::MAX_SIZE;
+}

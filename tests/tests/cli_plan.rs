@@ -1,0 +1,228 @@
+//! `needle plan` end to end: the JSON contract, the table, restrictions and errors.
+
+use needle_e2e::{example, needle};
+use serde_json::Value;
+use std::fmt::Write;
+
+fn plan_json(args: &[&str]) -> Value {
+    let out = needle()
+        .arg("plan")
+        .args(args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn dist(a: &Value, b: [f64; 3]) -> f64 {
+    let p: Vec<f64> = a
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    ((p[0] - b[0]).powi(2) + (p[1] - b[1]).powi(2) + (p[2] - b[2]).powi(2)).sqrt()
+}
+
+#[test]
+fn paper_json_has_the_contracted_keys_and_a_dense_path() {
+    let v = plan_json(&[example("paper").to_str().unwrap()]);
+    let best = &v["best"];
+    assert_eq!(best["form"], "RL");
+    assert_eq!(best["feasible"], true);
+    for key in [
+        "length",
+        "risk",
+        "penalty",
+        "control_degree",
+        "objective",
+        "min_clearance",
+        "target_error",
+    ] {
+        assert!(best[key].is_number(), "best.{key}");
+    }
+    assert_eq!(best["control_degree"], 2);
+    assert!(best["insertion"]["theta1_deg"].is_number());
+    let segs = best["segments"].as_array().unwrap();
+    assert_eq!(segs.len(), 2);
+    assert_eq!(segs[0]["kind"], "R");
+    assert_eq!(segs[1]["kind"], "L");
+    for s in segs {
+        assert!(s["length"].is_number() && s["bevel_deg"].is_number());
+    }
+    let pts = best["points"].as_array().unwrap();
+    assert!(dist(&pts[0], [0.0, 0.0, 0.0]) < 1e-6);
+    assert!(dist(&pts[pts.len() - 1], [0.0, 0.0, 90.0]) <= 0.1);
+    let mut walked = 0.0;
+    for w in pts.windows(2) {
+        let p: Vec<f64> = w[1]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let step = dist(&w[0], [p[0], p[1], p[2]]);
+        assert!(step <= 1.0 + 1e-4, "points {step} mm apart");
+        walked += step;
+    }
+    let length = best["length"].as_f64().unwrap();
+    assert!(
+        (walked - length).abs() < 0.05 * length,
+        "polyline {walked} vs length {length}"
+    );
+    let forms = v["forms"].as_array().unwrap();
+    assert_eq!(forms.len(), 10);
+    let l = forms.iter().find(|f| f["form"] == "L").unwrap();
+    assert_eq!(l["feasible"], false);
+    assert!(l["length"].is_null() && l["objective"].is_null() && l["min_clearance"].is_null());
+    assert!(v["stats"]["time_us"].is_number() && v["stats"]["iterations"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn forms_and_degree_flags_restrict_the_search() {
+    let p = example("paper");
+    let v = plan_json(&[p.to_str().unwrap(), "--forms", "RL,LRL"]);
+    let words: Vec<&str> = v["forms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["form"].as_str().unwrap())
+        .collect();
+    assert_eq!(words, ["RL", "LRL"]);
+    let v = plan_json(&[p.to_str().unwrap(), "--max-degree", "1"]);
+    assert_eq!(v["forms"].as_array().unwrap().len(), 2);
+    assert_eq!(v["best"]["form"], "R");
+}
+
+#[test]
+fn table_lists_every_form_and_the_best() {
+    let out = needle().arg("plan").arg(example("paper")).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    for w in ["RRR", "LRL", "best: RL (N = 2)"] {
+        assert!(text.contains(w), "{w} missing from\n{text}");
+    }
+}
+
+#[test]
+fn the_3d_example_needs_a_bevel_rotation() {
+    let v = plan_json(&[example("space").to_str().unwrap()]);
+    let best = &v["best"];
+    assert_eq!(best["feasible"], true);
+    assert!(best["target_error"].as_f64().unwrap() <= 0.1);
+    assert!(best["min_clearance"].as_f64().unwrap() > 0.0);
+    // Out of the plane: some arc is rolled by an angle that is neither 0 nor 180 degrees.
+    let rolled = best["segments"].as_array().unwrap().iter().any(|s| {
+        let b = s["bevel_deg"].as_f64().unwrap().abs();
+        s["kind"] == "R" && b > 1.0 && (180.0 - b) > 1.0
+    });
+    assert!(rolled, "{best}");
+    let xs: Vec<f64> = best["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p[0].as_f64().unwrap())
+        .collect();
+    assert!(
+        xs.iter().any(|x| x.abs() > 1.0),
+        "the path leaves the y-z plane"
+    );
+}
+
+fn scenario_file(text: &str) -> tempfile_path::TempFile {
+    tempfile_path::TempFile::new(text)
+}
+
+mod tempfile_path {
+    use std::path::PathBuf;
+    pub struct TempFile(pub PathBuf);
+    impl TempFile {
+        pub fn new(text: &str) -> Self {
+            use std::sync::atomic::{AtomicUsize, Ordering};
+            static N: AtomicUsize = AtomicUsize::new(0);
+            let p = std::env::temp_dir().join(format!(
+                "needle-e2e-{}-{}.toml",
+                std::process::id(),
+                N.fetch_add(1, Ordering::SeqCst)
+            ));
+            std::fs::write(&p, text).unwrap();
+            TempFile(p)
+        }
+    }
+    impl Drop for TempFile {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+}
+
+fn paper_with(extra_obstacles: &str) -> String {
+    let base = std::fs::read_to_string(example("paper")).unwrap();
+    format!("{base}\n{extra_obstacles}")
+}
+
+fn fails_with(text: &str, needle_text: &str) {
+    let f = scenario_file(text);
+    let out = needle().arg("plan").arg(&f.0).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(needle_text), "stderr: {err}");
+    assert!(!err.contains("panicked"), "stderr: {err}");
+}
+
+#[test]
+fn bad_scenarios_exit_non_zero_with_the_reason() {
+    let mut many = String::new();
+    for i in 0..40 {
+        writeln!(
+            many,
+            "[[obstacles]]\ncenter = [0.0, {}, 200.0]\nradius = 1.0",
+            -100.0 + 5.0 * i as f32
+        )
+        .unwrap();
+    }
+    fails_with(
+        &paper_with(&many),
+        "43 obstacles given but the planner holds at most 32",
+    );
+    fails_with(
+        &paper_with("[[obstacles]]\ncenter = [0.0, 0.0, 88.0]\nradius = 5.0"),
+        "the target lies inside obstacle 3",
+    );
+    fails_with(
+        &std::fs::read_to_string(example("paper"))
+            .unwrap()
+            .replace("radius = 11.0", "radius = nan"),
+        "obstacles[1].radius is not a finite number",
+    );
+    fails_with(
+        &std::fs::read_to_string(example("paper"))
+            .unwrap()
+            .replace("curvature_radius = 63.7", "curvature_radius = -2"),
+        "needle.curvature_radius must be positive",
+    );
+    let walled = paper_with(
+        "[[obstacles]]\ncenter = [0.0, 0.0, 75.0]\nradius = 12.0\n[[obstacles]]\ncenter = [0.0, 14.0, 92.0]\nradius = 12.0\n\
+         [[obstacles]]\ncenter = [0.0, -14.0, 92.0]\nradius = 12.0\n[[obstacles]]\ncenter = [0.0, 0.0, 106.0]\nradius = 12.0",
+    );
+    fails_with(&walled, "unreachable");
+    let out = needle()
+        .args(["plan", "no/such/file.toml"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read scenario"));
+    let out = needle()
+        .arg("plan")
+        .arg(example("paper"))
+        .args(["--forms", "RLL"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("is not a path form"));
+}
