@@ -218,6 +218,7 @@ fn infeasible_outcome(form: planner_core::Form) -> FormOutcome {
         segments: Default::default(),
         iterations: 0,
         evaluations: 0,
+        kkt_residual: f32::NAN,
     }
 }
 
