@@ -65,18 +65,48 @@ fn assert_form_agrees(plane: bool, seed: u64, word: &str, ask: Ask) {
     );
 }
 
-// Regression cases the reference found on main at 408dec1 (see docs/optimality.md).
+// Regression cases the reference found (see docs/optimality.md). Those marked "fixed" failed on
+// main at 408dec1 and pass from 1e0750f; the others fail on 1e0750f.
 
-/// RL near the tilt bound (theta1 = 57.9 of 60 degrees, F = 116.659): reported infeasible.
+/// Fixed. RL near the tilt bound (theta1 = 57.9 of 60 degrees, F = 116.659): was reported
+/// infeasible.
 #[test]
 fn plane_seed_3_rl_near_the_tilt_bound() {
     assert_form_agrees(true, 3, "RL", Ask::AllForms);
 }
 
-/// RRR: planner F = 149.79 (theta1 = -35.8), reference F = 130.28 (theta1 = 0.9).
+/// Fixed. RRR: planner F was 149.79 (theta1 = -35.8), reference F = 130.28 (theta1 = 0.9).
 #[test]
 fn plane_seed_129_rrr() {
     assert_form_agrees(true, 129, "RRR", Ask::AllForms);
+}
+
+/// RLR: planner F = 132.83 (theta1 = -25.86), reference F = 126.77 (theta1 = -46.04).
+#[test]
+fn plane_seed_176_rlr() {
+    assert_form_agrees(true, 176, "RLR", Ask::AllForms);
+}
+
+/// RL: reference F = 110.212 (theta1 = -21.008, R 73.674 mm bevel 180, L 30.643 mm, clearance
+/// 0.063 mm) is the overall optimum; the planner reports RL infeasible and its best is RR,
+/// F = 110.681.
+#[test]
+fn plane_seed_265_rl_thin_clearance() {
+    assert_form_agrees(true, 265, "RL", Ask::AllForms);
+}
+
+/// LRL: planner F = 110.212 (theta1 = -39.71, last L = 0), reference F = 109.938 with theta1 at
+/// the tilt bound (-42.84 degrees).
+#[test]
+fn plane_seed_299_lrl_at_the_tilt_bound() {
+    assert_form_agrees(true, 299, "LRL", Ask::AllForms);
+}
+
+/// RL planned alone: the optimum is a lone arc with an empty line (reference F = 110.531,
+/// theta1 = 18.98, R 98.18 mm, L 0); the planner reports RL infeasible.
+#[test]
+fn plane_seed_130_rl_planned_alone() {
+    assert_form_agrees(true, 130, "RL", Ask::EachForm);
 }
 
 /// RRR whose only feasible paths loop (L = 325.7 mm, theta1 at the -60 degree bound, the last
@@ -86,7 +116,7 @@ fn plane_seed_102_rrr_long_loop() {
     assert_form_agrees(true, 102, "RRR", Ask::AllForms);
 }
 
-/// LRR planned alone: planner F = 123.55, reference F = 118.95.
+/// Fixed. LRR planned alone: planner F was 123.55, reference F = 118.95.
 #[test]
 fn plane_seed_10_lrr_planned_alone() {
     assert_form_agrees(true, 10, "LRR", Ask::EachForm);
@@ -98,7 +128,7 @@ fn space_seed_126_r() {
     assert_form_agrees(false, 126, "R", Ask::AllForms);
 }
 
-/// 3-D RL: planner F = 106.51 (a lone arc, L = 0), reference F = 104.25.
+/// Fixed. 3-D RL: planner F was 106.51 (a lone arc, L = 0), reference F = 104.25.
 #[test]
 fn space_seed_122_rl() {
     assert_form_agrees(false, 122, "RL", Ask::AllForms);

@@ -130,6 +130,8 @@ fn solutions_are_consistent_with_planner_core_conventions() {
         scenarios.push(random_scenario(seed, true));
     }
     scenarios.push(random_scenario(0, false));
+    // Only long looping paths (about 330 mm, arcs of 145 mm on one circle) reach this target.
+    scenarios.push(random_scenario(102, true));
     for s in &scenarios {
         for f in s.options.selected_forms().iter() {
             let Some(sol) = solve_form(s, f, Effort(0.5)) else {
