@@ -143,7 +143,10 @@ fn truncated_frames() {
         c.send_raw(&bytes).unwrap();
         let got = faults(&mut c);
         assert_eq!(got.len(), 1, "cut at {cut}");
-        assert!(matches!(got[0], (0, Fault::BadCrc | Fault::Truncated)), "{got:?}");
+        assert!(
+            matches!(got[0], (0, Fault::BadCrc | Fault::Truncated)),
+            "{got:?}"
+        );
     }
     assert_still_serves(&mut c);
 }
@@ -168,7 +171,13 @@ fn wrong_protocol_version() {
     c.send_raw(&frame(&req)).unwrap();
     assert_eq!(
         faults(&mut c),
-        vec![(77, Fault::UnsupportedVersion { supported: 1, got: 2 })]
+        vec![(
+            77,
+            Fault::UnsupportedVersion {
+                supported: 1,
+                got: 2
+            }
+        )]
     );
     assert_still_serves(&mut c);
 }
@@ -178,7 +187,9 @@ fn a_scenario_over_the_devices_capacity() {
     let mut c = client();
     // Over the planner's capacity but within the wire's: the planner's typed error.
     let n = MAX_OBSTACLES + 8;
-    let result = c.plan_encoded(&encoded_with_obstacles(n), &mut |_| {}).unwrap();
+    let result = c
+        .plan_encoded(&encoded_with_obstacles(n), &mut |_| {})
+        .unwrap();
     assert_eq!(
         result,
         Err(PlanError::TooManyObstacles {

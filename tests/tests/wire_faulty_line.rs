@@ -92,12 +92,21 @@ fn five_hundred_plans_over_a_noisy_line() {
         audit.accepted_by_host,
         audit.forged_to_host,
     );
-    assert_eq!(audit.forged_to_device, 0, "a damaged frame reached the device");
+    assert_eq!(
+        audit.forged_to_device, 0,
+        "a damaged frame reached the device"
+    );
     assert_eq!(audit.forged_to_host, 0, "a damaged frame reached the host");
-    assert!(up.flipped > 100 && down.flipped > 100, "the line was not noisy");
+    assert!(
+        up.flipped > 100 && down.flipped > 100,
+        "the line was not noisy"
+    );
     assert!(link.retried > 0 && link.detected > 0);
     // Retries carry nearly every request through 2% byte damage.
-    assert!(exact >= REQUESTS * 95 / 100, "only {exact} of {REQUESTS} exact");
+    assert!(
+        exact >= REQUESTS * 95 / 100,
+        "only {exact} of {REQUESTS} exact"
+    );
     // The device still serves: one more plan, now over a clean line.
     let mut clean = Client::new(Sim(InProcess::new()), config);
     assert_eq!(

@@ -84,7 +84,12 @@ fn info_and_ping_over_tcp() {
     assert_eq!(v["max_control_degree"], planner_core::MAX_CONTROL_DEGREE);
     let (ok, out, err) = run_needle(&["ping", "--tcp", &sim.address, "--count", "3"]);
     assert!(ok, "{err}");
-    assert_eq!(out.lines().filter(|l| l.starts_with("pong from hil-sim")).count(), 3);
+    assert_eq!(
+        out.lines()
+            .filter(|l| l.starts_with("pong from hil-sim"))
+            .count(),
+        3
+    );
 }
 
 #[test]
@@ -98,9 +103,7 @@ fn a_silent_device_gives_a_clear_error_not_a_hang() {
         drop(conns);
     });
     let start = Instant::now();
-    let (ok, _, err) = run_needle(&[
-        "ping", "--tcp", &addr, "--timeout", "0.2", "--retries", "2",
-    ]);
+    let (ok, _, err) = run_needle(&["ping", "--tcp", &addr, "--timeout", "0.2", "--retries", "2"]);
     assert!(!ok);
     assert!(err.contains("did not answer"), "{err}");
     assert!(err.contains("3 attempts"), "{err}");

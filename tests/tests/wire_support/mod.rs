@@ -21,7 +21,15 @@ pub fn hil_sim_bin() -> &'static Path {
             Some(other) => other.to_string(),
         };
         let status = Command::new(env!("CARGO"))
-            .args(["build", "--quiet", "-p", "hil-sim", "--bin", "hil-sim", "--profile"])
+            .args([
+                "build",
+                "--quiet",
+                "-p",
+                "hil-sim",
+                "--bin",
+                "hil-sim",
+                "--profile",
+            ])
             .arg(&profile)
             .current_dir(workspace())
             .status()
