@@ -83,7 +83,10 @@ impl InProcess {
 
     /// Starts checking every frame accepted in either direction against the frames sent.
     pub fn audited(mut self) -> Self {
-        self.audit = Some(Box::default());
+        let mut audit = Box::<(Audit, Audit)>::default();
+        audit.1.clean = Box::new(FrameDecoder::for_replies());
+        audit.1.line = Box::new(FrameDecoder::for_replies());
+        self.audit = Some(audit);
         self
     }
 

@@ -32,7 +32,7 @@ fn run(dev: &mut DeviceService) -> Vec<Reply> {
 }
 
 fn decode(bytes: &[u8]) -> Vec<Reply> {
-    let mut d = FrameDecoder::<MAX_FRAME>::new();
+    let mut d = FrameDecoder::<MAX_FRAME>::for_replies();
     let mut replies = Vec::new();
     for &b in bytes {
         if let Some(ev) = d.push(b) {

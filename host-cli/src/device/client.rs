@@ -174,7 +174,7 @@ impl<T: Transport> Client<T> {
         Client {
             link,
             config,
-            decoder: FrameDecoder::new(),
+            decoder: FrameDecoder::for_replies(),
             events: VecDeque::new(),
             stats: LinkStats::default(),
             next_id: (seed as u16).max(1),
