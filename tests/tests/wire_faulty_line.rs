@@ -138,6 +138,17 @@ fn wire_bytes_for_the_paper_scenario() {
         s.bytes_in - before.bytes_in,
     );
     assert_eq!(s.retried, 0);
+    let ram = std::mem::size_of::<planner_core::service::DeviceService>();
+    println!(
+        "frames: max payload {} bytes, max frame {} bytes with delimiters; upload buffer {}, \
+         result buffer {}; DeviceService {} bytes of RAM (host layout)",
+        planner_core::wire::MAX_PAYLOAD,
+        planner_core::wire::MAX_WIRE_FRAME,
+        planner_core::wire::MAX_PLAN_REQUEST,
+        planner_core::wire::MAX_PLAN_RESULT,
+        ram
+    );
+    assert!(ram < 16 * 1024, "the service must fit a small MCU's RAM");
     assert!(request.len() <= planner_core::wire::MAX_PLAN_REQUEST);
     assert!(result.len() <= planner_core::wire::MAX_PLAN_RESULT);
 }
