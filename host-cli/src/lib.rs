@@ -1,5 +1,6 @@
 //! Host-side library behind the `needle` command: scenario files, plan rendering, commands.
 
+pub mod analysis;
 pub mod bench;
 pub mod device;
 pub mod report;

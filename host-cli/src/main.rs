@@ -1,7 +1,10 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
+mod device_bench;
+
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
@@ -35,12 +38,28 @@ struct PlanArgs {
     /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
     #[arg(long, value_delimiter = ',')]
     forms: Option<Vec<String>>,
+    /// Also draw every form's path (SVG).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
+    #[arg(long)]
+    approx: Option<needle_cli::analysis::approx::Method>,
 }
 
 #[derive(Subcommand)]
 enum Command {
     /// Plan a scenario on this machine.
     Plan(PlanArgs),
+    /// Re-plan for each value of one weight (robustness analysis).
+    Sweep(analysis::SweepArgs),
+    /// Plan with the RRT baseline.
+    Rrt(analysis::RrtCmd),
+    /// The optimiser against the RRT over several seeds.
+    Compare(analysis::CompareArgs),
+    /// Turn polygon obstacles into covering circles.
+    Approx(analysis::ApproxArgs),
+    /// Draw a scenario and its plan (SVG).
+    Plot(analysis::PlotArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(SendArgs),
     /// Check that a device answers, and how fast.
@@ -63,6 +82,8 @@ enum Command {
     Ports,
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
+    /// Measure the firmware in QEMU: flash, RAM, stack and instructions per plan.
+    DeviceBench(device_bench::Args),
 }
 
 /// `needle send`: the options of `plan` plus where the device is.
@@ -87,7 +108,10 @@ struct BenchArgs {
 }
 
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
-    let mut scenario = load_scenario(&args.file)?;
+    let mut scenario = match args.approx {
+        None => load_scenario(&args.file)?,
+        Some(m) => needle_cli::scenario_file::load_scenario_shapes(&args.file, Some(m))?.0,
+    };
     if let Some(n) = args.max_degree {
         scenario.options.max_control_degree = n;
     }
@@ -116,6 +140,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
         println!("{}", plan_json(&scenario, &report, stats));
     } else {
         print!("{}", plan_table(&report, stats));
+    }
+    if let Some(out) = &args.plot {
+        analysis::write_plan_plot(&args.file, args.approx, &scenario, &report, out)?;
     }
     Ok(())
 }
@@ -165,11 +192,17 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan(a),
+        Command::Sweep(a) => analysis::run_sweep(a),
+        Command::Rrt(a) => analysis::run_rrt(a),
+        Command::Compare(a) => analysis::run_compare(a),
+        Command::Approx(a) => analysis::run_approx(a),
+        Command::Plot(a) => analysis::run_plot(a),
         Command::Send(a) => send(a),
         Command::Ping { link, count } => device::commands::ping(link, *count),
         Command::Info { link, json } => device::commands::info(link, *json),
         Command::Ports => device::commands::ports(),
         Command::Bench(a) => bench(a),
+        Command::DeviceBench(a) => device_bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

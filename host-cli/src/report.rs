@@ -63,6 +63,7 @@ pub fn outcome_json(scenario: &Scenario, o: &FormOutcome, with_points: bool) -> 
             "direction": o.insertion.direction,
         },
         "segments": segments,
+        "kkt_residual": num(o.kkt_residual),
         "iterations": o.iterations,
         "evaluations": o.evaluations,
     });
@@ -79,7 +80,10 @@ pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> Valu
         .iter()
         .map(|o| {
             let f = o.feasible;
+            let full = outcome_json(scenario, o, false);
             json!({
+                "insertion": if f { full["insertion"].clone() } else { Value::Null },
+                "segments": if f { full["segments"].clone() } else { Value::Null },
                 "form": o.form.to_string(),
                 "feasible": f,
                 "status": format!("{:?}", o.status),
@@ -88,6 +92,7 @@ pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> Valu
                 "objective": if f { num(o.objective) } else { Value::Null },
                 "min_clearance": if f { num(o.min_clearance) } else { Value::Null },
                 "target_error": if f { num(o.target_error) } else { Value::Null },
+                "kkt_residual": if f { num(o.kkt_residual) } else { Value::Null },
                 "iterations": o.iterations,
                 "evaluations": o.evaluations,
             })

@@ -44,7 +44,7 @@ pub fn closest(start: &Frame, kind: SegmentKind, length: f32, radius: f32, c: &V
 fn finish(point: V3, c: &V3, at: f32, where_: Nearest) -> Closest {
     let d = point - c;
     Closest {
-        distance: libm::sqrtf(d.dot(&d)),
+        distance: crate::fmath::sqrt(d.dot(&d)),
         point,
         at,
         where_,
@@ -73,7 +73,7 @@ fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
     let mut a0 = if qx == 0.0 && qy == 0.0 {
         0.0 // on the circle's axis every point is as near: take the start
     } else {
-        libm::atan2f(qy, -qx)
+        crate::fmath::atan2(qy, -qx)
     };
     if a0 < 0.0 {
         a0 += TWO_PI;
@@ -82,7 +82,7 @@ fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
         return finish(start.p, c, 0.0, Nearest::Start);
     }
     if a0 < sweep {
-        let p = center + (e2 * -libm::cosf(a0) + e3 * libm::sinf(a0)) * radius;
+        let p = center + (e2 * -crate::fmath::cos(a0) + e3 * crate::fmath::sin(a0)) * radius;
         return finish(p, c, a0 * radius, Nearest::Interior);
     }
     let at_start = finish(start.p, c, 0.0, Nearest::Start);

@@ -45,7 +45,7 @@ impl Frame {
 
     /// The frame turned by `angle` (radians) about the heading: the bevel rotation.
     pub fn rolled(&self, angle: f32) -> Frame {
-        let (s, c) = (libm::sinf(angle), libm::cosf(angle));
+        let (s, c) = (crate::fmath::sin(angle), crate::fmath::cos(angle));
         let (e1, e2) = (self.e1(), self.e2());
         Frame::from_columns(self.p, e1 * c + e2 * s, e2 * c - e1 * s, self.e3())
     }
@@ -59,7 +59,7 @@ impl Frame {
             },
             SegmentKind::Arc => {
                 let a = s / radius;
-                let (sn, cs) = (libm::sinf(a), libm::cosf(a));
+                let (sn, cs) = (crate::fmath::sin(a), crate::fmath::cos(a));
                 let (e2, e3) = (self.e2(), self.e3());
                 let p = self.p + e2 * (radius * (1.0 - cs)) + e3 * (radius * sn);
                 Frame::from_columns(p, self.e1(), e2 * cs - e3 * sn, e3 * cs + e2 * sn)
@@ -107,31 +107,35 @@ impl Screw {
 /// the direction is (nearly) along x.
 pub fn entry_basis(direction: [f32; 3]) -> Matrix3<f32> {
     let d = V3::new(direction[0], direction[1], direction[2]);
-    let n = libm::sqrtf(d.dot(&d));
+    let n = crate::fmath::sqrt(d.dot(&d));
     let e3 = d / n;
     let x = V3::new(1.0, 0.0, 0.0);
     let y = V3::new(0.0, 1.0, 0.0);
     let pick = if libm::fabsf(e3.dot(&x)) < 0.9 { x } else { y };
     let e1u = pick - e3 * pick.dot(&e3);
-    let e1 = e1u / libm::sqrtf(e1u.dot(&e1u));
+    let e1 = e1u / crate::fmath::sqrt(e1u.dot(&e1u));
     let e2 = e3.cross(&e1);
     Matrix3::from_columns(&[e1, e2, e3])
 }
 
 /// Rotation of `v` about unit `axis` by `angle` (Rodrigues).
 pub fn rotate(v: V3, axis: V3, angle: f32) -> V3 {
-    let (s, c) = (libm::sinf(angle), libm::cosf(angle));
+    let (s, c) = (crate::fmath::sin(angle), crate::fmath::cos(angle));
     v * c + axis.cross(&v) * s + axis * (axis.dot(&v) * (1.0 - c))
 }
 
-/// The first frame of the path: the entry basis turned by `theta1` about its e1, after `theta2`
-/// about its e2. `tilt` from the nominal axis satisfies cos(tilt) = cos(theta1) cos(theta2).
+/// The first frame of the path: the entry basis turned by `theta2` about its e2, then by
+/// `theta1` about its (fixed) e1. The tilt from the nominal axis satisfies
+/// cos(tilt) = cos(theta1) cos(theta2).
 pub fn insertion_frame(position: V3, basis: &Matrix3<f32>, theta1: f32, theta2: f32) -> Frame {
-    let b1: V3 = basis.column(0).into();
-    let b2: V3 = basis.column(1).into();
-    let b3: V3 = basis.column(2).into();
-    let turn = |v: V3| rotate(rotate(v, b2, theta2), b1, theta1);
-    Frame::from_columns(position, turn(b1), turn(b2), turn(b3))
+    let (s1, c1) = (crate::fmath::sin(theta1), crate::fmath::cos(theta1));
+    let (s2, c2) = (crate::fmath::sin(theta2), crate::fmath::cos(theta2));
+    // Rx(theta1) * Ry(theta2) in basis coordinates.
+    let turn = Matrix3::new(c2, 0.0, s2, s1 * s2, c1, -s1 * c2, -c1 * s2, s1, c1 * c2);
+    Frame {
+        p: position,
+        r: basis * turn,
+    }
 }
 
 /// Geometry of one path: the frame at the start of every segment and at the end.
@@ -244,7 +248,11 @@ mod tests {
         let f = straight_up()
             .rolled(core::f32::consts::PI)
             .advanced(SegmentKind::Arc, r * 0.5, r);
-        let expect = V3::new(0.0, -r * (1.0 - libm::cosf(0.5)), r * libm::sinf(0.5));
+        let expect = V3::new(
+            0.0,
+            -r * (1.0 - crate::fmath::cos(0.5)),
+            r * crate::fmath::sin(0.5),
+        );
         assert!((f.p - expect).norm() < 1e-4);
     }
 
@@ -252,7 +260,7 @@ mod tests {
     fn insertion_tilt_follows_theta1_then_theta2() {
         let f = insertion_frame(V3::zeros(), &entry_basis([0.0, 0.0, 1.0]), 0.3, 0.2);
         let cos_tilt = f.e3().dot(&V3::new(0.0, 0.0, 1.0));
-        assert!((cos_tilt - libm::cosf(0.3) * libm::cosf(0.2)).abs() < 1e-6);
+        assert!((cos_tilt - crate::fmath::cos(0.3) * crate::fmath::cos(0.2)).abs() < 1e-6);
         // theta1 alone keeps the heading in the y-z plane.
         let g = insertion_frame(V3::zeros(), &entry_basis([0.0, 0.0, 1.0]), 0.4, 0.0);
         assert!(g.e3().x.abs() < 1e-7 && g.e2().x.abs() < 1e-7);

@@ -69,6 +69,9 @@ pub struct FormOutcome {
     pub insertion: Insertion,
     /// The segments, entry first.
     pub segments: Segments,
+    /// KKT residual of the reported solve: the infinity norm of the last SQP step (radians or
+    /// radius-lengths); near zero when it converged.
+    pub kkt_residual: f32,
     /// Optimiser iterations spent on this form (all starts).
     pub iterations: u32,
     /// Objective/constraint evaluations spent on this form.

@@ -47,51 +47,54 @@ pub struct Problem<'a> {
     pub min_clearance: f32,
     /// cos of the tilt bound.
     pub cos_max_tilt: f32,
-    basis: Matrix3<f32>,
+    /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
+    pub basis: Matrix3<f32>,
     entry: V3,
     target: V3,
 }
 
-/// Everything known about one point of the variable space.
+/// The objective and the clearances at one point (no derivatives: what seeds and line searches
+/// need).
 #[derive(Clone, Debug)]
-pub struct Evaluation {
+pub struct Value {
     /// The variables.
     pub x: Vars,
     /// The path.
     pub geo: PathGeometry,
-    /// End point minus target, in the constraint rows' coordinates.
-    pub residual: [f32; 3],
-    /// Jacobian of `residual`.
-    pub jac: [Vars; 3],
     /// L (mm).
     pub length: f32,
     /// D (infinite when a clearance is not positive).
     pub risk: f32,
     /// a1 L + a2 D + a4 N (H left out: it is zero wherever the optimiser may go).
     pub objective: f32,
-    /// Gradient of `objective`.
-    pub grad: Vars,
     /// Clearance d_i to each obstacle (mm).
     pub clearance: [f32; MAX_OBSTACLES],
-    /// Gradient of each clearance.
-    pub clearance_grad: [Vars; MAX_OBSTACLES],
+    /// The segment nearest to each obstacle.
+    pub nearest_segment: [u8; MAX_OBSTACLES],
     /// Smallest clearance.
     pub min_clearance: f32,
 }
 
-impl Evaluation {
+impl Value {
     /// Every clearance above the floor and the tilt within its bound.
     pub fn admissible(&self, p: &Problem) -> bool {
         self.min_clearance > p.min_clearance
             && self.objective.is_finite()
             && p.tilt_margin(&self.x) >= 0.0
     }
+}
 
-    /// Size of the end-point residual (mm).
-    pub fn residual_norm(&self) -> f32 {
-        let r = &self.residual;
-        libm::sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
-    }
+/// First derivatives at a point (what an accepted SQP iterate needs).
+#[derive(Clone, Debug)]
+pub struct Derivatives {
+    /// End point minus target, in the constraint rows' coordinates.
+    pub residual: [f32; 3],
+    /// Jacobian of `residual`.
+    pub jac: [Vars; 3],
+    /// Gradient of the objective.
+    pub grad: Vars,
+    /// Gradient of each clearance.
+    pub clearance_grad: [Vars; MAX_OBSTACLES],
 }
 
 fn v3(a: [f32; 3]) -> V3 {
@@ -156,7 +159,7 @@ impl<'a> Problem<'a> {
             m_eq: if plane { 2 } else { 3 },
             radius,
             min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
-            cos_max_tilt: libm::cosf(tilt),
+            cos_max_tilt: crate::fmath::cos(tilt),
             basis: entry_basis(scenario.entry.direction),
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
@@ -207,16 +210,16 @@ impl<'a> Problem<'a> {
     /// cos(tilt) - cos(max tilt): non-negative inside the tilt cone.
     pub fn tilt_margin(&self, x: &Vars) -> f32 {
         let (t1, t2) = self.angles(x);
-        libm::cosf(t1) * libm::cosf(t2) - self.cos_max_tilt
+        crate::fmath::cos(t1) * crate::fmath::cos(t2) - self.cos_max_tilt
     }
 
     /// Gradient of [`Problem::tilt_margin`].
     pub fn tilt_margin_grad(&self, x: &Vars) -> Vars {
         let mut g = [0.0; MAX_VARS];
         let (t1, t2) = self.angles(x);
-        g[0] = -libm::sinf(t1) * libm::cosf(t2);
+        g[0] = -crate::fmath::sin(t1) * crate::fmath::cos(t2);
         if !self.plane {
-            g[1] = -libm::cosf(t1) * libm::sinf(t2);
+            g[1] = -crate::fmath::cos(t1) * crate::fmath::sin(t2);
         }
         g
     }
@@ -301,21 +304,65 @@ impl<'a> Problem<'a> {
         }
     }
 
-    /// Full evaluation at `x`.
-    pub fn evaluate(&self, x: &Vars) -> Evaluation {
-        let (geo, residual, jac) = self.end_constraint(x);
-        let screws = self.screws(x, &geo);
-        let w = &self.scenario.weights;
-        let obstacles = &self.scenario.obstacles;
+    /// Objective and clearances at `x`.
+    pub fn value(&self, x: &Vars) -> Value {
+        self.value_or_blocked(x, false)
+    }
+
+    /// Like [`Problem::value`], but with `stop_when_blocked` the scan of the obstacles stops at the
+    /// first one the path touches (the value is then inadmissible and only `min_clearance` is
+    /// meaningful): a sweep over many seeds needs no more.
+    pub fn value_or_blocked(&self, x: &Vars, stop_when_blocked: bool) -> Value {
+        let geo = self.geometry(x);
         let mut clearance = [f32::INFINITY; MAX_OBSTACLES];
-        let mut clearance_grad = [[0.0; MAX_VARS]; MAX_OBSTACLES];
+        let mut nearest_segment = [0u8; MAX_OBSTACLES];
+        let (risk, min_clearance) = self.scan(&geo, stop_when_blocked, |o, d, seg| {
+            clearance[o] = d;
+            nearest_segment[o] = seg;
+        });
+        let w = &self.scenario.weights;
+        let length = geo.total_length();
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective = w.length * length + risk_term + w.control * self.form.len() as f32;
+        Value {
+            x: *x,
+            geo,
+            length,
+            risk,
+            objective,
+            clearance,
+            nearest_segment,
+            min_clearance,
+        }
+    }
+
+    /// Objective and smallest clearance only (what a sweep over many seeds needs), stopping at
+    /// the first obstacle the path touches.
+    pub fn score(&self, x: &Vars) -> (f32, f32) {
+        let geo = self.geometry(x);
+        let (risk, min_clearance) = self.scan(&geo, true, |_, _, _| {});
+        let w = &self.scenario.weights;
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective =
+            w.length * geo.total_length() + risk_term + w.control * self.form.len() as f32;
+        (objective, min_clearance)
+    }
+
+    /// Clearance of every obstacle (`record(obstacle, clearance, nearest segment)`); returns D
+    /// (infinite once an obstacle is within the clearance floor) and the smallest clearance.
+    fn scan(
+        &self,
+        geo: &PathGeometry,
+        stop_when_blocked: bool,
+        mut record: impl FnMut(usize, f32, u8),
+    ) -> (f32, f32) {
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
-        let mut inv_grad = [0.0f32; MAX_VARS];
         let mut blocked = false;
-        for (o, ob) in obstacles.iter().enumerate() {
+        for (o, ob) in self.scenario.obstacles.iter().enumerate() {
             let c = v3(ob.center);
-            let mut best: Option<(usize, crate::clearance::Closest)> = None;
+            let mut best = f32::INFINITY;
+            let mut nearest = 0u8;
             for seg in 0..self.form.len() {
                 let cl = closest(
                     &geo.starts[seg],
@@ -324,14 +371,60 @@ impl<'a> Problem<'a> {
                     self.radius,
                     &c,
                 );
-                if best.is_none_or(|(_, b)| cl.distance < b.distance) {
-                    best = Some((seg, cl));
+                if cl.distance < best {
+                    best = cl.distance;
+                    nearest = seg as u8;
                 }
             }
-            let Some((seg, cl)) = best else { continue };
-            let d = cl.distance - ob.radius;
-            clearance[o] = d;
-            min_clearance = min_clearance.min(d);
+            let d = best - ob.radius;
+            record(o, d, nearest);
+            if d < min_clearance {
+                min_clearance = d;
+            }
+            if d > self.min_clearance {
+                inv_sum += 1.0 / d;
+            } else {
+                blocked = true;
+                if stop_when_blocked {
+                    break;
+                }
+            }
+        }
+        let risk = if blocked {
+            f32::INFINITY
+        } else {
+            inv_sum * self.risk_scale()
+        };
+        (risk, min_clearance)
+    }
+
+    fn risk_scale(&self) -> f32 {
+        let count = self.scenario.obstacles.len();
+        match self.scenario.options.risk {
+            RiskMeasure::Mean if count > 0 => 1.0 / count as f32,
+            _ => 1.0,
+        }
+    }
+
+    /// Exact first derivatives at the point `v` (from [`Problem::value`]).
+    pub fn derivatives(&self, v: &Value) -> Derivatives {
+        let (_, residual, jac) = self.end_constraint(&v.x);
+        let geo = &v.geo;
+        let screws = self.screws(&v.x, geo);
+        let w = &self.scenario.weights;
+        let mut clearance_grad = [[0.0; MAX_VARS]; MAX_OBSTACLES];
+        let mut grad = [0.0; MAX_VARS];
+        let risk_scale = w.risk * self.risk_scale();
+        for (o, ob) in self.scenario.obstacles.iter().enumerate() {
+            let c = v3(ob.center);
+            let seg = usize::from(v.nearest_segment[o]);
+            let cl = closest(
+                &geo.starts[seg],
+                self.form.kind(seg),
+                geo.lengths[seg],
+                self.radius,
+                &c,
+            );
             if cl.distance > 0.0 {
                 let normal = (cl.point - c) / cl.distance;
                 let at_end = cl.where_ == Nearest::End;
@@ -341,47 +434,22 @@ impl<'a> Problem<'a> {
                     }
                 }
             }
-            if d <= 0.0 {
-                blocked = true;
-            } else {
-                inv_sum += 1.0 / d;
-                let s = -1.0 / (d * d);
+            let d = v.clearance[o];
+            if d > 0.0 && risk_scale != 0.0 {
+                let s = -risk_scale / (d * d);
                 for k in 0..self.n {
-                    inv_grad[k] += s * clearance_grad[o][k];
+                    grad[k] += s * clearance_grad[o][k];
                 }
             }
-        }
-        let scale = match self.scenario.options.risk {
-            RiskMeasure::Mean if !obstacles.is_empty() => 1.0 / obstacles.len() as f32,
-            _ => 1.0,
-        };
-        let risk = if blocked {
-            f32::INFINITY
-        } else {
-            inv_sum * scale
-        };
-        let length = geo.total_length();
-        let mut grad = [0.0; MAX_VARS];
-        for (k, g) in grad.iter_mut().enumerate().take(self.n) {
-            *g = w.risk * scale * inv_grad[k];
         }
         for i in 0..self.form.len() {
             grad[self.length_var(i)] += w.length * self.radius;
         }
-        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
-        let objective = w.length * length + risk_term + w.control * self.form.len() as f32;
-        Evaluation {
-            x: *x,
-            geo,
+        Derivatives {
             residual,
             jac,
-            length,
-            risk,
-            objective,
             grad,
-            clearance,
             clearance_grad,
-            min_clearance,
         }
     }
 }
@@ -414,16 +482,18 @@ mod tests {
     /// Central differences in f32 agree with the analytic derivatives to a few parts in 10^3.
     fn check_gradients(p: &Problem, x: &Vars) -> usize {
         let mut objective_checks = 0;
-        let e = p.evaluate(x);
+        let v = p.value(x);
+        let e = p.derivatives(&v);
         let h = 1e-3f32;
         for k in 0..p.n {
             let mut xp = *x;
             let mut xm = *x;
             xp[k] += h;
             xm[k] -= h;
-            let (ep, em) = (p.evaluate(&xp), p.evaluate(&xm));
+            let (ep, em) = (p.value(&xp), p.value(&xm));
+            let (rp, rm) = (p.end_constraint(&xp).1, p.end_constraint(&xm).1);
             for r in 0..p.m_eq {
-                let fd = (ep.residual[r] - em.residual[r]) / (2.0 * h);
+                let fd = (rp[r] - rm[r]) / (2.0 * h);
                 assert!(
                     (fd - e.jac[r][k]).abs() < 2e-2 * (1.0 + fd.abs()),
                     "jac[{r}][{k}] {fd} vs {}",
@@ -439,7 +509,7 @@ mod tests {
                 );
             }
             // The objective is only defined away from the obstacles.
-            if [e.risk, ep.risk, em.risk].iter().all(|r| r.is_finite()) {
+            if [v.risk, ep.risk, em.risk].iter().all(|r| r.is_finite()) {
                 let fd = (ep.objective - em.objective) / (2.0 * h);
                 assert!(
                     (fd - e.grad[k]).abs() < 3e-2 * (1.0 + fd.abs()),

@@ -106,11 +106,19 @@ impl Qp {
         let mut working = [0usize; MAX_VARS];
         let mut w_len = 0usize;
         let mut in_working = [false; MAX_ROWS];
+        let mut stationary = false;
+        // Reused each iteration: every entry of the leading dim × dim block is written below.
+        let mut k = [[0.0f32; KKT]; KKT];
+        let mut rhs = [0.0f32; KKT];
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
             let dim = n + self.m_eq + w_len;
-            let mut k = [[0.0f32; KKT]; KKT];
-            let mut rhs = [0.0f32; KKT];
+            for row in k.iter_mut().take(dim).skip(n) {
+                for v in row.iter_mut().take(dim).skip(n) {
+                    *v = 0.0;
+                }
+                rhs[n..dim].iter_mut().for_each(|r| *r = 0.0);
+            }
             for i in 0..n {
                 for j in 0..n {
                     k[i][j] = self.h[i][j];
@@ -134,9 +142,13 @@ impl Qp {
             }
             let sol = solve_dense(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
             let d = &sol[..n];
+
             let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
             let scale = p.iter().take(n).fold(1.0f32, |m, v| m.max(libm::fabsf(*v)));
-            if step_norm <= 1e-7 * scale {
+            // After a full, unblocked step p minimises over the working set; what the KKT solve
+            // returns as a further step is rounding noise.
+            if stationary || step_norm <= 1e-7 * scale {
+                stationary = false;
                 // Stationary on the working set: check the inequality multipliers.
                 let mut worst: Option<(usize, f32)> = None;
                 for w in 0..w_len {
@@ -173,12 +185,16 @@ impl Qp {
             let mut blocking = None;
             let mut dv = [0.0f32; MAX_VARS];
             dv[..n].copy_from_slice(d);
+            let d_norm = crate::fmath::sqrt(self.dot(&dv, &dv));
             for i in 0..self.m {
                 if in_working[i] {
                     continue;
                 }
                 let ad = self.dot(&self.rows[i], &dv);
-                if ad < 0.0 {
+                // Rounding makes a just-released or parallel row look blocking by a hair; only a
+                // row that the step really crosses may block (this prevents cycling).
+                let row_norm = crate::fmath::sqrt(self.dot(&self.rows[i], &self.rows[i]));
+                if ad < -1e-5 * row_norm * d_norm {
                     let slack = self.rhs[i] - self.dot(&self.rows[i], &p);
                     let t = (slack / ad).max(0.0);
                     if t < alpha {
@@ -189,6 +205,9 @@ impl Qp {
             }
             for j in 0..n {
                 p[j] += alpha * dv[j];
+            }
+            if blocking.is_none() {
+                stationary = true;
             }
             if let Some(i) = blocking {
                 if w_len < n {

@@ -178,7 +178,7 @@ fn positive(field: Field, v: f32) -> Result<(), PlanError> {
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
     let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    libm::sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    crate::fmath::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
 }
 
 impl Scenario {

@@ -7,16 +7,16 @@
 use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
-use crate::problem::{Evaluation, Problem, Vars};
+use crate::problem::{Problem, Vars};
 use crate::scenario::{Scenario, Workspace};
-use crate::seeds::{seed, splits, HEADINGS};
-use crate::sqp::{self, restore, LocalSolution};
+use crate::seeds::sweep;
+use crate::sqp::{self, LocalSolution};
 use crate::verify::check;
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
 /// Distinct seeds refined per side assignment (plane) or per seed plane (3-D).
-pub const REFINED_PER_GROUP: usize = 3;
+pub const REFINED_PER_GROUP: usize = 4;
 
 /// The best few admissible seeds, kept distinct.
 struct Shortlist {
@@ -30,11 +30,22 @@ impl Shortlist {
         }
     }
 
-    fn offer(&mut self, e: &Evaluation, n: usize) {
-        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - e.x[k]) < 0.05);
+    fn is_full(&self) -> bool {
+        self.items.is_full()
+    }
+
+    fn worst(&self) -> f32 {
+        self.items
+            .iter()
+            .map(|(f, _)| *f)
+            .fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    fn offer(&mut self, objective: f32, at: &Vars, n: usize) {
+        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - at[k]) < 0.2);
         if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
-            if e.objective < self.items[i].0 {
-                self.items[i] = (e.objective, e.x);
+            if objective < self.items[i].0 {
+                self.items[i] = (objective, *at);
             }
             return;
         }
@@ -42,13 +53,13 @@ impl Shortlist {
             let worst = (0..self.items.len())
                 .max_by(|&a, &b| self.items[a].0.total_cmp(&self.items[b].0))
                 .unwrap_or(0);
-            if e.objective >= self.items[worst].0 {
+            if objective >= self.items[worst].0 {
                 return;
             }
             self.items.swap_remove(worst);
         }
         // Room was made above.
-        let _ = self.items.push((e.objective, e.x));
+        let _ = self.items.push((objective, *at));
     }
 }
 
@@ -74,23 +85,23 @@ fn solve_group(
     } else {
         1u16 << p.form.arc_count()
     };
+    let fixed = p.scenario.weights.control * p.form.len() as f32;
+    let a1 = p.scenario.weights.length;
     for s in 0..arc_sides {
         let s = if p.plane { sides } else { s as u8 };
-        for h in 0..HEADINGS {
-            for split in splits(p.form.len()) {
-                let Some(mut x) = seed(p, psi, h, s, split) else {
-                    continue;
-                };
-                if !restore(p, &mut x, &mut effort.evaluations) {
-                    continue;
-                }
-                let e = p.evaluate(&x);
-                effort.evaluations += 1;
-                if e.admissible(p) {
-                    list.offer(&e, p.n);
-                }
+        sweep(p, psi, s, &mut |x: &Vars| {
+            // D >= 0, so a1 L + a4 N bounds F from below: skip what cannot enter the shortlist.
+            let length: f32 = (0..p.form.len()).map(|i| x[p.length_var(i)]).sum::<f32>() * p.radius;
+            if list.is_full() && a1 * length + fixed >= list.worst() {
+                return f32::NEG_INFINITY;
             }
-        }
+            let (objective, min_clearance) = p.score(x);
+            effort.evaluations += 1;
+            if min_clearance > p.min_clearance && objective.is_finite() && p.tilt_margin(x) >= 0.0 {
+                list.offer(objective, x, p.n);
+            }
+            min_clearance
+        });
     }
     let mut best: Option<LocalSolution> = None;
     for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
@@ -231,7 +242,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
     let insertion = Insertion {
         theta1_deg: t1.to_degrees(),
         theta2_deg: t2.to_degrees(),
-        tilt_deg: libm::acosf(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
+        tilt_deg: crate::fmath::acos(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
         direction: [heading.x, heading.y, heading.z],
     };
     let lengths = p.lengths(x);
@@ -282,6 +293,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
         target_error: verdict.target_error,
         insertion,
         segments,
+        kkt_residual: sol.step_norm,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
@@ -300,6 +312,7 @@ fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
         target_error: f32::NAN,
         insertion: Insertion::default(),
         segments: Segments::new(),
+        kkt_residual: f32::NAN,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }

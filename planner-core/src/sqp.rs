@@ -9,7 +9,7 @@
 //! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
 
 use crate::plan::SolveStatus;
-use crate::problem::{Evaluation, Problem, Vars, MAX_VARS};
+use crate::problem::{Derivatives, Problem, Value, Vars, MAX_VARS};
 use crate::qp::{Qp, MAX_ROWS};
 use crate::scenario::MAX_OBSTACLES;
 
@@ -28,7 +28,7 @@ const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
 #[derive(Clone, Debug)]
 pub struct LocalSolution {
     /// The best point (feasible, on target).
-    pub eval: Evaluation,
+    pub eval: Value,
     /// How the solve ended.
     pub status: SolveStatus,
     /// Iterations taken.
@@ -51,7 +51,7 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
     for _ in 0..=MAX_RESTORE {
         let (_, r, jac) = p.end_constraint(x);
         *evals += 1;
-        let norm = libm::sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        let norm = crate::fmath::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if !norm.is_finite() {
             return false;
         }
@@ -164,13 +164,14 @@ fn solve_small(a: &mut [[f32; 3]; 3], b: &mut [f32; 3], m: usize) -> bool {
 /// Gradient of the Lagrangian for the nonlinear constraints (end point, clearances, tilt).
 fn lagrangian_grad(
     p: &Problem,
-    e: &Evaluation,
+    x: &Vars,
+    e: &Derivatives,
     eq: &[f32; 3],
     clear: &[(usize, f32)],
     tilt_mult: f32,
 ) -> Vars {
     let mut g = e.grad;
-    let tg = p.tilt_margin_grad(&e.x);
+    let tg = p.tilt_margin_grad(x);
     for k in 0..p.n {
         for (r, mu) in eq.iter().enumerate().take(p.m_eq) {
             g[k] -= mu * e.jac[r][k];
@@ -191,11 +192,12 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     if !restore(p, &mut x, &mut evals) {
         return None;
     }
-    let mut cur = p.evaluate(&x);
+    let mut cur = p.value(&x);
     evals += 1;
     if !cur.admissible(p) {
         return None;
     }
+    let mut cur_d = p.derivatives(&cur);
     let n = p.n;
     let gamma = p.scenario.weights.length * p.radius + 1.0;
     let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
@@ -208,9 +210,9 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     while iterations < MAX_ITERATIONS {
         iterations += 1;
         // Build the QP of the tangent step.
-        let mut qp = Qp::new(n, h, cur.grad);
+        let mut qp = Qp::new(n, h, cur_d.grad);
         for r in 0..p.m_eq {
-            qp.push_eq(&cur.jac[r]);
+            qp.push_eq(&cur_d.jac[r]);
         }
         for k in 0..n {
             let mut unit = [0.0; MAX_VARS];
@@ -236,19 +238,20 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             let Some(o) = best else { break };
             taken[o] = true;
             let row = qp.m;
-            if qp.push_row(&cur.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
+            if qp.push_row(&cur_d.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
                 clear_rows[n_clear] = (o, row);
                 n_clear += 1;
             }
         }
         let Ok(sol) = qp.solve() else {
+            // Only a degenerate working set gets here; the iterate is still feasible.
             status = SolveStatus::BudgetExhausted;
             break;
         };
         let mut slope = 0.0;
         step_norm = 0.0f32;
         for k in 0..n {
-            slope += cur.grad[k] * sol.p[k];
+            slope += cur_d.grad[k] * sol.p[k];
             step_norm = step_norm.max(libm::fabsf(sol.p[k]));
         }
         if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
@@ -257,14 +260,14 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         }
         // Backtracking line search on the restored objective.
         let mut t = 1.0f32;
-        let mut next: Option<Evaluation> = None;
+        let mut next: Option<Value> = None;
         for _ in 0..MAX_BACKTRACKS {
             let mut xt = cur.x;
             for k in 0..n {
                 xt[k] = (cur.x[k] + t * sol.p[k]).clamp(p.lower[k], p.upper[k]);
             }
             if restore(p, &mut xt, &mut evals) {
-                let e = p.evaluate(&xt);
+                let e = p.value(&xt);
                 evals += 1;
                 if e.admissible(p) && e.objective <= cur.objective + 1e-4 * t * slope {
                     next = Some(e);
@@ -283,8 +286,9 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             .map(|&(o, row)| (o, sol.mult[row]))
             .collect();
         let tilt_mult = if p.plane { 0.0 } else { sol.mult[tilt_row] };
-        let g_old = lagrangian_grad(p, &cur, &sol.eq_mult, &clear, tilt_mult);
-        let g_new = lagrangian_grad(p, &next, &sol.eq_mult, &clear, tilt_mult);
+        let next_d = p.derivatives(&next);
+        let g_old = lagrangian_grad(p, &cur.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
+        let g_new = lagrangian_grad(p, &next.x, &next_d, &sol.eq_mult, &clear, tilt_mult);
         let mut s = [0.0f32; MAX_VARS];
         let mut y = [0.0f32; MAX_VARS];
         for k in 0..n {
@@ -293,6 +297,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         }
         bfgs_update(&mut h, &s, &y, n);
         cur = next;
+        cur_d = next_d;
     }
     Some(LocalSolution {
         eval: cur,

@@ -65,7 +65,7 @@ pub fn max_line_length(scenario: &Scenario) -> f32 {
     }
     let (a, b) = (scenario.entry.position, scenario.target.position);
     let d = V3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    2.0 * libm::sqrtf(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
+    2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
 }
 
 /// Checks a reported path against the scenario.
@@ -126,7 +126,7 @@ pub fn check(
     )
     .e3();
     let tilt = heading.dot(&nominal);
-    let cos_max = libm::cosf(scenario.entry.max_tilt_deg.to_radians());
+    let cos_max = crate::fmath::cos(scenario.entry.max_tilt_deg.to_radians());
     let tilt_ok = tilt >= cos_max - 1e-6;
     let within_bounds = lengths_ok && tilt_ok;
     let clearance_floor = scenario.options.min_clearance.max(0.0);

@@ -111,7 +111,7 @@ impl MaxSize for FormOutcome {
     const MAX_SIZE: usize = Form::MAX_SIZE
         + SolveStatus::MAX_SIZE
         + bool::MAX_SIZE
-        + 6 * f32::MAX_SIZE
+        + 7 * f32::MAX_SIZE
         + Insertion::MAX_SIZE
         + crate::plan::Segments::MAX_SIZE
         + 2 * u32::MAX_SIZE;

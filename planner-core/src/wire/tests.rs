@@ -40,6 +40,7 @@ fn worst_outcome() -> FormOutcome {
             direction: [1.0, 0.0, 0.0],
         },
         segments,
+        kkt_residual: 7.0,
         iterations: u32::MAX,
         evaluations: u32::MAX,
     }

@@ -1,0 +1,21 @@
+//! The last resort: the firmware is written not to panic on any input, so reaching this is a bug.
+//! It tells the host (an error frame on the link, so `needle` reports a device fault rather than a
+//! timeout), logs the location, then stops: a reset on a board, a failing exit status under QEMU.
+
+use crate::board;
+use crate::link::Link;
+use core::panic::PanicInfo;
+
+#[panic_handler]
+fn panic(info: &PanicInfo) -> ! {
+    cortex_m::interrupt::disable();
+    let mut link = board::panic_link();
+    // A lone delimiter ends any frame the host was receiving, so the error frame stands alone.
+    link.write_all(&[0]);
+    if let Some(location) = info.location() {
+        defmt::error!("panic at {=str}:{=u32}", location.file(), location.line());
+    } else {
+        defmt::error!("panic");
+    }
+    board::fatal_stop()
+}

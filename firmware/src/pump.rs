@@ -1,0 +1,110 @@
+//! The service loop: bytes from the link into the service, reply bytes from the service out.
+//!
+//! Work is measured per plan: a `poll` runs inside a marker region, and the region counts when
+//! the service was planning before or after it, that is from the poll that takes the request's
+//! last chunk (decode the scenario, start the plan) through each form to the poll that encodes the
+//! result. Received bytes reach the service a whole frame at a time ([`Inbox`]), so the poll that
+//! decodes the last chunk always finds all of it, however the line split it in time. The report marker fires when planning stops. Upload and fetch frames, idle polls and
+//! the time bytes take on the line are not counted; frames the host sends *during* planning
+//! (status queries) would be, so `needle device-bench` sends none. Reply bytes are staged in
+//! [`Outbox`] and sent to the link outside the regions.
+
+use crate::link::Link;
+use crate::marker;
+use planner_core::service::DeviceService;
+use planner_core::wire::MAX_WIRE_FRAME;
+
+/// Received bytes held until a frame delimiter (0x00) arrives, then handed to the service.
+pub struct Inbox {
+    buf: [u8; MAX_WIRE_FRAME],
+    len: usize,
+}
+
+impl Inbox {
+    /// An empty inbox.
+    pub const fn new() -> Self {
+        Inbox {
+            buf: [0; MAX_WIRE_FRAME],
+            len: 0,
+        }
+    }
+
+    fn take(&mut self, bytes: &[u8], service: &mut DeviceService) {
+        for &b in bytes {
+            if self.len == self.buf.len() {
+                // Longer than any frame: pass it on, the service reports it as too long.
+                service.receive(&self.buf);
+                self.len = 0;
+            }
+            self.buf[self.len] = b;
+            self.len += 1;
+            if b == 0 {
+                service.receive(&self.buf[..self.len]);
+                self.len = 0;
+            }
+        }
+    }
+}
+
+/// Reply bytes staged between polls (a plan reply fits; a larger burst is flushed early).
+pub struct Outbox {
+    buf: [u8; OUTBOX_BYTES],
+    len: usize,
+}
+
+const OUTBOX_BYTES: usize = 2048;
+
+impl Outbox {
+    /// An empty outbox.
+    pub const fn new() -> Self {
+        Outbox {
+            buf: [0; OUTBOX_BYTES],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, mut bytes: &[u8], link: &mut impl Link) {
+        while !bytes.is_empty() {
+            if self.len == self.buf.len() {
+                self.flush(link);
+            }
+            let n = bytes.len().min(self.buf.len() - self.len);
+            self.buf[self.len..self.len + n].copy_from_slice(&bytes[..n]);
+            self.len += n;
+            bytes = &bytes[n..];
+        }
+    }
+
+    fn flush(&mut self, link: &mut impl Link) {
+        if self.len > 0 {
+            link.write_all(&self.buf[..self.len]);
+            self.len = 0;
+        }
+    }
+}
+
+/// Serves requests forever.
+pub fn run(
+    link: &mut impl Link,
+    service: &mut DeviceService,
+    inbox: &mut Inbox,
+    outbox: &mut Outbox,
+) -> ! {
+    let mut rx = [0u8; 64];
+    loop {
+        link.service();
+        let n = link.read(&mut rx);
+        inbox.take(&rx[..n], service);
+        let was_planning = service.is_planning();
+        marker::begin();
+        service.poll(&mut |bytes| outbox.push(bytes, link));
+        let planning = service.is_planning();
+        if was_planning || planning {
+            marker::end();
+        }
+        if was_planning && !planning {
+            marker::report();
+        }
+        outbox.flush(link);
+    }
+}

@@ -1,0 +1,296 @@
+//! Pictures: the scenario with every form's path (the paper's Figure 10), the RRT tree and path
+//! (Figure 11), covering circles of polygon obstacles (Figure 9) and weight sweeps (Figures 6-8).
+//!
+//! Plane scenarios are drawn in the y-z plane; 3-D scenarios as two orthogonal projections
+//! (z-y and z-x). Elements carry classes (`obstacle`, `polygon`, `path`, `best`, `legend`, ...)
+//! so tests and scripts can read the structure back.
+
+use super::svg::{esc, form_colour, ticks, Svg};
+use crate::scenario_file::ObstacleShape;
+use planner_core::scenario::Workspace;
+use planner_core::Scenario;
+
+/// One path to draw.
+#[derive(Clone, Debug)]
+pub struct PlotPath {
+    /// Legend text.
+    pub label: String,
+    /// Form word (an attribute of the element), e.g. `RL` or `RRT`.
+    pub form: String,
+    /// Stroke colour.
+    pub colour: String,
+    /// Points along the path (mm).
+    pub points: Vec<[f32; 3]>,
+    /// Drawn thicker and marked in the legend.
+    pub best: bool,
+}
+
+/// What a scenario picture shows.
+#[derive(Clone, Debug, Default)]
+pub struct Scene<'a> {
+    /// Title line.
+    pub title: String,
+    /// Obstacle shapes (polygons and their circles); empty to draw the scenario's circles.
+    pub shapes: &'a [ObstacleShape],
+    /// Paths, one per form.
+    pub paths: Vec<PlotPath>,
+    /// Extra legend lines (forms without a path, RRT statistics, ...).
+    pub notes: Vec<String>,
+    /// RRT tree edges as point lists, drawn thin and grey.
+    pub tree: Vec<Vec<[f32; 3]>>,
+}
+
+const VIEW_W: f64 = 560.0;
+const LEGEND_W: f64 = 340.0;
+const PAD: f64 = 50.0;
+
+struct View {
+    h: usize,
+    v: usize,
+    lo: [f64; 2],
+    scale: f64,
+    origin: [f64; 2],
+    size: [f64; 2],
+}
+
+impl View {
+    fn px(&self, p: [f32; 3]) -> [f64; 2] {
+        let (h, v) = (f64::from(p[self.h]), f64::from(p[self.v]));
+        [
+            self.origin[0] + (h - self.lo[0]) * self.scale,
+            self.origin[1] + self.size[1] - (v - self.lo[1]) * self.scale,
+        ]
+    }
+}
+
+const AXIS: [&str; 3] = ["x", "y", "z"];
+
+fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    let mut grow = |p: [f32; 3], r: f32| {
+        for (k, axis) in [h, v].into_iter().enumerate() {
+            lo[k] = lo[k].min(f64::from(p[axis] - r));
+            hi[k] = hi[k].max(f64::from(p[axis] + r));
+        }
+    };
+    grow(scenario.entry.position, 0.0);
+    grow(scenario.target.position, 0.0);
+    for o in &scenario.obstacles {
+        grow(o.center, o.radius);
+    }
+    for p in s.paths.iter().flat_map(|p| &p.points) {
+        grow(*p, 0.0);
+    }
+    for p in s.tree.iter().flatten() {
+        grow(*p, 0.0);
+    }
+    for (lo_k, hi_k) in lo.iter_mut().zip(hi.iter_mut()) {
+        let span = (*hi_k - *lo_k).max(10.0);
+        *lo_k -= 0.05 * span;
+        *hi_k += 0.05 * span;
+    }
+    (lo, hi)
+}
+
+fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
+    let [x0, y0] = view.origin;
+    let [w, hgt] = view.size;
+    svg.group("axes");
+    svg.raw(&format!(
+        r#"<rect class="frame" x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{hgt:.1}" style="fill:none;stroke:#444"/>"#
+    ));
+    for t in ticks(view.lo[0], hi[0], 6) {
+        let x = x0 + (t - view.lo[0]) * view.scale;
+        svg.line([x, y0 + hgt], [x, y0 + hgt + 4.0], "tick", "stroke:#444");
+        svg.line([x, y0], [x, y0 + hgt], "grid", "stroke:#eee");
+        svg.text(
+            [x, y0 + hgt + 16.0],
+            &format!("{t}"),
+            10.0,
+            "middle",
+            "tick-label",
+        );
+    }
+    for t in ticks(view.lo[1], hi[1], 6) {
+        let y = y0 + hgt - (t - view.lo[1]) * view.scale;
+        svg.line([x0 - 4.0, y], [x0, y], "tick", "stroke:#444");
+        svg.line([x0, y], [x0 + w, y], "grid", "stroke:#eee");
+        svg.text(
+            [x0 - 6.0, y + 3.5],
+            &format!("{t}"),
+            10.0,
+            "end",
+            "tick-label",
+        );
+    }
+    svg.text(
+        [x0 + w / 2.0, y0 + hgt + 32.0],
+        &format!("{} (mm)", AXIS[view.h]),
+        11.0,
+        "middle",
+        "axis-label",
+    );
+    svg.text(
+        [x0 - 36.0, y0 + hgt / 2.0],
+        &format!("{} (mm)", AXIS[view.v]),
+        11.0,
+        "middle",
+        "axis-label",
+    );
+    svg.end_group();
+}
+
+/// The scenario picture as an SVG document.
+pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
+    let planes: Vec<(usize, usize)> = match scenario.options.workspace {
+        Workspace::PlaneYz => vec![(2, 1)],
+        Workspace::Space => vec![(2, 1), (2, 0)],
+    };
+    let mut views = Vec::new();
+    let mut top = PAD;
+    for &(h, v) in &planes {
+        let (lo, hi) = extent(scene, scenario, h, v);
+        let scale = (VIEW_W / (hi[0] - lo[0])).min(520.0 / (hi[1] - lo[1]));
+        let size = [(hi[0] - lo[0]) * scale, (hi[1] - lo[1]) * scale];
+        views.push((
+            View {
+                h,
+                v,
+                lo,
+                scale,
+                origin: [PAD + 20.0, top],
+                size,
+            },
+            hi,
+        ));
+        top += size[1] + PAD + 10.0;
+    }
+    let legend_lines = scene.paths.len() + scene.notes.len() + 3;
+    let height = top.max(PAD + 30.0 + 18.0 * legend_lines as f64);
+    let width = PAD + 20.0 + VIEW_W + 30.0 + LEGEND_W;
+    let mut svg = Svg::new(width, height);
+    svg.text([PAD, 24.0], &scene.title, 14.0, "start", "title");
+    for (k, (view, hi)) in views.iter().enumerate() {
+        axes(&mut svg, view, *hi);
+        // Paths and trees stay inside the frame.
+        svg.raw(&format!(
+            r#"<clipPath id="view{k}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath><g clip-path="url(#view{k})">"#,
+            view.origin[0], view.origin[1], view.size[0], view.size[1]
+        ));
+        let scale = view.scale;
+        if !scene.tree.is_empty() {
+            let lines: Vec<Vec<[f64; 2]>> = scene
+                .tree
+                .iter()
+                .map(|l| l.iter().map(|p| view.px(*p)).collect())
+                .collect();
+            svg.multi_path(&lines, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
+        }
+        svg.group("obstacles");
+        let mut approximated = vec![false; scenario.obstacles.len()];
+        let mut k = 0;
+        for shape in scene.shapes {
+            for _ in &shape.circles {
+                if let Some(a) = approximated.get_mut(k) {
+                    *a = shape.polygon.is_some();
+                }
+                k += 1;
+            }
+        }
+        for (i, o) in scenario.obstacles.iter().enumerate() {
+            let style = if approximated[i] {
+                "fill:#d9d9d9;fill-opacity:0.5;stroke:#666;stroke-dasharray:4 3"
+            } else {
+                "fill:#c8c8c8;stroke:#333"
+            };
+            svg.raw(&format!(
+                r#"<circle class="obstacle" data-index="{i}" cx="{:.2}" cy="{:.2}" r="{:.2}" style="{style}"/>"#,
+                view.px(o.center)[0],
+                view.px(o.center)[1],
+                f64::from(o.radius) * scale
+            ));
+        }
+        let x = scenario.entry.position[0];
+        for shape in scene.shapes {
+            if let Some((poly, _)) = &shape.polygon {
+                let pts: Vec<[f64; 2]> = poly
+                    .vertices()
+                    .iter()
+                    .map(|p| view.px([x, p[0] as f32, p[1] as f32]))
+                    .collect();
+                svg.polygon(&pts, "polygon", "fill:#8c8c8c;fill-opacity:0.8;stroke:#222");
+            }
+        }
+        svg.end_group();
+        // The best path last, on top of the others.
+        let order = scene
+            .paths
+            .iter()
+            .filter(|p| !p.best)
+            .chain(scene.paths.iter().filter(|p| p.best));
+        for p in order {
+            let pts: Vec<[f64; 2]> = p.points.iter().map(|q| view.px(*q)).collect();
+            let (class, width) = if p.best {
+                ("path best", 3.5)
+            } else {
+                ("path", 1.6)
+            };
+            svg.polyline(
+                &pts,
+                class,
+                &format!("stroke:{};stroke-width:{width}", p.colour),
+                &format!(r#"data-form="{}""#, esc(&p.form)),
+            );
+        }
+        let entry = view.px(scenario.entry.position);
+        svg.polygon(
+            &[
+                [entry[0] - 6.0, entry[1] - 6.0],
+                [entry[0] + 6.0, entry[1] - 6.0],
+                [entry[0], entry[1] + 6.0],
+            ],
+            "entry",
+            "fill:#000",
+        );
+        let target = view.px(scenario.target.position);
+        svg.circle(
+            target,
+            5.0,
+            "target",
+            "fill:none;stroke:#000;stroke-width:2",
+        );
+        svg.circle(target, 1.5, "target", "fill:#000");
+        svg.raw("</g>");
+    }
+    legend(&mut svg, scene, PAD + 20.0 + VIEW_W + 30.0);
+    svg.finish()
+}
+
+fn legend(svg: &mut Svg, scene: &Scene<'_>, x: f64) {
+    svg.group("legend");
+    let mut y = PAD + 10.0;
+    for p in &scene.paths {
+        let width = if p.best { 3.5 } else { 1.6 };
+        svg.line(
+            [x, y - 4.0],
+            [x + 24.0, y - 4.0],
+            "legend-swatch",
+            &format!("stroke:{};stroke-width:{width}", p.colour),
+        );
+        svg.text([x + 30.0, y], &p.label, 11.0, "start", "legend-entry");
+        y += 18.0;
+    }
+    for n in &scene.notes {
+        svg.text([x, y], n, 11.0, "start", "legend-note");
+        y += 18.0;
+    }
+    y += 6.0;
+    svg.text([x, y], "▼ entry   ◎ target", 11.0, "start", "legend-note");
+    svg.end_group();
+}
+
+/// Colour for a form, by its catalogue index.
+pub fn colour_of(form: planner_core::Form) -> String {
+    form_colour(form.index()).to_string()
+}

@@ -1,0 +1,318 @@
+//! `needle device-bench`: what the planner costs on the microcontroller, measured in QEMU.
+//!
+//! For each board it builds the release firmware, reads flash and static RAM from the image,
+//! boots it in QEMU (mps2-an386 for the `mps2-an386` build, netduinoplus2 for the `stm32f4`
+//! build) with the instruction-count plugin (`tools/insn-count`), plans each scenario over the
+//! emulated UART, and reads the stack's high-water mark from the painted stack at the end. Each
+//! device plan is also checked against the host's plan, bit for bit.
+
+mod artifacts;
+mod by_function;
+mod client;
+mod elf;
+mod qemu;
+
+use anyhow::{bail, Context, Result};
+use planner_core::wire::PlanResult;
+use planner_core::Scenario;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use artifacts::{ensure_qemu, ensure_target};
+
+/// The value cortex-m-rt paints the stack with at reset (feature `paint-stack`).
+const STACK_PAINT: u32 = 0xCCCC_CCCC;
+
+/// The "must" budgets of issue 4; `--check` fails when a board leaves them.
+pub const FLASH_BUDGET: u64 = 256 * 1024;
+/// RAM budget: static RAM plus peak stack.
+pub const RAM_BUDGET: u64 = 64 * 1024;
+/// Instructions for one plan of the paper's scenario.
+pub const PAPER_INSTRUCTION_BUDGET: u64 = 50_000_000;
+
+/// A board build and the QEMU machine that runs it.
+pub struct Board {
+    /// Name in the report.
+    pub name: &'static str,
+    /// Cargo features of the firmware build.
+    pub features: &'static str,
+    /// QEMU machine.
+    pub machine: &'static str,
+}
+
+/// The boards measured.
+pub const BOARDS: [Board; 2] = [
+    Board {
+        name: "mps2-an386",
+        features: "mps2-an386",
+        machine: "mps2-an386",
+    },
+    Board {
+        name: "stm32f4",
+        features: "stm32f4",
+        machine: "netduinoplus2",
+    },
+];
+
+/// Figures of one board.
+pub struct BoardFigures {
+    /// Board name.
+    pub board: &'static str,
+    /// See [`elf::Footprint`].
+    pub flash_bytes: u64,
+    /// See [`elf::Footprint`].
+    pub static_ram_bytes: u64,
+    /// Deepest stack use over all the runs (bytes).
+    pub peak_stack_bytes: u64,
+    /// Scenario name and instructions executed for its plan.
+    pub instructions: Vec<(String, u64)>,
+    /// Scenario name and whether the device's plan equals the host's bit for bit.
+    pub matches_host: Vec<(String, bool)>,
+}
+
+impl BoardFigures {
+    /// The JSON object of `needle device-bench --json`.
+    pub fn to_json(&self) -> Value {
+        let map = |v: &[(String, u64)]| {
+            v.iter()
+                .map(|(k, n)| (k.clone(), json!(n)))
+                .collect::<Map<_, _>>()
+        };
+        let same = self
+            .matches_host
+            .iter()
+            .map(|(k, b)| (k.clone(), json!(b)))
+            .collect::<Map<_, _>>();
+        json!({
+            "board": self.board,
+            "flash_bytes": self.flash_bytes,
+            "static_ram_bytes": self.static_ram_bytes,
+            "peak_stack_bytes": self.peak_stack_bytes,
+            "instructions": map(&self.instructions),
+            "matches_host": same,
+        })
+    }
+
+    /// Budget violations, as sentences (empty when within every "must" budget).
+    pub fn over_budget(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.flash_bytes >= FLASH_BUDGET {
+            out.push(format!(
+                "{}: flash {} B >= {} B",
+                self.board, self.flash_bytes, FLASH_BUDGET
+            ));
+        }
+        let ram = self.static_ram_bytes + self.peak_stack_bytes;
+        if ram >= RAM_BUDGET {
+            out.push(format!(
+                "{}: RAM {} B (static + peak stack) >= {} B",
+                self.board, ram, RAM_BUDGET
+            ));
+        }
+        for (name, n) in &self.instructions {
+            if name == "paper" && *n >= PAPER_INSTRUCTION_BUDGET {
+                out.push(format!(
+                    "{}: paper plan {n} instructions >= {PAPER_INSTRUCTION_BUDGET}",
+                    self.board
+                ));
+            }
+        }
+        for (name, same) in &self.matches_host {
+            if !same {
+                out.push(format!(
+                    "{}: the device's plan of {name} differs from the host's",
+                    self.board
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// A scenario to plan: its name (file stem) and contents.
+pub struct NamedScenario {
+    /// File stem, the key in `instructions`.
+    pub name: String,
+    /// The scenario.
+    pub scenario: Scenario,
+}
+
+/// Loads scenario files, named by their stem.
+pub fn load_scenarios(files: &[PathBuf]) -> Result<Vec<NamedScenario>> {
+    files
+        .iter()
+        .map(|f| {
+            let name = f
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("scenario")
+                .to_owned();
+            let scenario = needle_cli::scenario_file::load_scenario(f)?;
+            Ok(NamedScenario { name, scenario })
+        })
+        .collect()
+}
+
+fn encoded(result: &PlanResult) -> Result<Vec<u8>> {
+    let mut buf = vec![0u8; planner_core::wire::MAX_PLAN_RESULT];
+    Ok(postcard::to_slice(result, &mut buf)
+        .context("encoding a plan")?
+        .to_vec())
+}
+
+/// Measures one board: build, sizes, then one QEMU run planning every scenario. With `profile`,
+/// also prints where the instructions went, by function.
+pub fn measure(
+    root: &Path,
+    board: &Board,
+    plugin: &Path,
+    scenarios: &[NamedScenario],
+    profile: bool,
+) -> Result<BoardFigures> {
+    let image = artifacts::build_firmware(root, board.name, board.features)?;
+    let footprint = elf::footprint(&image)?;
+    let dir = root
+        .join("firmware")
+        .join("target")
+        .join("device-bench")
+        .join(board.name);
+    let mut qemu = qemu::Qemu::start(board.machine, &image, plugin, &dir, profile)?;
+    let mut device = client::Device::new(qemu.connect()?)?;
+    device
+        .hello(Duration::from_secs(20))
+        .with_context(|| format!("{} in QEMU {}", board.name, board.machine))?;
+    let mut instructions = Vec::new();
+    let mut matches_host = Vec::new();
+    for s in scenarios {
+        let host = encoded(&planner_core::plan(&s.scenario))?;
+        let before = qemu.counts()?.len();
+        let on_device = device
+            .plan(&s.scenario)
+            .with_context(|| format!("planning {} on {}", s.name, board.name))?;
+        let counts = qemu.counts()?;
+        if counts.len() != before + 1 {
+            bail!(
+                "{}: expected one instruction count for {}, the plugin gave {}",
+                board.name,
+                s.name,
+                counts.len() - before
+            );
+        }
+        instructions.push((s.name.clone(), counts[before]));
+        matches_host.push((s.name.clone(), encoded(&on_device)? == host));
+    }
+    drop(device);
+    let len = footprint.stack_top - footprint.stack_bottom;
+    let memory = qemu.read_memory_and_quit(footprint.stack_bottom, len)?;
+    if profile {
+        let text = by_function::report(&image, &dir.join("profile.txt"), 30)?;
+        eprintln!("{}: {text}", board.name);
+    }
+    Ok(BoardFigures {
+        board: board.name,
+        flash_bytes: footprint.flash_bytes,
+        static_ram_bytes: footprint.static_ram_bytes,
+        peak_stack_bytes: elf::peak_stack(&memory, STACK_PAINT),
+        instructions,
+        matches_host,
+    })
+}
+
+/// Builds the plugin, then measures every board.
+pub fn measure_all(
+    root: &Path,
+    scenarios: &[NamedScenario],
+    profile: bool,
+) -> Result<Vec<BoardFigures>> {
+    ensure_target()?;
+    ensure_qemu()?;
+    let plugin = artifacts::build_plugin(root)?;
+    BOARDS
+        .iter()
+        .map(|b| measure(root, b, &plugin, scenarios, profile))
+        .collect()
+}
+
+/// The human-readable report.
+pub fn table(figures: &[BoardFigures]) -> String {
+    let mut s = String::new();
+    for f in figures {
+        s.push_str(&format!(
+            "{}: flash {} B ({:.1} KiB), static RAM {} B, peak stack {} B, RAM total {:.1} KiB\n",
+            f.board,
+            f.flash_bytes,
+            f.flash_bytes as f64 / 1024.0,
+            f.static_ram_bytes,
+            f.peak_stack_bytes,
+            (f.static_ram_bytes + f.peak_stack_bytes) as f64 / 1024.0
+        ));
+        for ((name, n), (_, same)) in f.instructions.iter().zip(&f.matches_host) {
+            s.push_str(&format!(
+                "  {name}: {n} instructions per plan ({:.2} M), plan {} the host's\n",
+                *n as f64 / 1e6,
+                if *same { "equals" } else { "DIFFERS from" }
+            ));
+        }
+    }
+    s
+}
+
+/// `needle device-bench` options.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scenario files (default: examples/paper.toml and examples/space.toml).
+    files: Vec<PathBuf>,
+    /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
+    /// `peak_stack_bytes`, `instructions`, `matches_host`), as a JSON array.
+    #[arg(long)]
+    json: bool,
+    /// Fail when a board leaves a "must" budget (flash < 256 KiB, RAM < 64 KiB, paper plan
+    /// < 50 M instructions) or a device plan differs from the host's.
+    #[arg(long)]
+    check: bool,
+    /// Also print, per board, the functions the measured instructions were spent in (slower).
+    #[arg(long)]
+    profile: bool,
+    /// The needle-planner checkout holding firmware/ and tools/ (default: where `needle` was built).
+    #[arg(long)]
+    root: Option<PathBuf>,
+}
+
+/// Runs `needle device-bench`.
+pub fn run(args: &Args) -> Result<()> {
+    let root = match &args.root {
+        Some(r) => r.clone(),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join(".."),
+    };
+    if !root.join("firmware").join("Cargo.toml").is_file() {
+        bail!(
+            "{} holds no firmware/ (pass --root CHECKOUT)",
+            root.display()
+        );
+    }
+    let files = if args.files.is_empty() {
+        vec![
+            root.join("examples/paper.toml"),
+            root.join("examples/space.toml"),
+        ]
+    } else {
+        args.files.clone()
+    };
+    let scenarios = load_scenarios(&files)?;
+    let figures = measure_all(&root, &scenarios, args.profile)?;
+    if args.json {
+        let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();
+        println!("{}", serde_json::to_string_pretty(&all)?);
+    } else {
+        print!("{}", table(&figures));
+    }
+    let over: Vec<String> = figures.iter().flat_map(BoardFigures::over_budget).collect();
+    if args.check && !over.is_empty() {
+        bail!("over budget:\n  {}", over.join("\n  "));
+    }
+    for o in &over {
+        eprintln!("warning: {o}");
+    }
+    Ok(())
+}

@@ -1,0 +1,230 @@
+//! Single-precision elementary functions computed in f32 only.
+//!
+//! `libm`'s `sinf`/`cosf`/`atan2f` evaluate in f64 internally, which the Cortex-M4F (a
+//! single-precision FPU) emulates in software: two thirds of the device's planning time went
+//! there. These are Cody–Waite range reduction plus Cephes minimax polynomials (a few ulp), in
+//! plain f32 arithmetic, so the host and the device compute the same bits.
+
+use core::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+// pi/2 split so that k * PIO2_1 is exact for the k the planner meets.
+const PIO2_1: f32 = 1.570_312_5;
+const PIO2_2: f32 = 4.837_513e-4;
+const PIO2_3: f32 = 7.549_79e-8;
+
+/// sin and cos of `x` (radians). NaN and infinities give NaN.
+pub fn sincos(x: f32) -> (f32, f32) {
+    if !x.is_finite() {
+        return (f32::NAN, f32::NAN);
+    }
+    let k = round(x * (2.0 / PI));
+    let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
+    let z = r * r;
+    let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
+    let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
+    // Quadrant from k mod 4 (the cast saturates: only for |x| far beyond any angle here).
+    match (k as i32) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+/// sin of `x`.
+pub fn sin(x: f32) -> f32 {
+    sincos(x).0
+}
+
+/// cos of `x`.
+pub fn cos(x: f32) -> f32 {
+    sincos(x).1
+}
+
+fn round(x: f32) -> f32 {
+    // Round half away from zero without libm: truncate x ± 0.5.
+    let t = if x >= 0.0 { x + 0.5 } else { x - 0.5 };
+    if t.abs() >= 8_388_608.0 {
+        t
+    } else {
+        (t as i32) as f32
+    }
+}
+
+/// atan of `x` for x >= 0.
+fn atan_pos(x: f32) -> f32 {
+    let (base, t) = if x > 2.414_213_6 {
+        (FRAC_PI_2, -1.0 / x)
+    } else if x > 0.414_213_57 {
+        (FRAC_PI_4, (x - 1.0) / (x + 1.0))
+    } else {
+        (0.0, x)
+    };
+    let z = t * t;
+    base + ((((8.053_744_5e-2 * z - 1.387_768_5e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1)
+        * z
+        * t
+        + t)
+}
+
+/// atan of `x`.
+pub fn atan(x: f32) -> f32 {
+    if x.is_nan() {
+        return f32::NAN;
+    }
+    if x < 0.0 {
+        -atan_pos(-x)
+    } else {
+        atan_pos(x)
+    }
+}
+
+/// The angle of the point (x, y) in (-pi, pi], as `atan2(y, x)`.
+pub fn atan2(y: f32, x: f32) -> f32 {
+    if x.is_nan() || y.is_nan() {
+        return f32::NAN;
+    }
+    if x == 0.0 {
+        return if y > 0.0 {
+            FRAC_PI_2
+        } else if y < 0.0 {
+            -FRAC_PI_2
+        } else {
+            0.0
+        };
+    }
+    if x.is_infinite() || y.is_infinite() {
+        // Only the directions matter: map each infinite coordinate to ±1 and the finite one to 0.
+        let unit = |v: f32| if v.is_infinite() { v.signum() } else { 0.0 };
+        let (ys, xs) = (unit(y), unit(x));
+        return if xs == 0.0 {
+            ys * FRAC_PI_2
+        } else {
+            atan2(ys, xs)
+        };
+    }
+    let a = atan(y / x);
+    if x > 0.0 {
+        a
+    } else if y >= 0.0 {
+        a + PI
+    } else {
+        a - PI
+    }
+}
+
+/// Square root to about one ulp: an integer estimate of 1/sqrt refined by three Newton steps,
+/// then one correction of the root (the soft-float `sqrtf` cost a tenth of the device's time).
+pub fn sqrt(x: f32) -> f32 {
+    if !(x > 0.0) || x.is_infinite() {
+        // 0 -> 0, +inf -> inf, negative or NaN -> NaN.
+        return if x == 0.0 || x == f32::INFINITY {
+            x
+        } else {
+            f32::NAN
+        };
+    }
+    // Scale subnormals into the normal range, where the bit estimate holds.
+    let (x, scale) = if x < 1e-30 {
+        (x * 1e30, 1e-15)
+    } else {
+        (x, 1.0)
+    };
+    let mut y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y *= 1.5 - 0.5 * x * y * y;
+    }
+    let s = x * y;
+    (s + 0.5 * y * (x - s * s)) * scale
+}
+
+/// `a` wrapped into [0, 2 pi).
+pub fn wrap_positive(a: f32) -> f32 {
+    if !a.is_finite() {
+        return f32::NAN;
+    }
+    let tau = core::f32::consts::TAU;
+    let mut r = a - tau * ((a / tau) as i32) as f32;
+    if r < 0.0 {
+        r += tau;
+    }
+    if r >= tau {
+        r -= tau;
+    }
+    r
+}
+
+/// asin of `x` in [-1, 1] (clamped).
+pub fn asin(x: f32) -> f32 {
+    let x = x.clamp(-1.0, 1.0);
+    atan2(x, sqrt((1.0 - x) * (1.0 + x)))
+}
+
+/// acos of `x` in [-1, 1] (clamped).
+pub fn acos(x: f32) -> f32 {
+    let x = x.clamp(-1.0, 1.0);
+    atan2(sqrt((1.0 - x) * (1.0 + x)), x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sin_cos_match_f64_to_a_few_ulp() {
+        let mut worst = 0.0f64;
+        for i in -20_000..=20_000 {
+            let x = i as f32 * 1.7e-3;
+            let (s, c) = sincos(x);
+            worst = worst.max((s as f64 - (x as f64).sin()).abs());
+            worst = worst.max((c as f64 - (x as f64).cos()).abs());
+        }
+        assert!(worst < 3e-7, "{worst}");
+    }
+
+    #[test]
+    fn atan2_matches_f64_in_every_quadrant() {
+        let mut worst = 0.0f64;
+        for i in -300..=300 {
+            for j in -300..=300 {
+                let (y, x) = (i as f32 * 0.37, j as f32 * 0.41);
+                let want = (y as f64).atan2(x as f64);
+                worst = worst.max((atan2(y, x) as f64 - want).abs());
+            }
+        }
+        assert!(worst < 5e-7, "{worst}");
+        assert_eq!(atan2(0.0, 0.0), 0.0);
+        assert!(atan2(f32::NAN, 1.0).is_nan());
+        assert!(atan2(1.0, f32::INFINITY).abs() < 1e-6);
+    }
+
+    #[test]
+    fn sqrt_is_within_an_ulp_or_two() {
+        for i in 0..100_000 {
+            let x = (i as f32 * 0.731).powi(2) * 1e-3 + 1e-6 * i as f32;
+            let got = sqrt(x);
+            let want = (x as f64).sqrt();
+            assert!(
+                (got as f64 - want).abs() <= 2.5e-7 * want,
+                "{x}: {got} vs {want}"
+            );
+        }
+        assert_eq!(sqrt(0.0), 0.0);
+        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
+        assert_eq!(sqrt(f32::INFINITY), f32::INFINITY);
+        let tiny = 1e-40f32;
+        assert!((sqrt(tiny) as f64 - (tiny as f64).sqrt()).abs() < 1e-6 * (tiny as f64).sqrt());
+        assert!((wrap_positive(-0.5) - (core::f32::consts::TAU - 0.5)).abs() < 1e-6);
+        assert!((wrap_positive(7.0) - (7.0 - core::f32::consts::TAU)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn inverse_functions() {
+        for i in -100..=100 {
+            let x = i as f32 / 100.0;
+            assert!((asin(x) as f64 - (x as f64).asin()).abs() < 1e-6);
+            assert!((acos(x) as f64 - (x as f64).acos()).abs() < 1e-6);
+        }
+        assert!(sin(f32::INFINITY).is_nan());
+    }
+}

@@ -1,0 +1,134 @@
+//! The firmware, built for QEMU's mps2-an386 (Cortex-M4F), answering `needle send` over its
+//! emulated UART: its plans equal the host's bit for bit, malformed frames and a scenario over
+//! capacity get their typed error replies, and it keeps serving after them.
+
+mod firmware_support;
+
+use firmware_support::{build_firmware, emulator_ready, Qemu};
+use needle_cli::device::{open, Client, ClientConfig, LinkTarget};
+use needle_e2e::{example, needle};
+use planner_core::wire::{cobs, crc::crc32, Fault, ReplyBody};
+use planner_core::PlanError;
+use serde_json::Value;
+use std::time::Duration;
+
+fn without_stats(json: &str) -> Value {
+    let mut v: Value = serde_json::from_str(json).expect("needle prints JSON");
+    v.as_object_mut().expect("an object").remove("stats");
+    v
+}
+
+fn run(args: &[&str]) -> String {
+    let out = needle().args(args).output().expect("run needle");
+    assert!(
+        out.status.success(),
+        "needle {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8")
+}
+
+/// `needle send` through QEMU prints the plan `needle plan` prints, number for number (the JSON
+/// numbers are the shortest decimal forms of the f32 values, so equal text is equal bits).
+fn assert_device_plan_equals_host(addr: &str, scenario: &str) {
+    let file = example(scenario);
+    let file = file.to_str().expect("UTF-8 path");
+    let host = run(&["plan", file, "--json"]);
+    let device = run(&["send", file, "--tcp", addr, "--json", "--timeout", "120"]);
+    let (h, d) = (without_stats(&host), without_stats(&device));
+    assert!(h["best"].is_object(), "{scenario}: the host found no plan");
+    assert_eq!(
+        h, d,
+        "{scenario}: the device's plan differs from the host's"
+    );
+}
+
+/// A frame whose CRC is right but whose payload is no message of the protocol.
+fn undecodable_frame() -> Vec<u8> {
+    let mut raw = vec![0xFF, 0xFF, 0xFF, 0x7F, 0x13];
+    raw.extend_from_slice(&crc32(&raw).to_le_bytes());
+    let mut frame = vec![0];
+    cobs::encode(&raw, &mut |b: &[u8]| frame.extend_from_slice(b));
+    frame.push(0);
+    frame
+}
+
+/// The paper's scenario as a plan request with 40 obstacles (the planner holds 32).
+fn over_capacity_request() -> Vec<u8> {
+    let s = needle_cli::scenario_file::load_scenario(&example("paper")).expect("paper.toml");
+    let mut bytes = postcard::to_stdvec(&(s.needle, s.entry, s.target)).expect("encode");
+    bytes.push(40); // obstacle count (a one-byte varint)
+    for i in 0..40 {
+        let o = planner_core::scenario::Obstacle {
+            center: [0.0, 100.0 + i as f32, 50.0],
+            radius: 1.0,
+        };
+        bytes.extend(postcard::to_stdvec(&o).expect("encode"));
+    }
+    bytes.extend(postcard::to_stdvec(&(s.weights, s.options)).expect("encode"));
+    bytes
+}
+
+fn expect_fault(client: &mut Client<Box<dyn needle_cli::device::Transport>>, want: Fault) {
+    match client.next_reply().expect("link") {
+        Some(r) => assert_eq!(r.body, ReplyBody::Fault(want)),
+        None => panic!("no answer to a malformed frame (expected {want:?})"),
+    }
+}
+
+#[test]
+fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
+    if !emulator_ready("firmware_in_qemu_plans_like_the_host_and_answers_bad_input") {
+        return;
+    }
+    let image = build_firmware("mps2-an386", "mps2-an386");
+    let mut qemu = Qemu::start("mps2-an386", &image);
+
+    assert_device_plan_equals_host(&qemu.addr, "paper");
+    assert_device_plan_equals_host(&qemu.addr, "space");
+
+    let config = ClientConfig {
+        timeout: Duration::from_secs(10),
+        retries: 2,
+    };
+    let link = open(&LinkTarget::Tcp(qemu.addr.clone())).expect("connect to QEMU");
+    let mut client = Client::new(link, config);
+    // A corrupted frame (valid stuffing, wrong CRC-32).
+    client.send_raw(&[0, 7, 1, 2, 3, 4, 5, 6, 0]).unwrap();
+    expect_fault(&mut client, Fault::BadCrc);
+    // A frame with a good CRC that is not a message.
+    client.send_raw(&undecodable_frame()).unwrap();
+    expect_fault(&mut client, Fault::Undecodable);
+    // A frame longer than any message.
+    let mut long = vec![0u8];
+    long.extend(std::iter::repeat_n(0x55, 2000));
+    long.push(0);
+    client.send_raw(&long).unwrap();
+    expect_fault(&mut client, Fault::FrameTooLong);
+    // A scenario over the planner's capacity: the typed planner error comes back.
+    let result = client
+        .plan_encoded(&over_capacity_request(), &mut |_| {})
+        .expect("the device answers an over-capacity scenario");
+    assert_eq!(
+        result.err(),
+        Some(PlanError::TooManyObstacles {
+            given: 40,
+            capacity: 32
+        })
+    );
+    // The same link still plans, and the plan is the host's, bit for bit.
+    let paper = needle_cli::scenario_file::load_scenario(&example("paper")).unwrap();
+    let on_device = client
+        .plan(&paper, &mut |_| {})
+        .expect("plan after bad input");
+    let host = planner_core::plan(&paper);
+    assert_eq!(
+        postcard::to_stdvec(&on_device).unwrap(),
+        postcard::to_stdvec(&host).unwrap()
+    );
+    drop(client);
+
+    // And `needle send` on a new connection is served too.
+    assert_device_plan_equals_host(&qemu.addr, "paper");
+    assert!(qemu.running(), "the firmware stopped QEMU (a fault)");
+}

@@ -1,0 +1,144 @@
+//! Shared helpers of the `firmware_*` tests: toolchain and QEMU checks, firmware builds, and a
+//! QEMU process with the guest's UART on a local TCP port.
+#![allow(dead_code)]
+
+use needle_e2e::workspace;
+use std::net::{TcpListener, TcpStream};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+
+fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true")
+}
+
+fn qemu_runs() -> bool {
+    Command::new("qemu-system-arm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Whether the firmware can be built and emulated here. Adds the rustup target if missing.
+/// Without QEMU: under CI (`CI=true`) it is installed (`apt-get install qemu-system-arm`) and a
+/// failure to do so fails the test; elsewhere the test is skipped with a note.
+pub fn emulator_ready(test: &str) -> bool {
+    let installed = Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .output()
+        .map(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .any(|l| l.trim() == TARGET)
+        })
+        .unwrap_or(false);
+    if !installed {
+        let ok = Command::new("rustup")
+            .args(["target", "add", TARGET])
+            .status()
+            .is_ok_and(|s| s.success());
+        assert!(ok, "rustup target add {TARGET} failed");
+    }
+    if qemu_runs() {
+        return true;
+    }
+    if in_ci() {
+        let script = workspace().join("scripts/install-emulator");
+        let _ = Command::new("bash").arg(script).status();
+        assert!(
+            qemu_runs(),
+            "CI=true and qemu-system-arm is missing and could not be installed"
+        );
+        return true;
+    }
+    eprintln!(
+        "{test}: SKIPPED, qemu-system-arm is not installed (apt-get install qemu-system-arm)"
+    );
+    false
+}
+
+/// Builds the release firmware for `board` (its own target dir, as `needle device-bench` does)
+/// and returns the image.
+pub fn build_firmware(board: &str, features: &str) -> PathBuf {
+    let dir = workspace().join("firmware");
+    let target_dir = dir.join("target").join(board);
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.current_dir(&dir)
+        .args([
+            "build",
+            "--quiet",
+            "--release",
+            "--features",
+            features,
+            "--target-dir",
+        ])
+        .arg(&target_dir);
+    for var in [
+        "RUSTFLAGS",
+        "CARGO_ENCODED_RUSTFLAGS",
+        "CARGO_BUILD_RUSTFLAGS",
+        "CARGO_TARGET_DIR",
+        "CARGO_BUILD_TARGET",
+    ] {
+        cmd.env_remove(var);
+    }
+    let status = cmd.status().expect("run cargo build for the firmware");
+    assert!(status.success(), "building the {board} firmware failed");
+    target_dir.join(TARGET).join("release/needle-firmware")
+}
+
+/// QEMU running a firmware image, its UART on `addr`; killed (by its own handle) when dropped.
+pub struct Qemu {
+    child: Child,
+    /// `127.0.0.1:PORT` of the guest's UART.
+    pub addr: String,
+}
+
+impl Qemu {
+    /// Boots `image` on `machine` and waits until the UART's TCP server listens.
+    pub fn start(machine: &str, image: &PathBuf) -> Qemu {
+        let port = TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .expect("a free local port")
+            .port();
+        let child = Command::new("qemu-system-arm")
+            .args(["-M", machine, "-display", "none", "-monitor", "none"])
+            .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+            .arg(image)
+            .arg("-serial")
+            .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start qemu-system-arm");
+        let mut qemu = Qemu {
+            child,
+            addr: format!("127.0.0.1:{port}"),
+        };
+        // A first connection starts the guest; closing it leaves QEMU listening for the next.
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while TcpStream::connect(&qemu.addr).is_err() {
+            assert!(qemu.running(), "QEMU exited at start");
+            assert!(Instant::now() < deadline, "QEMU's UART never listened");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        qemu
+    }
+
+    /// Whether the emulator is still running (the firmware stops it only after a fault).
+    pub fn running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
