@@ -106,15 +106,10 @@ enum Skip {
     Resync,
 }
 
-impl<const N: usize> Default for FrameDecoder<N> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl<const N: usize> FrameDecoder<N> {
-    /// An empty decoder of requests (the device's side).
-    pub const fn new() -> Self {
+    /// An empty decoder of requests (the device's side). There is no `new`: a decoder that
+    /// expects the wrong direction rejects every frame as damaged, so the side is always named.
+    pub const fn for_requests() -> Self {
         Self::expecting(<Request as Directed>::DIRECTION)
     }
 

@@ -154,7 +154,7 @@ extern crate std;
 use std::vec::Vec;
 
 fn decode_all(bytes: &[u8]) -> Vec<Result<Vec<u8>, FrameError>> {
-    let mut d = FrameDecoder::<MAX_FRAME>::new();
+    let mut d = FrameDecoder::<MAX_FRAME>::for_requests();
     let mut out = Vec::new();
     for &b in bytes {
         if let Some(ev) = d.push(b) {
