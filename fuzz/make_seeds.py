@@ -27,7 +27,8 @@ def cobs(data):
     return bytes(out + bytes([len(block) + 1]) + block)
 
 def frame(payload):
-    return b"\x00" + cobs(payload + struct.pack("<I", zlib.crc32(payload))) + b"\x00"
+    # The CRC covers an unsent direction byte: 1 for requests.
+    return b"\x00" + cobs(payload + struct.pack("<I", zlib.crc32(b"\x01" + payload))) + b"\x00"
 
 def req(id_, variant, fields=b"", version=1):
     return bytes([version]) + varint(id_) + varint(variant) + fields

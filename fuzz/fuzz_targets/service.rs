@@ -25,7 +25,7 @@ fuzz_target!(|data: &[u8]| {
             assert!(polls < 10_000, "service never went idle");
         }
     }
-    let mut decoder = FrameDecoder::<MAX_FRAME>::new();
+    let mut decoder = FrameDecoder::<MAX_FRAME>::for_replies();
     for &b in &out {
         if let Some(ev) = decoder.push(b) {
             let payload = ev.expect("the device sent a damaged frame");

@@ -8,7 +8,6 @@ use std::collections::HashSet;
 
 /// Checks that no frame damaged on the line is ever accepted: every payload a receiver's decoder
 /// accepts must be one the other side actually sent.
-#[derive(Default)]
 struct Audit {
     sent: HashSet<Vec<u8>>,
     clean: Box<FrameDecoder<MAX_FRAME>>,
@@ -18,6 +17,24 @@ struct Audit {
 }
 
 impl Audit {
+    /// An audit of the frames travelling to the device (`replies` false) or to the host.
+    fn new(replies: bool) -> Self {
+        let decoder = || {
+            Box::new(if replies {
+                FrameDecoder::for_replies()
+            } else {
+                FrameDecoder::for_requests()
+            })
+        };
+        Audit {
+            sent: HashSet::new(),
+            clean: decoder(),
+            line: decoder(),
+            accepted: 0,
+            forged: 0,
+        }
+    }
+
     fn sent(&mut self, clean: &[u8]) {
         for &b in clean {
             if let Some(Ok(p)) = self.clean.push(b) {
@@ -83,7 +100,7 @@ impl InProcess {
 
     /// Starts checking every frame accepted in either direction against the frames sent.
     pub fn audited(mut self) -> Self {
-        self.audit = Some(Box::default());
+        self.audit = Some(Box::new((Audit::new(false), Audit::new(true))));
         self
     }
 

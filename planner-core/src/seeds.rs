@@ -126,7 +126,7 @@ fn complete(
         (SegmentKind::Arc, SegmentKind::Arc) => {
             let (s1, s2) = sides;
             if s1 == s2 {
-                return; // one circle: only a measure-zero set of targets; sub-form starts cover it
+                return; // one circle: `pieces` merges such runs into one arc
             }
             let (nx, ny) = bend(p.psi, s1);
             let (c1x, c1y) = (p.x + r * nx, p.y + r * ny);
@@ -167,6 +167,43 @@ fn segment_sides(p: &Problem, sides: u8) -> [f32; MAX_CONTROL_DEGREE] {
     out
 }
 
+/// A run of segments swept as one: consecutive arcs bending to the same side lie on one circle,
+/// so they are swept as a single arc of up to `count` times the longest arc and written out as
+/// `count` equal pieces. Without this, paths whose turn exceeds one arc's bound (the long loops
+/// around obstacles that block every short path) would have no seeds at all.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    kind: SegmentKind,
+    side: f32,
+    first: usize,
+    count: usize,
+}
+
+/// The form of `p` with sides `side`, runs of same-side arcs merged.
+fn pieces(
+    p: &Problem,
+    side: &[f32; MAX_CONTROL_DEGREE],
+) -> heapless::Vec<Piece, MAX_CONTROL_DEGREE> {
+    let mut out: heapless::Vec<Piece, MAX_CONTROL_DEGREE> = heapless::Vec::new();
+    for i in 0..p.form.len() {
+        let kind = p.form.kind(i);
+        if let Some(last) = out.last_mut() {
+            if kind == SegmentKind::Arc && last.kind == SegmentKind::Arc && last.side == side[i] {
+                last.count += 1;
+                continue;
+            }
+        }
+        // At most one piece per segment.
+        let _ = out.push(Piece {
+            kind,
+            side: side[i],
+            first: i,
+            count: 1,
+        });
+    }
+    out
+}
+
 /// Calls `visit` with the variables of every planar seed of `p` in the plane turned by `psi`, with
 /// arc sides `sides` (bit set: the arc bends left of the heading, seen along the plane normal).
 ///
@@ -196,22 +233,23 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
         sides: segment_sides(p, sides),
     };
     let r = p.radius;
-    let n = p.form.len();
-    let side = plane.sides;
-    let mut emit = |heading: f32, lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
-        match plane.variables(
-            p,
-            &Planar {
-                heading,
-                lengths: *lengths,
-            },
-        ) {
+    let pieces = pieces(p, &plane.sides);
+    let n = pieces.len();
+    // Lengths of the pieces, written out per segment.
+    let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
+        let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
+        for (piece, len) in pieces.iter().zip(piece_lengths) {
+            for l in lengths.iter_mut().skip(piece.first).take(piece.count) {
+                *l = len / piece.count as f32;
+            }
+        }
+        match plane.variables(p, &Planar { heading, lengths }) {
             Some(x) => visit(&x),
             None => f32::NEG_INFINITY,
         }
     };
     if n == 1 {
-        match p.form.kind(0) {
+        match pieces[0].kind {
             SegmentKind::Line => {
                 emit(0.0, &[dist, 0.0, 0.0, 0.0]);
             }
@@ -219,12 +257,13 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
                 if dist > 2.0 * r {
                     return;
                 }
+                let side = pieces[0].side;
                 let off = crate::fmath::sqrt(r * r - dist * dist / 4.0);
                 for cy in [off, -off] {
                     let cx = dist / 2.0;
-                    let h0 = heading_of_bend((cx / r, cy / r), side[0]);
-                    let h1 = heading_of_bend(((cx - dist) / r, cy / r), side[0]);
-                    emit(h0, &[r * turn(h0, h1, side[0]), 0.0, 0.0, 0.0]);
+                    let h0 = heading_of_bend((cx / r, cy / r), side);
+                    let h1 = heading_of_bend(((cx - dist) / r, cy / r), side);
+                    emit(h0, &[r * turn(h0, h1, side), 0.0, 0.0, 0.0]);
                 }
             }
         }
@@ -236,15 +275,17 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
     let heading_step = 2.0 * HEADING_SPAN / headings as f32;
     let caps = {
         let mut caps = [0.0f32; MAX_CONTROL_DEGREE];
-        for (i, c) in caps.iter_mut().enumerate().take(free) {
-            *c = match p.form.kind(i) {
-                SegmentKind::Arc => (p.upper[p.length_var(i)] * r).min(max_free),
+        for (c, piece) in caps.iter_mut().zip(&pieces).take(free) {
+            *c = match piece.kind {
+                SegmentKind::Arc => {
+                    (p.upper[p.length_var(piece.first)] * r * piece.count as f32).min(max_free)
+                }
                 SegmentKind::Line => max_free,
             };
         }
         caps
     };
-    // One probe: the free segments at fractions `cell` of their caps, completed onto the target;
+    // One probe: the free pieces at fractions `cell` of their caps, completed onto the target;
     // returns the largest clearance among the completions (how near the probe came to feasible).
     let mut probe = |heading: f32, cell: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
         let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
@@ -255,14 +296,14 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
         };
         for i in 0..free {
             lengths[i] = caps[i] * cell[i];
-            pose = advance(pose, p.form.kind(i), lengths[i], side[i], r);
+            pose = advance(pose, pieces[i].kind, lengths[i], pieces[i].side, r);
         }
-        let kinds = (p.form.kind(n - 2), p.form.kind(n - 1));
+        let (a, b) = (pieces[n - 2], pieces[n - 1]);
         let mut nearest = f32::NEG_INFINITY;
         complete(
             pose,
-            kinds,
-            (side[n - 2], side[n - 1]),
+            (a.kind, b.kind),
+            (a.side, b.side),
             dist,
             r,
             &mut |la, lb| {

@@ -172,7 +172,7 @@ impl DeviceService {
         DeviceService {
             rx: RxQueue::new(),
             overrun: false,
-            decoder: FrameDecoder::new(),
+            decoder: FrameDecoder::for_requests(),
             core: Core {
                 identity,
                 job: Job::Idle,

@@ -7,7 +7,7 @@ mod firmware_support;
 use firmware_support::{build_firmware, emulator_ready, Qemu};
 use needle_cli::device::{open, Client, ClientConfig, LinkTarget};
 use needle_e2e::{example, needle};
-use planner_core::wire::{cobs, crc::crc32, Fault, ReplyBody};
+use planner_core::wire::{cobs, frame_crc, Directed, Fault, ReplyBody, Request};
 use planner_core::PlanError;
 use serde_json::Value;
 use std::time::Duration;
@@ -46,7 +46,7 @@ fn assert_device_plan_equals_host(addr: &str, scenario: &str) {
 /// A frame whose CRC is right but whose payload is no message of the protocol.
 fn undecodable_frame() -> Vec<u8> {
     let mut raw = vec![0xFF, 0xFF, 0xFF, 0x7F, 0x13];
-    raw.extend_from_slice(&crc32(&raw).to_le_bytes());
+    raw.extend_from_slice(&frame_crc(<Request as Directed>::DIRECTION, &raw).to_le_bytes());
     let mut frame = vec![0];
     cobs::encode(&raw, &mut |b: &[u8]| frame.extend_from_slice(b));
     frame.push(0);

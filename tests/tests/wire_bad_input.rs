@@ -31,7 +31,7 @@ fn frame(req: &Request) -> Vec<u8> {
 /// Frames a raw payload with a valid CRC (for payloads that are not messages).
 fn frame_payload(payload: &[u8]) -> Vec<u8> {
     let mut raw = payload.to_vec();
-    raw.extend_from_slice(&planner_core::wire::crc::crc32(payload).to_le_bytes());
+    raw.extend_from_slice(&planner_core::wire::frame::frame_crc(1, payload).to_le_bytes());
     let mut out = vec![0u8];
     planner_core::wire::cobs::encode(&raw, &mut |b: &[u8]| out.extend_from_slice(b));
     out.push(0);

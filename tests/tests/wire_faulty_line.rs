@@ -115,3 +115,40 @@ fn five_hundred_plans_over_a_noisy_line() {
     );
     assert!(client.ping().is_ok() || client.ping().is_ok());
 }
+
+/// Bytes on the wire for the paper scenario (printed for docs/protocol.md; asserted against
+/// the frame bounds).
+#[test]
+fn wire_bytes_for_the_paper_scenario() {
+    let scenario = Scenario::paper();
+    let request = postcard::to_stdvec(&planner_core::wire::PlanRequest::new(&scenario)).unwrap();
+    let result = postcard::to_stdvec(&plan(&scenario)).unwrap();
+    let mut client = Client::new(Sim(InProcess::new()), ClientConfig::default());
+    client.hello().unwrap();
+    let before = client.stats();
+    client.plan(&scenario, &mut |_| {}).unwrap().unwrap();
+    let s = client.stats();
+    println!(
+        "paper scenario: plan request {} bytes encoded, plan result {} bytes encoded; \
+         on the wire (frames, clean line): host to device {} bytes in {} frames, device to host {} bytes",
+        request.len(),
+        result.len(),
+        s.bytes_out - before.bytes_out,
+        s.sent - before.sent,
+        s.bytes_in - before.bytes_in,
+    );
+    assert_eq!(s.retried, 0);
+    let ram = std::mem::size_of::<planner_core::service::DeviceService>();
+    println!(
+        "frames: max payload {} bytes, max frame {} bytes with delimiters; upload buffer {}, \
+         result buffer {}; DeviceService {} bytes of RAM (host layout)",
+        planner_core::wire::MAX_PAYLOAD,
+        planner_core::wire::MAX_WIRE_FRAME,
+        planner_core::wire::MAX_PLAN_REQUEST,
+        planner_core::wire::MAX_PLAN_RESULT,
+        ram
+    );
+    assert!(ram < 16 * 1024, "the service must fit a small MCU's RAM");
+    assert!(request.len() <= planner_core::wire::MAX_PLAN_REQUEST);
+    assert!(result.len() <= planner_core::wire::MAX_PLAN_RESULT);
+}

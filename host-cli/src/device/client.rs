@@ -131,7 +131,7 @@ impl From<io::Error> for LinkError {
 }
 
 enum Event {
-    Reply(Reply),
+    Reply(Box<Reply>),
     /// A frame that failed its CRC, stuffing or decoding.
     Damaged,
 }
@@ -174,7 +174,7 @@ impl<T: Transport> Client<T> {
         Client {
             link,
             config,
-            decoder: FrameDecoder::new(),
+            decoder: FrameDecoder::for_replies(),
             events: VecDeque::new(),
             stats: LinkStats::default(),
             next_id: (seed as u16).max(1),
@@ -240,7 +240,7 @@ impl<T: Transport> Client<T> {
             for &b in &buf[..n] {
                 if let Some(ev) = self.decoder.push(b) {
                     let ev = match ev.map(postcard::from_bytes::<Reply>) {
-                        Ok(Ok(reply)) => Event::Reply(reply),
+                        Ok(Ok(reply)) => Event::Reply(Box::new(reply)),
                         _ => Event::Damaged,
                     };
                     self.events.push_back(ev);
@@ -256,7 +256,7 @@ impl<T: Transport> Client<T> {
             match self.next_event(deadline)? {
                 None => return Ok(None),
                 Some(Event::Damaged) => self.stats.detected += 1,
-                Some(Event::Reply(r)) => return Ok(Some(r)),
+                Some(Event::Reply(r)) => return Ok(Some(*r)),
             }
         }
     }
@@ -318,7 +318,7 @@ impl<T: Transport> Client<T> {
                     self.stats.detected += 1;
                     return Ok(None);
                 }
-                Some(Event::Reply(r)) => r,
+                Some(Event::Reply(r)) => *r,
             };
             if let ReplyBody::Fault(Fault::UnsupportedVersion { supported, .. }) = reply.body {
                 return Err(LinkError::Version { device: supported });

@@ -27,7 +27,7 @@ impl Device {
         stream.set_nodelay(true)?;
         Ok(Device {
             stream,
-            decoder: FrameDecoder::new(),
+            decoder: FrameDecoder::for_replies(),
             next_id: 1,
             plan_timeout: Duration::from_secs(600),
         })

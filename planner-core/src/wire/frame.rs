@@ -2,9 +2,13 @@
 //!
 //! The leading delimiter closes whatever garbage preceded the frame, so noise on an idle line
 //! costs at most one rejected pseudo-frame and never the next real one.
+//!
+//! The CRC also covers a direction byte that is not sent (1 for requests, 2 for replies): a line
+//! that echoes or loops back the host's own frames (a misconfigured port, a loopback adapter)
+//! shows up as damaged frames, never as replies.
 
 use super::cobs;
-use super::crc::{crc32, Crc32};
+use super::crc::Crc32;
 use super::max_size::{max, MaxSize};
 use super::messages::{Reply, Request};
 use serde::Serialize;
@@ -29,9 +33,31 @@ pub enum EncodeError {
     TooLarge,
 }
 
+/// Which way a message travels; part of its frame's CRC.
+pub trait Directed {
+    /// 1 for host to device, 2 for device to host.
+    const DIRECTION: u8;
+}
+
+impl Directed for Request {
+    const DIRECTION: u8 = 1;
+}
+
+impl Directed for Reply {
+    const DIRECTION: u8 = 2;
+}
+
+/// The frame checksum of `payload` travelling in `direction`.
+pub fn frame_crc(direction: u8, payload: &[u8]) -> u32 {
+    let mut c = Crc32::new();
+    c.update(&[direction]);
+    c.update(payload);
+    c.value()
+}
+
 /// Serialises `msg` into `scratch` and hands the complete frame to `out` piece by piece.
 /// Returns the number of bytes handed out.
-pub fn encode_frame<T: Serialize>(
+pub fn encode_frame<T: Serialize + Directed>(
     msg: &T,
     scratch: &mut [u8],
     out: &mut dyn FnMut(&[u8]),
@@ -40,7 +66,7 @@ pub fn encode_frame<T: Serialize>(
     let n = postcard::to_slice(msg, &mut scratch[..payload_cap])
         .map_err(|_| EncodeError::TooLarge)?
         .len();
-    let crc = crc32(&scratch[..n]);
+    let crc = frame_crc(T::DIRECTION, &scratch[..n]);
     scratch[n..n + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
     let mut written = 2;
     out(&[0]);
@@ -66,6 +92,7 @@ pub enum FrameError {
 
 /// Accumulates line bytes and yields checked payloads. Fixed buffer of `N` bytes.
 pub struct FrameDecoder<const N: usize> {
+    direction: u8,
     buf: [u8; N],
     len: usize,
     skip: Skip,
@@ -79,16 +106,21 @@ enum Skip {
     Resync,
 }
 
-impl<const N: usize> Default for FrameDecoder<N> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl<const N: usize> FrameDecoder<N> {
-    /// An empty decoder.
-    pub const fn new() -> Self {
+    /// An empty decoder of requests (the device's side). There is no `new`: a decoder that
+    /// expects the wrong direction rejects every frame as damaged, so the side is always named.
+    pub const fn for_requests() -> Self {
+        Self::expecting(<Request as Directed>::DIRECTION)
+    }
+
+    /// An empty decoder of replies (the host's side).
+    pub const fn for_replies() -> Self {
+        Self::expecting(<Reply as Directed>::DIRECTION)
+    }
+
+    const fn expecting(direction: u8) -> Self {
         FrameDecoder {
+            direction,
             buf: [0; N],
             len: 0,
             skip: Skip::No,
@@ -133,9 +165,7 @@ impl<const N: usize> FrameDecoder<N> {
         let body = n - CRC_LEN;
         let mut crc_bytes = [0u8; CRC_LEN];
         crc_bytes.copy_from_slice(&self.buf[body..n]);
-        let mut c = Crc32::new();
-        c.update(&self.buf[..body]);
-        if c.value() != u32::from_le_bytes(crc_bytes) {
+        if frame_crc(self.direction, &self.buf[..body]) != u32::from_le_bytes(crc_bytes) {
             return Some(Err(FrameError::BadCrc));
         }
         Some(Ok(&self.buf[..body]))

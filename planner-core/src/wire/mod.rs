@@ -14,7 +14,8 @@ pub mod messages;
 pub mod obstacles;
 
 pub use frame::{
-    encode_frame, EncodeError, FrameDecoder, FrameError, MAX_FRAME, MAX_PAYLOAD, MAX_WIRE_FRAME,
+    encode_frame, frame_crc, Directed, EncodeError, FrameDecoder, FrameError, MAX_FRAME,
+    MAX_PAYLOAD, MAX_WIRE_FRAME,
 };
 pub use max_size::MaxSize;
 pub use messages::{

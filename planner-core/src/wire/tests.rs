@@ -142,7 +142,7 @@ fn frames_take_one_cobs_block() {
     assert_eq!(MAX_FRAME, MAX_PAYLOAD + frame::CRC_LEN + 1);
 }
 
-fn frame_bytes<T: Serialize>(msg: &T) -> std::vec::Vec<u8> {
+fn frame_bytes<T: Serialize + frame::Directed>(msg: &T) -> std::vec::Vec<u8> {
     extern crate std;
     let mut out = std::vec::Vec::new();
     let mut scratch = [0u8; MAX_PAYLOAD + frame::CRC_LEN];
@@ -154,7 +154,7 @@ extern crate std;
 use std::vec::Vec;
 
 fn decode_all(bytes: &[u8]) -> Vec<Result<Vec<u8>, FrameError>> {
-    let mut d = FrameDecoder::<MAX_FRAME>::new();
+    let mut d = FrameDecoder::<MAX_FRAME>::for_requests();
     let mut out = Vec::new();
     for &b in bytes {
         if let Some(ev) = d.push(b) {
@@ -259,4 +259,23 @@ fn too_many_obstacles_decode_into_a_typed_error() {
     let bytes = postcard::to_slice(&req, &mut buf).unwrap();
     let back: PlanRequest = postcard::from_bytes(bytes).unwrap();
     assert_eq!(back.into_scenario().unwrap(), s);
+}
+
+#[test]
+fn an_echoed_request_is_never_taken_for_a_reply() {
+    // Every request, looped back to the host, fails the reply decoder's CRC.
+    let req = Request {
+        header: Header::new(3),
+        body: RequestBody::Fetch {
+            offset: 0,
+            max_len: 64,
+        },
+    };
+    let f = frame_bytes(&req);
+    let mut host = FrameDecoder::<MAX_FRAME>::for_replies();
+    let events: Vec<_> = f
+        .iter()
+        .filter_map(|&b| host.push(b).map(|e| e.map(|_| ())))
+        .collect();
+    assert_eq!(events, [Err(FrameError::BadCrc)]);
 }

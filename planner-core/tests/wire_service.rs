@@ -1,0 +1,195 @@
+//! The device service fed directly: state machine behaviour and random byte streams.
+
+use planner_core::service::DeviceService;
+use planner_core::wire::crc::crc32;
+use planner_core::wire::{
+    encode_frame, Chunk, Fault, FrameDecoder, Header, PlanRequest, Reply, ReplyBody, Request,
+    RequestBody, MAX_FRAME, MAX_PAYLOAD,
+};
+use planner_core::Scenario;
+use proptest::prelude::*;
+
+fn frame(id: u16, body: RequestBody) -> Vec<u8> {
+    let mut scratch = [0u8; MAX_PAYLOAD + 4];
+    let mut out = Vec::new();
+    let req = Request {
+        header: Header::new(id),
+        body,
+    };
+    encode_frame(&req, &mut scratch, &mut |b: &[u8]| out.extend_from_slice(b)).unwrap();
+    out
+}
+
+/// Polls until idle (bounded) and decodes every reply; panics on a damaged or foreign frame.
+fn run(dev: &mut DeviceService) -> Vec<Reply> {
+    let mut out = Vec::new();
+    let mut polls = 0;
+    while dev.poll(&mut |b: &[u8]| out.extend_from_slice(b)) {
+        polls += 1;
+        assert!(polls < 100_000, "the service never went idle");
+    }
+    decode(&out)
+}
+
+fn decode(bytes: &[u8]) -> Vec<Reply> {
+    let mut d = FrameDecoder::<MAX_FRAME>::for_replies();
+    let mut replies = Vec::new();
+    for &b in bytes {
+        if let Some(ev) = d.push(b) {
+            let payload = ev.expect("the device sends only intact frames");
+            replies.push(postcard::from_bytes::<Reply>(payload).expect("a reply"));
+        }
+    }
+    replies
+}
+
+fn upload_frames(id: u16, scenario: &Scenario) -> Vec<Vec<u8>> {
+    let mut buf = [0u8; planner_core::wire::MAX_PLAN_REQUEST];
+    let bytes = postcard::to_slice(&PlanRequest::new(scenario), &mut buf)
+        .unwrap()
+        .to_vec();
+    let crc = crc32(&bytes);
+    bytes
+        .chunks(50)
+        .enumerate()
+        .map(|(i, c)| {
+            frame(
+                id,
+                RequestBody::Upload {
+                    offset: (i * 50) as u16,
+                    total: bytes.len() as u16,
+                    crc,
+                    data: Chunk::from_slice(c).unwrap(),
+                },
+            )
+        })
+        .collect()
+}
+
+fn small_scenario() -> Scenario {
+    let mut s = Scenario::paper();
+    s.options.max_control_degree = 1;
+    s
+}
+
+#[test]
+fn busy_while_planning_then_cancel_frees_the_device() {
+    let mut dev = Box::new(DeviceService::new());
+    for f in upload_frames(1, &small_scenario()) {
+        dev.receive(&f);
+    }
+    // Handle the upload frames only: the plan has started, no form done yet.
+    let mut out = Vec::new();
+    while !dev.is_planning() {
+        assert!(dev.poll(&mut |b: &[u8]| out.extend_from_slice(b)));
+    }
+    for f in upload_frames(2, &small_scenario()).into_iter().take(1) {
+        dev.receive(&f);
+    }
+    dev.receive(&frame(1, RequestBody::Cancel));
+    let replies = run(&mut dev);
+    assert!(replies
+        .iter()
+        .any(|r| r.header.id == 2 && r.body == ReplyBody::Fault(Fault::Busy { active: 1 })));
+    assert!(replies
+        .iter()
+        .any(|r| r.header.id == 1 && r.body == ReplyBody::Cancelled { was_active: true }));
+    assert!(!dev.is_planning());
+    assert_eq!(dev.stats().plans, 0, "the cancelled plan did not finish");
+    // Free again: a new upload is taken and planned to the end.
+    for f in upload_frames(3, &small_scenario()) {
+        dev.receive(&f);
+    }
+    let replies = run(&mut dev);
+    assert!(replies
+        .iter()
+        .any(|r| r.header.id == 3 && matches!(r.body, ReplyBody::Finished { .. })));
+}
+
+#[test]
+fn a_repeated_upload_is_acknowledged_not_replanned() {
+    let mut dev = Box::new(DeviceService::new());
+    let frames = upload_frames(5, &small_scenario());
+    for f in &frames {
+        dev.receive(f);
+    }
+    run(&mut dev);
+    assert_eq!(dev.stats().plans, 1);
+    dev.receive(frames.last().unwrap());
+    let replies = run(&mut dev);
+    assert!(
+        matches!(replies[0].body, ReplyBody::Uploaded { received, total } if received == total)
+    );
+    assert_eq!(dev.stats().plans, 1);
+    // The same id with another scenario is a new request, not a repeat.
+    let mut other = small_scenario();
+    other.target.tolerance = 0.2;
+    for f in upload_frames(5, &other) {
+        dev.receive(&f);
+    }
+    run(&mut dev);
+    assert_eq!(dev.stats().plans, 2);
+}
+
+#[test]
+fn the_fuzz_seeds_are_valid_requests() {
+    // Seeds of fuzz/ (first byte: the target's chunk selector) must pass the CRC and decode.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let data = std::fs::read(entry.unwrap().path()).unwrap();
+        let mut dev = Box::new(DeviceService::new());
+        dev.receive(&data[1..]);
+        let replies = run(&mut dev);
+        assert!(!replies.is_empty());
+        assert_eq!(dev.stats().bad_crc + dev.stats().truncated, 0);
+        checked += 1;
+    }
+    assert!(checked >= 5);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Random bytes never panic the service, it always goes idle, sends only intact reply
+    /// frames, and answers a ping that follows the noise.
+    #[test]
+    fn random_streams_then_a_ping(
+        noise in proptest::collection::vec(any::<u8>(), 0..3000),
+        split in 1usize..300,
+        nonce in any::<u32>(),
+    ) {
+        let mut dev = Box::new(DeviceService::new());
+        for chunk in noise.chunks(split) {
+            dev.receive(chunk);
+            run(&mut dev);
+        }
+        dev.receive(&frame(42, RequestBody::Ping { nonce }));
+        let replies = run(&mut dev);
+        let pong = ReplyBody::Pong { nonce };
+        prop_assert!(replies.iter().any(|r| r.header.id == 42 && r.body == pong), "no pong");
+    }
+
+    /// Valid frames with random bytes flipped: every damaged frame is rejected (never answered
+    /// as if intact), and the device answers the intact ones.
+    #[test]
+    fn damaged_frames_are_rejected(
+        flips in proptest::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..4),
+        nonce in any::<u32>(),
+    ) {
+        let good = frame(7, RequestBody::Ping { nonce });
+        let mut bad = good.clone();
+        for (i, mask) in &flips {
+            let at = 1 + i.index(bad.len() - 2);
+            bad[at] ^= mask;
+        }
+        let mut dev = Box::new(DeviceService::new());
+        dev.receive(&bad);
+        let replies = run(&mut dev);
+        prop_assert!(replies.iter().all(|r| matches!(r.body, ReplyBody::Fault(_))), "{replies:?}");
+        dev.receive(&good);
+        let replies = run(&mut dev);
+        prop_assert_eq!(replies.len(), 1);
+        prop_assert_eq!(&replies[0].body, &ReplyBody::Pong { nonce });
+    }
+}
