@@ -101,14 +101,19 @@ fn v3(a: [f32; 3]) -> V3 {
     V3::new(a[0], a[1], a[2])
 }
 
+/// Relative shrink of the tilt and arc bounds (about 30 f32 ulps).
+const BOUND_SHRINK: f32 = 1.0 - 4e-6;
+
 impl<'a> Problem<'a> {
     /// The problem of `form`; in plane mode `sides` bit i set means arc i turns to the negative side.
     pub fn new(scenario: &'a Scenario, form: Form, sides: u8) -> Problem<'a> {
         let plane = scenario.options.workspace == Workspace::PlaneYz;
         let radius = scenario.needle.curvature_radius;
-        let tilt = scenario.entry.max_tilt_deg.to_radians();
-        let max_arc = scenario.needle.max_arc_deg.to_radians();
-        let max_line = max_line_length(scenario) / radius;
+        // The optimiser's bounds sit a few f32 ulps inside the scenario's, so a path at a bound
+        // still respects it when its reported numbers are rounded or re-evaluated in f64.
+        let tilt = scenario.entry.max_tilt_deg.to_radians() * BOUND_SHRINK;
+        let max_arc = scenario.needle.max_arc_deg.to_radians() * BOUND_SHRINK;
+        let max_line = max_line_length(scenario) / radius * BOUND_SHRINK;
         let mut lower = [0.0; MAX_VARS];
         let mut upper = [0.0; MAX_VARS];
         let angles = if plane { 1 } else { 2 };
