@@ -17,6 +17,7 @@ pub mod error;
 pub mod fmath;
 pub mod form;
 pub mod kinematics;
+pub mod planar;
 pub mod plan;
 pub mod planner;
 pub mod problem;

@@ -11,6 +11,7 @@
 
 use crate::form::SegmentKind;
 use crate::kinematics::{insertion_frame, V3};
+use crate::planar::{advance, complete, heading_of_bend, turn, Pose};
 use crate::problem::{Problem, Vars, MAX_VARS};
 use crate::MAX_CONTROL_DEGREE;
 
@@ -31,125 +32,6 @@ pub fn grid(len: usize) -> (usize, usize) {
 struct Planar {
     heading: f32,
     lengths: [f32; MAX_CONTROL_DEGREE],
-}
-
-/// In-plane pose: position in (chord, m) coordinates and heading angle.
-#[derive(Clone, Copy, Debug)]
-struct Pose {
-    x: f32,
-    y: f32,
-    psi: f32,
-}
-
-/// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
-fn bend(psi: f32, s: f32) -> (f32, f32) {
-    (s * crate::fmath::sin(psi), -s * crate::fmath::cos(psi))
-}
-
-/// The heading at which an arc of side `s` has unit bend normal `n`.
-fn heading_of_bend(n: (f32, f32), s: f32) -> f32 {
-    crate::fmath::atan2(s * n.0, -s * n.1)
-}
-
-/// Turning angle in [0, 2 pi) from heading `from` to `to` for side `s` (right turns decrease psi).
-fn turn(from: f32, to: f32, s: f32) -> f32 {
-    crate::fmath::wrap_positive(s * (from - to))
-}
-
-fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
-    match kind {
-        SegmentKind::Line => Pose {
-            x: p.x + len * crate::fmath::cos(p.psi),
-            y: p.y + len * crate::fmath::sin(p.psi),
-            psi: p.psi,
-        },
-        SegmentKind::Arc => {
-            let (nx, ny) = bend(p.psi, s);
-            let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
-            let psi = p.psi - s * len / radius;
-            let (mx, my) = bend(psi, s);
-            Pose {
-                x: cx - radius * mx,
-                y: cy - radius * my,
-                psi,
-            }
-        }
-    }
-}
-
-/// Closed-form completions of the last two segments from `p` to the target `(tx, 0)`; calls
-/// `out(length_a, length_b)` for each.
-fn complete(
-    p: Pose,
-    kinds: (SegmentKind, SegmentKind),
-    sides: (f32, f32),
-    tx: f32,
-    r: f32,
-    out: &mut dyn FnMut(f32, f32),
-) {
-    match kinds {
-        (SegmentKind::Arc, SegmentKind::Line) => {
-            let s = sides.0;
-            let (nx, ny) = bend(p.psi, s);
-            let (qx, qy) = (tx - (p.x + r * nx), -(p.y + r * ny));
-            let q2 = qx * qx + qy * qy;
-            if q2 < r * r {
-                return;
-            }
-            let line = crate::fmath::sqrt(q2 - r * r);
-            let psi_end = crate::fmath::atan2(qy, qx) - s * crate::fmath::atan2(r, line);
-            out(r * turn(p.psi, psi_end, s), line);
-        }
-        (SegmentKind::Line, SegmentKind::Arc) => {
-            let s = sides.1;
-            let (nx, ny) = bend(p.psi, s);
-            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
-            let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
-            let wd = wx * dx + wy * dy;
-            let disc = wd * wd - (wx * wx + wy * wy) + r * r;
-            if disc < 0.0 {
-                return;
-            }
-            let root = crate::fmath::sqrt(disc);
-            for line in [wd - root, wd + root] {
-                if line < 0.0 {
-                    continue;
-                }
-                let (cx, cy) = (p.x + line * dx + r * nx, p.y + line * dy + r * ny);
-                let psi_end = heading_of_bend(((cx - tx) / r, cy / r), s);
-                out(line, r * turn(p.psi, psi_end, s));
-                if root == 0.0 {
-                    break;
-                }
-            }
-        }
-        (SegmentKind::Arc, SegmentKind::Arc) => {
-            let (s1, s2) = sides;
-            if s1 == s2 {
-                return; // one circle: `pieces` merges such runs into one arc
-            }
-            let (nx, ny) = bend(p.psi, s1);
-            let (c1x, c1y) = (p.x + r * nx, p.y + r * ny);
-            let (ux, uy) = (tx - c1x, -c1y);
-            let d = crate::fmath::sqrt(ux * ux + uy * uy);
-            if !(d >= r && d <= 3.0 * r) || d == 0.0 {
-                return;
-            }
-            let a = (3.0 * r * r + d * d) / (2.0 * d);
-            let h = crate::fmath::sqrt((4.0 * r * r - a * a).max(0.0));
-            let (ex, ey) = (ux / d, uy / d);
-            for sign in [-1.0f32, 1.0] {
-                let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);
-                let psi1 = heading_of_bend(((c1x - c2x) / (2.0 * r), (c1y - c2y) / (2.0 * r)), s1);
-                let psi2 = heading_of_bend(((c2x - tx) / r, c2y / r), s2);
-                out(r * turn(p.psi, psi1, s1), r * turn(psi1, psi2, s2));
-                if h == 0.0 {
-                    break;
-                }
-            }
-        }
-        (SegmentKind::Line, SegmentKind::Line) => {}
-    }
 }
 
 /// Side (+1 right, -1 left) of each segment for arc-side bits `sides` (bit set: left).
@@ -175,20 +57,22 @@ fn segment_sides(p: &Problem, sides: u8) -> [f32; MAX_CONTROL_DEGREE] {
 struct Piece {
     kind: SegmentKind,
     side: f32,
-    first: usize,
-    count: usize,
+    /// The segments it covers (bit i: segment i).
+    segments: u8,
+    count: u8,
 }
 
-/// The form of `p` with sides `side`, runs of same-side arcs merged.
-fn pieces(
-    p: &Problem,
-    side: &[f32; MAX_CONTROL_DEGREE],
-) -> heapless::Vec<Piece, MAX_CONTROL_DEGREE> {
-    let mut out: heapless::Vec<Piece, MAX_CONTROL_DEGREE> = heapless::Vec::new();
-    for i in 0..p.form.len() {
+type Pieces = heapless::Vec<Piece, MAX_CONTROL_DEGREE>;
+
+/// The form of `p` with sides `side`, without the segments in `skipped` (they get length zero),
+/// runs of same-side arcs merged.
+fn pieces(p: &Problem, side: &[f32; MAX_CONTROL_DEGREE], skipped: u8) -> Pieces {
+    let mut out = Pieces::new();
+    for i in (0..p.form.len()).filter(|i| skipped & (1 << i) == 0) {
         let kind = p.form.kind(i);
         if let Some(last) = out.last_mut() {
             if kind == SegmentKind::Arc && last.kind == SegmentKind::Arc && last.side == side[i] {
+                last.segments |= 1 << i;
                 last.count += 1;
                 continue;
             }
@@ -197,7 +81,7 @@ fn pieces(
         let _ = out.push(Piece {
             kind,
             side: side[i],
-            first: i,
+            segments: 1 << i,
             count: 1,
         });
     }
@@ -207,40 +91,39 @@ fn pieces(
 /// Calls `visit` with the variables of every planar seed of `p` in the plane turned by `psi`, with
 /// arc sides `sides` (bit set: the arc bends left of the heading, seen along the plane normal).
 ///
+/// The form is swept whole and then once more without each of its lines: an optimum whose line
+/// has length zero lies on the edge of the form's completions, where a grid rarely lands.
+///
 /// `visit` returns the seed's smallest clearance (negative when it touches an obstacle, minus
 /// infinity when it was not evaluated); near misses make the sweep look again, more finely.
 pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f32) {
-    let e = p.scenario.entry.position;
-    let t = p.scenario.target.position;
-    let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
-    let dist = crate::fmath::sqrt(d.dot(&d));
-    let chord = d / dist;
-    let b1: V3 = p.basis.column(0).into();
-    let b2: V3 = p.basis.column(1).into();
-    let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
-        b1
-    } else {
-        b2
-    };
-    let a = pick - chord * pick.dot(&chord);
-    let a = a / crate::fmath::sqrt(a.dot(&a));
-    let normal = a * crate::fmath::cos(psi) + chord.cross(&a) * crate::fmath::sin(psi);
-    let m = normal.cross(&chord);
-    let plane = SeedPlane {
-        chord,
-        m,
-        normal,
-        sides: segment_sides(p, sides),
-    };
+    let plane = SeedPlane::new(p, psi, sides);
+    sweep_pieces(p, &plane, &pieces(p, &plane.sides, 0), visit);
+    if p.form.len() > 1 {
+        for i in 0..p.form.len() {
+            if p.form.kind(i) == SegmentKind::Line {
+                sweep_pieces(p, &plane, &pieces(p, &plane.sides, 1 << i), visit);
+            }
+        }
+    }
+}
+
+fn sweep_pieces(
+    p: &Problem,
+    plane: &SeedPlane,
+    pieces: &Pieces,
+    visit: &mut dyn FnMut(&Vars) -> f32,
+) {
     let r = p.radius;
-    let pieces = pieces(p, &plane.sides);
+    let dist = plane.dist;
     let n = pieces.len();
-    // Lengths of the pieces, written out per segment.
     let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
         let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
         for (piece, len) in pieces.iter().zip(piece_lengths) {
-            for l in lengths.iter_mut().skip(piece.first).take(piece.count) {
-                *l = len / piece.count as f32;
+            for (i, l) in lengths.iter_mut().enumerate() {
+                if piece.segments & (1 << i) != 0 {
+                    *l = len / f32::from(piece.count);
+                }
             }
         }
         match plane.variables(p, &Planar { heading, lengths }) {
@@ -275,10 +158,11 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
     let heading_step = 2.0 * HEADING_SPAN / headings as f32;
     let caps = {
         let mut caps = [0.0f32; MAX_CONTROL_DEGREE];
-        for (c, piece) in caps.iter_mut().zip(&pieces).take(free) {
+        for (c, piece) in caps.iter_mut().zip(pieces).take(free) {
             *c = match piece.kind {
                 SegmentKind::Arc => {
-                    (p.upper[p.length_var(piece.first)] * r * piece.count as f32).min(max_free)
+                    let first = piece.segments.trailing_zeros() as usize;
+                    (p.upper[p.length_var(first)] * r * f32::from(piece.count)).min(max_free)
                 }
                 SegmentKind::Line => max_free,
             };
@@ -315,8 +199,18 @@ pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f
         nearest
     };
     let combos = steps.pow(free as u32);
-    for hi in 0..headings {
-        let heading = -HEADING_SPAN + heading_step * (hi as f32 + 0.5);
+    // The grid's headings, then the two at the tilt bound (optima often lie on it).
+    let grid_heading = |hi: usize| -> Option<f32> {
+        if hi < headings {
+            Some(-HEADING_SPAN + heading_step * (hi as f32 + 0.5))
+        } else {
+            plane.tilt_bound_headings.and_then(|b| b.get(hi - headings).copied())
+        }
+    };
+    for hi in 0..headings + 2 {
+        let Some(heading) = grid_heading(hi) else {
+            continue;
+        };
         for combo in 0..combos {
             let mut cell = [0.0f32; MAX_CONTROL_DEGREE];
             let mut c = combo;
@@ -355,13 +249,56 @@ const REFINE: usize = 4;
 
 /// The plane of a sweep and the arcs' sides.
 struct SeedPlane {
+    /// Unit vector from the entry to the target.
     chord: V3,
+    /// In-plane unit normal to the chord (positive headings turn towards it).
     m: V3,
     normal: V3,
+    /// Entry to target (mm).
+    dist: f32,
     sides: [f32; MAX_CONTROL_DEGREE],
+    /// The in-plane headings on the tilt bound (just inside), if the plane crosses it.
+    tilt_bound_headings: Option<[f32; 2]>,
 }
 
 impl SeedPlane {
+    /// The plane through the entry and the target turned by `psi` about the chord.
+    fn new(p: &Problem, psi: f32, sides: u8) -> Self {
+        let e = p.scenario.entry.position;
+        let t = p.scenario.target.position;
+        let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
+        let dist = crate::fmath::sqrt(d.dot(&d));
+        let chord = d / dist;
+        let b1: V3 = p.basis.column(0).into();
+        let b2: V3 = p.basis.column(1).into();
+        let b3: V3 = p.basis.column(2).into();
+        let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
+            b1
+        } else {
+            b2
+        };
+        let a = pick - chord * pick.dot(&chord);
+        let a = a / crate::fmath::sqrt(a.dot(&a));
+        let normal = a * crate::fmath::cos(psi) + chord.cross(&a) * crate::fmath::sin(psi);
+        let m = normal.cross(&chord);
+        // heading . b3 = A cos h + B sin h = R cos(h - phi) meets cos(max tilt) at phi +- w.
+        let (ca, cb) = (chord.dot(&b3), m.dot(&b3));
+        let reach = crate::fmath::sqrt(ca * ca + cb * cb);
+        let tilt_bound_headings = (reach > p.cos_max_tilt).then(|| {
+            let phi = crate::fmath::atan2(cb, ca);
+            let w = crate::fmath::acos(p.cos_max_tilt / reach) * (1.0 - 1e-4);
+            [phi - w, phi + w]
+        });
+        SeedPlane {
+            chord,
+            m,
+            normal,
+            dist,
+            sides: segment_sides(p, sides),
+            tilt_bound_headings,
+        }
+    }
+
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
     fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
         let heading =

@@ -1,0 +1,128 @@
+//! Planar needle geometry in a seed plane: poses, arcs, and the closed-form completions of the
+//! last two segments onto the target (which lies at `(tx, 0)`, the entry at the origin).
+
+use crate::form::SegmentKind;
+
+/// In-plane pose: position in (chord, m) coordinates and heading angle.
+#[derive(Clone, Copy, Debug)]
+pub struct Pose {
+    /// Along the chord (mm).
+    pub x: f32,
+    /// Across the chord, towards the plane's `m` axis (mm).
+    pub y: f32,
+    /// Heading (radians from the chord).
+    pub psi: f32,
+}
+
+/// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
+pub fn bend(psi: f32, s: f32) -> (f32, f32) {
+    (s * crate::fmath::sin(psi), -s * crate::fmath::cos(psi))
+}
+
+/// The heading at which an arc of side `s` has unit bend normal `n`.
+pub fn heading_of_bend(n: (f32, f32), s: f32) -> f32 {
+    crate::fmath::atan2(s * n.0, -s * n.1)
+}
+
+/// Turning angle in [0, 2 pi) from heading `from` to `to` for side `s` (right turns decrease psi).
+pub fn turn(from: f32, to: f32, s: f32) -> f32 {
+    crate::fmath::wrap_positive(s * (from - to))
+}
+
+/// The pose after a segment of `kind` and length `len` bending to side `s`.
+pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
+    match kind {
+        SegmentKind::Line => Pose {
+            x: p.x + len * crate::fmath::cos(p.psi),
+            y: p.y + len * crate::fmath::sin(p.psi),
+            psi: p.psi,
+        },
+        SegmentKind::Arc => {
+            let (nx, ny) = bend(p.psi, s);
+            let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
+            let psi = p.psi - s * len / radius;
+            let (mx, my) = bend(psi, s);
+            Pose {
+                x: cx - radius * mx,
+                y: cy - radius * my,
+                psi,
+            }
+        }
+    }
+}
+
+/// Closed-form completions of the last two segments from `p` to the target `(tx, 0)`; calls
+/// `out(length_a, length_b)` for each.
+pub fn complete(
+    p: Pose,
+    kinds: (SegmentKind, SegmentKind),
+    sides: (f32, f32),
+    tx: f32,
+    r: f32,
+    out: &mut dyn FnMut(f32, f32),
+) {
+    match kinds {
+        (SegmentKind::Arc, SegmentKind::Line) => {
+            let s = sides.0;
+            let (nx, ny) = bend(p.psi, s);
+            let (qx, qy) = (tx - (p.x + r * nx), -(p.y + r * ny));
+            let q2 = qx * qx + qy * qy;
+            if q2 < r * r {
+                return;
+            }
+            let line = crate::fmath::sqrt(q2 - r * r);
+            let psi_end = crate::fmath::atan2(qy, qx) - s * crate::fmath::atan2(r, line);
+            out(r * turn(p.psi, psi_end, s), line);
+        }
+        (SegmentKind::Line, SegmentKind::Arc) => {
+            let s = sides.1;
+            let (nx, ny) = bend(p.psi, s);
+            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
+            let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
+            let wd = wx * dx + wy * dy;
+            let disc = wd * wd - (wx * wx + wy * wy) + r * r;
+            if disc < 0.0 {
+                return;
+            }
+            let root = crate::fmath::sqrt(disc);
+            for line in [wd - root, wd + root] {
+                if line < 0.0 {
+                    continue;
+                }
+                let (cx, cy) = (p.x + line * dx + r * nx, p.y + line * dy + r * ny);
+                let psi_end = heading_of_bend(((cx - tx) / r, cy / r), s);
+                out(line, r * turn(p.psi, psi_end, s));
+                if root == 0.0 {
+                    break;
+                }
+            }
+        }
+        (SegmentKind::Arc, SegmentKind::Arc) => {
+            let (s1, s2) = sides;
+            if s1 == s2 {
+                return; // one circle: `pieces` merges such runs into one arc
+            }
+            let (nx, ny) = bend(p.psi, s1);
+            let (c1x, c1y) = (p.x + r * nx, p.y + r * ny);
+            let (ux, uy) = (tx - c1x, -c1y);
+            let d = crate::fmath::sqrt(ux * ux + uy * uy);
+            if !(d >= r && d <= 3.0 * r) || d == 0.0 {
+                return;
+            }
+            let a = (3.0 * r * r + d * d) / (2.0 * d);
+            let h = crate::fmath::sqrt((4.0 * r * r - a * a).max(0.0));
+            let (ex, ey) = (ux / d, uy / d);
+            for sign in [-1.0f32, 1.0] {
+                let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);
+                let psi1 = heading_of_bend(((c1x - c2x) / (2.0 * r), (c1y - c2y) / (2.0 * r)), s1);
+                let psi2 = heading_of_bend(((c2x - tx) / r, c2y / r), s2);
+                out(r * turn(p.psi, psi1, s1), r * turn(psi1, psi2, s2));
+                if h == 0.0 {
+                    break;
+                }
+            }
+        }
+        (SegmentKind::Line, SegmentKind::Line) => {}
+    }
+}
+
