@@ -51,6 +51,40 @@ pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pos
     }
 }
 
+/// Squared distance from the point `q` to the segment of `kind` and length `len` that starts at
+/// `p` and bends to side `s` (exact: the nearest point of the circle or line, else an end).
+pub fn distance_squared(
+    p: Pose,
+    kind: SegmentKind,
+    len: f32,
+    s: f32,
+    radius: f32,
+    q: (f32, f32),
+) -> f32 {
+    let sq = |x: f32, y: f32| x * x + y * y;
+    match kind {
+        SegmentKind::Line => {
+            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
+            let t = ((q.0 - p.x) * dx + (q.1 - p.y) * dy).clamp(0.0, len);
+            sq(q.0 - p.x - t * dx, q.1 - p.y - t * dy)
+        }
+        SegmentKind::Arc => {
+            let (nx, ny) = bend(p.psi, s);
+            let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
+            let (vx, vy) = (q.0 - cx, q.1 - cy);
+            // The radius to the start is -n; along the arc it turns clockwise for s = +1.
+            let ccw = crate::fmath::atan2(-nx * vy + ny * vx, -nx * vx - ny * vy);
+            if crate::fmath::wrap_positive(-s * ccw) * radius <= len {
+                let off = crate::fmath::sqrt(sq(vx, vy)) - radius;
+                off * off
+            } else {
+                let end = advance(p, kind, len, s, radius);
+                sq(q.0 - p.x, q.1 - p.y).min(sq(q.0 - end.x, q.1 - end.y))
+            }
+        }
+    }
+}
+
 /// Closed-form completions of the last two segments from `p` to the target `(tx, 0)`; calls
 /// `out(length_a, length_b)` for each.
 pub fn complete(
@@ -126,3 +160,50 @@ pub fn complete(
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator in [0, 1).
+    fn uniform(state: &mut u32) -> f32 {
+        *state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (*state >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    #[test]
+    fn distance_matches_dense_sampling_of_the_segment() {
+        let mut rng = 7u32;
+        let radius = 50.0;
+        for case in 0..400 {
+            let kind = if case % 2 == 0 {
+                SegmentKind::Arc
+            } else {
+                SegmentKind::Line
+            };
+            let side = if case % 4 < 2 { 1.0 } else { -1.0 };
+            let start = Pose {
+                x: 40.0 * uniform(&mut rng) - 20.0,
+                y: 40.0 * uniform(&mut rng) - 20.0,
+                psi: 6.0 * uniform(&mut rng) - 3.0,
+            };
+            let len = 2.0 * core::f32::consts::PI * radius * uniform(&mut rng);
+            let q = (
+                300.0 * uniform(&mut rng) - 150.0,
+                300.0 * uniform(&mut rng) - 150.0,
+            );
+            let exact = crate::fmath::sqrt(distance_squared(start, kind, len, side, radius, q));
+            let samples = 20_000;
+            let sampled = (0..=samples)
+                .map(|k| {
+                    let at = advance(start, kind, len * k as f32 / samples as f32, side, radius);
+                    crate::fmath::sqrt((q.0 - at.x).powi(2) + (q.1 - at.y).powi(2))
+                })
+                .fold(f32::INFINITY, f32::min);
+            // Sampling overestimates by at most half a step squared over the distance.
+            assert!(
+                exact <= sampled + 1e-3 && sampled - exact < 0.05,
+                "case {case}: exact {exact}, sampled {sampled}"
+            );
+        }
+    }
+}

@@ -403,7 +403,8 @@ impl<'a> Problem<'a> {
         (risk, min_clearance)
     }
 
-    fn risk_scale(&self) -> f32 {
+    /// The factor that turns the sum of 1/d over obstacles into D (1/count for the mean).
+    pub fn risk_scale(&self) -> f32 {
         let count = self.scenario.obstacles.len();
         match self.scenario.options.risk {
             RiskMeasure::Mean if count > 0 => 1.0 / count as f32,

@@ -11,8 +11,9 @@
 
 use crate::form::SegmentKind;
 use crate::kinematics::{insertion_frame, V3};
-use crate::planar::{advance, complete, heading_of_bend, turn, Pose};
+use crate::planar::{advance, complete, distance_squared, heading_of_bend, turn, Pose};
 use crate::problem::{Problem, Vars, MAX_VARS};
+use crate::scenario::MAX_OBSTACLES;
 use crate::MAX_CONTROL_DEGREE;
 
 /// Widest heading from the chord swept (radians, about 86 degrees).
@@ -88,48 +89,84 @@ fn pieces(p: &Problem, side: &[f32; MAX_CONTROL_DEGREE], skipped: u8) -> Pieces 
     out
 }
 
-/// Calls `visit` with the variables of every planar seed of `p` in the plane turned by `psi`, with
-/// arc sides `sides` (bit set: the arc bends left of the heading, seen along the plane normal).
+/// Where a sweep's seeds go.
+pub trait SeedSink {
+    /// The objective at or above which a seed is of no use (infinite while any seed is).
+    fn bound(&self) -> f32;
+    /// A seed that ends on the target within every bound and clear of every obstacle.
+    fn offer(&mut self, objective: f32, x: &Vars);
+}
+
+/// Offers `sink` every admissible planar seed of `p` in the plane turned by `psi`, with arc sides
+/// `sides` (bit set: the arc bends left of the heading, seen along the plane normal). Returns the
+/// number of seeds scored.
 ///
 /// The form is swept whole and then once more without each of its lines: an optimum whose line
 /// has length zero lies on the edge of the form's completions, where a grid rarely lands.
-///
-/// `visit` returns the seed's smallest clearance (negative when it touches an obstacle, minus
-/// infinity when it was not evaluated); near misses make the sweep look again, more finely.
-pub fn sweep(p: &Problem, psi: f32, sides: u8, visit: &mut dyn FnMut(&Vars) -> f32) {
+/// Seeds are scored in their plane (the distance from a point to a planar path is its in-plane
+/// distance combined with its height over the plane), which costs a fraction of a 3-D
+/// evaluation; only the seeds offered are turned into problem variables.
+pub fn sweep(p: &Problem, psi: f32, sides: u8, sink: &mut dyn SeedSink) -> u32 {
     let plane = SeedPlane::new(p, psi, sides);
-    sweep_pieces(p, &plane, &pieces(p, &plane.sides, 0), visit);
+    let mut scored = 0;
+    sweep_pieces(p, &plane, &pieces(p, &plane.sides, 0), sink, &mut scored);
     if p.form.len() > 1 {
         for i in 0..p.form.len() {
             if p.form.kind(i) == SegmentKind::Line {
-                sweep_pieces(p, &plane, &pieces(p, &plane.sides, 1 << i), visit);
+                let without = pieces(p, &plane.sides, 1 << i);
+                sweep_pieces(p, &plane, &without, sink, &mut scored);
             }
         }
     }
+    scored
 }
 
 fn sweep_pieces(
     p: &Problem,
     plane: &SeedPlane,
     pieces: &Pieces,
-    visit: &mut dyn FnMut(&Vars) -> f32,
+    sink: &mut dyn SeedSink,
+    scored: &mut u32,
 ) {
     let r = p.radius;
     let dist = plane.dist;
     let n = pieces.len();
+    let w = &p.scenario.weights;
+    let fixed = w.control * p.form.len() as f32;
+    // Scores a seed; returns its smallest clearance (negative when it touches an obstacle, minus
+    // infinity when it was not scored); near misses make the sweep look again, more finely.
     let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
-        let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
+        let mut length = 0.0;
         for (piece, len) in pieces.iter().zip(piece_lengths) {
-            for (i, l) in lengths.iter_mut().enumerate() {
-                if piece.segments & (1 << i) != 0 {
-                    *l = len / f32::from(piece.count);
+            let first = piece.segments.trailing_zeros() as usize;
+            let each = len / f32::from(piece.count);
+            if !(each >= 0.0 && each <= p.upper[p.length_var(first)] * r) {
+                return f32::NEG_INFINITY;
+            }
+            length += len;
+        }
+        // D >= 0, so a1 L + a4 N bounds F from below.
+        if !plane.within_tilt(p, heading) || w.length * length + fixed >= sink.bound() {
+            return f32::NEG_INFINITY;
+        }
+        *scored += 1;
+        let (risk, min_clearance) = plane.clearances(p, heading, pieces, piece_lengths);
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective = w.length * length + risk_term + fixed;
+        if min_clearance > p.min_clearance && objective.is_finite() {
+            let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
+            for (piece, len) in pieces.iter().zip(piece_lengths) {
+                for (i, l) in lengths.iter_mut().enumerate() {
+                    if piece.segments & (1 << i) != 0 {
+                        *l = len / f32::from(piece.count);
+                    }
                 }
             }
+            if let Some(x) = plane.variables(p, &Planar { heading, lengths }) {
+                sink.offer(objective, &x);
+            }
         }
-        match plane.variables(p, &Planar { heading, lengths }) {
-            Some(x) => visit(&x),
-            None => f32::NEG_INFINITY,
-        }
+        min_clearance
     };
     if n == 1 {
         match pieces[0].kind {
@@ -204,7 +241,9 @@ fn sweep_pieces(
         if hi < headings {
             Some(-HEADING_SPAN + heading_step * (hi as f32 + 0.5))
         } else {
-            plane.tilt_bound_headings.and_then(|b| b.get(hi - headings).copied())
+            plane
+                .tilt_bound_headings
+                .and_then(|b| b.get(hi - headings).copied())
         }
     };
     for hi in 0..headings + 2 {
@@ -259,6 +298,10 @@ struct SeedPlane {
     sides: [f32; MAX_CONTROL_DEGREE],
     /// The in-plane headings on the tilt bound (just inside), if the plane crosses it.
     tilt_bound_headings: Option<[f32; 2]>,
+    /// Components of the nominal insertion axis along the chord and `m`.
+    axis: (f32, f32),
+    /// Each obstacle's centre in plane coordinates and its squared height over the plane.
+    obstacles: [(f32, f32, f32); MAX_OBSTACLES],
 }
 
 impl SeedPlane {
@@ -289,6 +332,16 @@ impl SeedPlane {
             let w = crate::fmath::acos(p.cos_max_tilt / reach) * (1.0 - 1e-4);
             [phi - w, phi + w]
         });
+        let mut obstacles = [(0.0, 0.0, 0.0); MAX_OBSTACLES];
+        for (o, ob) in obstacles.iter_mut().zip(&p.scenario.obstacles) {
+            let c = V3::new(
+                ob.center[0] - e[0],
+                ob.center[1] - e[1],
+                ob.center[2] - e[2],
+            );
+            let h = c.dot(&normal);
+            *o = (c.dot(&chord), c.dot(&m), h * h);
+        }
         SeedPlane {
             chord,
             m,
@@ -296,7 +349,53 @@ impl SeedPlane {
             dist,
             sides: segment_sides(p, sides),
             tilt_bound_headings,
+            axis: (ca, cb),
+            obstacles,
         }
+    }
+
+    /// Whether the in-plane `heading` lies inside the tilt cone.
+    fn within_tilt(&self, p: &Problem, heading: f32) -> bool {
+        self.axis.0 * crate::fmath::cos(heading) + self.axis.1 * crate::fmath::sin(heading)
+            >= p.cos_max_tilt
+    }
+
+    /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite and
+    /// the scan stops at the first obstacle within the clearance floor).
+    fn clearances(
+        &self,
+        p: &Problem,
+        heading: f32,
+        pieces: &Pieces,
+        lengths: &[f32; MAX_CONTROL_DEGREE],
+    ) -> (f32, f32) {
+        let r = p.radius;
+        let mut starts = [Pose {
+            x: 0.0,
+            y: 0.0,
+            psi: heading,
+        }; MAX_CONTROL_DEGREE];
+        for i in 1..pieces.len() {
+            let prev = &pieces[i - 1];
+            starts[i] = advance(starts[i - 1], prev.kind, lengths[i - 1], prev.side, r);
+        }
+        let mut min_clearance = f32::INFINITY;
+        let mut inv_sum = 0.0f32;
+        for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
+            let mut nearest = f32::INFINITY;
+            for (i, piece) in pieces.iter().enumerate() {
+                let d2 = distance_squared(starts[i], piece.kind, lengths[i], piece.side, r, (x, y));
+                nearest = nearest.min(d2);
+            }
+            let d = crate::fmath::sqrt(nearest + h2) - ob.radius;
+            min_clearance = min_clearance.min(d);
+            if d > p.min_clearance {
+                inv_sum += 1.0 / d;
+            } else {
+                return (f32::INFINITY, min_clearance);
+            }
+        }
+        (inv_sum * p.risk_scale(), min_clearance)
     }
 
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.

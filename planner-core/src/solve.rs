@@ -9,7 +9,7 @@ use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::problem::{Problem, Vars};
 use crate::scenario::{Scenario, Workspace};
-use crate::seeds::sweep;
+use crate::seeds::{sweep, SeedSink};
 use crate::sqp::{self, LocalSolution};
 use crate::verify::check;
 
@@ -21,27 +21,32 @@ pub const REFINED_PER_GROUP: usize = 4;
 /// The best few admissible seeds, kept distinct.
 struct Shortlist {
     items: heapless::Vec<(f32, Vars), REFINED_PER_GROUP>,
+    /// Variables compared when telling seeds apart.
+    n: usize,
 }
 
 impl Shortlist {
-    fn new() -> Self {
+    fn new(n: usize) -> Self {
         Shortlist {
             items: heapless::Vec::new(),
+            n,
         }
     }
+}
 
-    fn is_full(&self) -> bool {
-        self.items.is_full()
-    }
-
-    fn worst(&self) -> f32 {
+impl SeedSink for Shortlist {
+    fn bound(&self) -> f32 {
+        if !self.items.is_full() {
+            return f32::INFINITY;
+        }
         self.items
             .iter()
             .map(|(f, _)| *f)
             .fold(f32::NEG_INFINITY, f32::max)
     }
 
-    fn offer(&mut self, objective: f32, at: &Vars, n: usize) {
+    fn offer(&mut self, objective: f32, at: &Vars) {
+        let n = self.n;
         let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - at[k]) < 0.2);
         if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
             if objective < self.items[i].0 {
@@ -79,29 +84,15 @@ fn solve_group(
     extra: &[Vars],
     effort: &mut Effort,
 ) -> Option<LocalSolution> {
-    let mut list = Shortlist::new();
+    let mut list = Shortlist::new(p.n);
     let arc_sides = if p.plane {
         1
     } else {
         1u16 << p.form.arc_count()
     };
-    let fixed = p.scenario.weights.control * p.form.len() as f32;
-    let a1 = p.scenario.weights.length;
     for s in 0..arc_sides {
         let s = if p.plane { sides } else { s as u8 };
-        sweep(p, psi, s, &mut |x: &Vars| {
-            // D >= 0, so a1 L + a4 N bounds F from below: skip what cannot enter the shortlist.
-            let length: f32 = (0..p.form.len()).map(|i| x[p.length_var(i)]).sum::<f32>() * p.radius;
-            if list.is_full() && a1 * length + fixed >= list.worst() {
-                return f32::NEG_INFINITY;
-            }
-            let (objective, min_clearance) = p.score(x);
-            effort.evaluations += 1;
-            if min_clearance > p.min_clearance && objective.is_finite() && p.tilt_margin(x) >= 0.0 {
-                list.offer(objective, x, p.n);
-            }
-            min_clearance
-        });
+        effort.evaluations += sweep(p, psi, s, &mut list);
     }
     let mut best: Option<LocalSolution> = None;
     for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
