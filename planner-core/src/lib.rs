@@ -14,6 +14,7 @@
 
 pub mod clearance;
 pub mod error;
+pub mod escape;
 pub mod fmath;
 pub mod form;
 pub mod kinematics;

@@ -95,6 +95,9 @@ pub trait SeedSink {
     fn bound(&self) -> f32;
     /// A seed that ends on the target within every bound and clear of every obstacle.
     fn offer(&mut self, objective: f32, x: &Vars);
+    /// A seed that ends on the target within every bound but cuts into an obstacle, by less
+    /// than [`NEAR_MISS`]: `min_clearance` says how much; `x` makes its variables.
+    fn near_miss(&mut self, min_clearance: f32, x: &dyn Fn() -> Option<Vars>);
 }
 
 /// Offers `sink` every admissible planar seed of `p` in the plane turned by `psi`, with arc sides
@@ -153,7 +156,7 @@ fn sweep_pieces(
         let (risk, min_clearance) = plane.clearances(p, heading, pieces, piece_lengths);
         let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
         let objective = w.length * length + risk_term + fixed;
-        if min_clearance > p.min_clearance && objective.is_finite() {
+        let variables = || {
             let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
             for (piece, len) in pieces.iter().zip(piece_lengths) {
                 for (i, l) in lengths.iter_mut().enumerate() {
@@ -162,9 +165,14 @@ fn sweep_pieces(
                     }
                 }
             }
-            if let Some(x) = plane.variables(p, &Planar { heading, lengths }) {
+            plane.variables(p, &Planar { heading, lengths })
+        };
+        if min_clearance > p.min_clearance && objective.is_finite() {
+            if let Some(x) = variables() {
                 sink.offer(objective, &x);
             }
+        } else if min_clearance > p.min_clearance - NEAR_MISS {
+            sink.near_miss(min_clearance, &variables);
         }
         min_clearance
     };
@@ -281,8 +289,9 @@ fn sweep_pieces(
     }
 }
 
-/// Clearance shortfall (mm) under which a probe's cell is searched again more finely.
-const NEAR_MISS: f32 = 4.0;
+/// Clearance shortfall (mm) under which a probe's cell is searched again more finely, and a seed
+/// counts as a near miss.
+pub const NEAR_MISS: f32 = 4.0;
 /// Subdivisions per dimension of a refined cell.
 const REFINE: usize = 4;
 
@@ -360,8 +369,9 @@ impl SeedPlane {
             >= p.cos_max_tilt
     }
 
-    /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite and
-    /// the scan stops at the first obstacle within the clearance floor).
+    /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite once
+    /// an obstacle is within the clearance floor, and the scan stops at the first obstacle cut
+    /// deeper than a near miss).
     fn clearances(
         &self,
         p: &Problem,
@@ -381,6 +391,7 @@ impl SeedPlane {
         }
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
+        let mut blocked = false;
         for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
             let mut nearest = f32::INFINITY;
             for (i, piece) in pieces.iter().enumerate() {
@@ -391,9 +402,14 @@ impl SeedPlane {
             min_clearance = min_clearance.min(d);
             if d > p.min_clearance {
                 inv_sum += 1.0 / d;
+            } else if d > p.min_clearance - NEAR_MISS {
+                blocked = true;
             } else {
                 return (f32::INFINITY, min_clearance);
             }
+        }
+        if blocked {
+            return (f32::INFINITY, min_clearance);
         }
         (inv_sum * p.risk_scale(), min_clearance)
     }

@@ -9,6 +9,7 @@ use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::problem::{Problem, Vars};
 use crate::scenario::{Scenario, Workspace};
+use crate::escape::escape;
 use crate::seeds::{sweep, SeedSink};
 use crate::sqp::{self, LocalSolution};
 use crate::verify::check;
@@ -17,10 +18,14 @@ use crate::verify::check;
 pub const SPACE_PLANES: usize = 8;
 /// Distinct seeds refined per side assignment (plane) or per seed plane (3-D).
 pub const REFINED_PER_GROUP: usize = 4;
+/// Near misses moved out of their obstacles per group, when the group has room for more seeds.
+pub const NEAR_MISSES_PER_GROUP: usize = 2;
 
 /// The best few admissible seeds, kept distinct.
 struct Shortlist {
     items: heapless::Vec<(f32, Vars), REFINED_PER_GROUP>,
+    /// The near misses that cut least into obstacles (their smallest clearance, variables).
+    near: heapless::Vec<(f32, Vars), NEAR_MISSES_PER_GROUP>,
     /// Variables compared when telling seeds apart.
     n: usize,
 }
@@ -29,6 +34,7 @@ impl Shortlist {
     fn new(n: usize) -> Self {
         Shortlist {
             items: heapless::Vec::new(),
+            near: heapless::Vec::new(),
             n,
         }
     }
@@ -46,26 +52,46 @@ impl SeedSink for Shortlist {
     }
 
     fn offer(&mut self, objective: f32, at: &Vars) {
-        let n = self.n;
-        let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - at[k]) < 0.2);
-        if let Some(i) = self.items.iter().position(|(_, x)| near(x)) {
-            if objective < self.items[i].0 {
-                self.items[i] = (objective, *at);
-            }
+        keep_best(&mut self.items, objective, at, self.n);
+    }
+
+    fn near_miss(&mut self, min_clearance: f32, x: &dyn Fn() -> Option<Vars>) {
+        let worst = self.near.iter().map(|(c, _)| -*c).fold(f32::NEG_INFINITY, f32::max);
+        if self.near.is_full() && -min_clearance >= worst {
             return;
         }
-        if self.items.is_full() {
-            let worst = (0..self.items.len())
-                .max_by(|&a, &b| self.items[a].0.total_cmp(&self.items[b].0))
-                .unwrap_or(0);
-            if objective >= self.items[worst].0 {
-                return;
-            }
-            self.items.swap_remove(worst);
+        if let Some(x) = x() {
+            keep_best(&mut self.near, -min_clearance, &x, self.n);
         }
-        // Room was made above.
-        let _ = self.items.push((objective, *at));
     }
+}
+
+/// Keeps in `items` the distinct points of lowest `key`: a point near one already kept replaces it
+/// if lower, otherwise it takes the place of the highest when that is higher.
+fn keep_best<const N: usize>(
+    items: &mut heapless::Vec<(f32, Vars), N>,
+    key: f32,
+    at: &Vars,
+    n: usize,
+) {
+    let near = |x: &Vars| (0..n).all(|k| libm::fabsf(x[k] - at[k]) < 0.2);
+    if let Some(i) = items.iter().position(|(_, x)| near(x)) {
+        if key < items[i].0 {
+            items[i] = (key, *at);
+        }
+        return;
+    }
+    if items.is_full() {
+        let worst = (0..items.len())
+            .max_by(|&a, &b| items[a].0.total_cmp(&items[b].0))
+            .unwrap_or(0);
+        if key >= items[worst].0 {
+            return;
+        }
+        items.swap_remove(worst);
+    }
+    // Room was made above.
+    let _ = items.push((key, *at));
 }
 
 /// Effort spent on a form.
@@ -93,6 +119,16 @@ fn solve_group(
     for s in 0..arc_sides {
         let s = if p.plane { sides } else { s as u8 };
         effort.evaluations += sweep(p, psi, s, &mut list);
+    }
+    // A group with few admissible seeds may hide a feasible region thinner than the sweep's
+    // spacing next to its near misses.
+    if !list.items.is_full() {
+        let near = core::mem::take(&mut list.near);
+        for (_, x) in near.iter() {
+            if let Some(x) = escape(p, x, &mut effort.evaluations) {
+                list.offer(p.value(&x).objective, &x);
+            }
+        }
     }
     let mut best: Option<LocalSolution> = None;
     for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {

@@ -20,9 +20,9 @@ pub const MAX_BACKTRACKS: u32 = 8;
 /// Gauss–Newton steps per restoration.
 pub const MAX_RESTORE: u32 = 8;
 /// Largest change of any variable in one step (radians or radius-lengths).
-const TRUST: f32 = 0.5;
+pub(crate) const TRUST: f32 = 0.5;
 /// Clearance rows given to the QP: the nearest obstacles only.
-const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
+pub(crate) const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
 
 /// Result of a local solve.
 #[derive(Clone, Debug)]
