@@ -280,9 +280,13 @@ impl<'a> Problem<'a> {
     }
 
     /// End-point residual and its Jacobian only (for restoration).
-    pub fn end_constraint(&self, x: &Vars) -> (PathGeometry, [f32; 3], [Vars; 3]) {
+    pub fn end_constraint(&self, x: &Vars) -> ([f32; 3], [Vars; 3]) {
         let geo = self.geometry(x);
-        let screws = self.screws(x, &geo);
+        self.end_rows(&geo, &self.screws(x, &geo))
+    }
+
+    /// End-point residual and Jacobian of the path `geo` with variable screws `screws`.
+    fn end_rows(&self, geo: &PathGeometry, screws: &[Screw; MAX_VARS]) -> ([f32; 3], [Vars; 3]) {
         let end = geo.end();
         let diff = end - self.target;
         let mut residual = [0.0; 3];
@@ -294,7 +298,7 @@ impl<'a> Problem<'a> {
                 jac[r][k] = screws[k].velocity(&end).dot(axis);
             }
         }
-        (geo, residual, jac)
+        (residual, jac)
     }
 
     /// Directions of the end-point constraint rows (plane mode drops the plane normal).
@@ -414,12 +418,27 @@ impl<'a> Problem<'a> {
 
     /// Exact first derivatives at the point `v` (from [`Problem::value`]).
     pub fn derivatives(&self, v: &Value) -> Derivatives {
-        let (_, residual, jac) = self.end_constraint(&v.x);
+        let mut out = Derivatives {
+            residual: [0.0; 3],
+            jac: [[0.0; MAX_VARS]; 3],
+            grad: [0.0; MAX_VARS],
+            clearance_grad: [[0.0; MAX_VARS]; MAX_OBSTACLES],
+        };
+        self.derivatives_into(v, &mut out);
+        out
+    }
+
+    /// [`Problem::derivatives`] written into `out` (an SQP iteration reuses one buffer: on the
+    /// device, moving these kilobytes costs more than computing them). Rows of `clearance_grad`
+    /// beyond the scenario's obstacles are left as they were.
+    pub fn derivatives_into(&self, v: &Value, out: &mut Derivatives) {
         let geo = &v.geo;
         let screws = self.screws(&v.x, geo);
+        (out.residual, out.jac) = self.end_rows(geo, &screws);
         let w = &self.scenario.weights;
-        let mut clearance_grad = [[0.0; MAX_VARS]; MAX_OBSTACLES];
-        let mut grad = [0.0; MAX_VARS];
+        let clearance_grad = &mut out.clearance_grad;
+        let grad = &mut out.grad;
+        *grad = [0.0; MAX_VARS];
         let risk_scale = w.risk * self.risk_scale();
         for (o, ob) in self.scenario.obstacles.iter().enumerate() {
             let c = v3(ob.center);
@@ -431,6 +450,7 @@ impl<'a> Problem<'a> {
                 self.radius,
                 &c,
             );
+            clearance_grad[o] = [0.0; MAX_VARS];
             if cl.distance > 0.0 {
                 let normal = (cl.point - c) / cl.distance;
                 let at_end = cl.where_ == Nearest::End;
@@ -450,12 +470,6 @@ impl<'a> Problem<'a> {
         }
         for i in 0..self.form.len() {
             grad[self.length_var(i)] += w.length * self.radius;
-        }
-        Derivatives {
-            residual,
-            jac,
-            grad,
-            clearance_grad,
         }
     }
 }
@@ -497,7 +511,7 @@ mod tests {
             xp[k] += h;
             xm[k] -= h;
             let (ep, em) = (p.value(&xp), p.value(&xm));
-            let (rp, rm) = (p.end_constraint(&xp).1, p.end_constraint(&xm).1);
+            let (rp, rm) = (p.end_constraint(&xp).0, p.end_constraint(&xm).0);
             for r in 0..p.m_eq {
                 let fd = (rp[r] - rm[r]) / (2.0 * h);
                 assert!(

@@ -117,8 +117,8 @@ impl Qp {
                 for v in row.iter_mut().take(dim).skip(n) {
                     *v = 0.0;
                 }
-                rhs[n..dim].iter_mut().for_each(|r| *r = 0.0);
             }
+            rhs[n..dim].iter_mut().for_each(|r| *r = 0.0);
             for i in 0..n {
                 for j in 0..n {
                     k[i][j] = self.h[i][j];
@@ -242,8 +242,15 @@ fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Opt
         if !(libm::fabsf(a[piv][col]) > tiny) {
             return None;
         }
-        a.swap(col, piv);
-        b.swap(col, piv);
+        if piv != col {
+            // Only columns from `col` on are read again (the rest is eliminated).
+            for c in col..dim {
+                let t = a[col][c];
+                a[col][c] = a[piv][c];
+                a[piv][c] = t;
+            }
+            b.swap(col, piv);
+        }
         for r in col + 1..dim {
             let f = a[r][col] / a[col][col];
             if f != 0.0 {

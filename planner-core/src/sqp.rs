@@ -49,7 +49,7 @@ pub fn equality_tolerance(p: &Problem) -> f32 {
 pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
     let tol = equality_tolerance(p);
     for _ in 0..=MAX_RESTORE {
-        let (_, r, jac) = p.end_constraint(x);
+        let (r, jac) = p.end_constraint(x);
         *evals += 1;
         let norm = crate::fmath::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if !norm.is_finite() {
@@ -286,9 +286,9 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             .map(|&(o, row)| (o, sol.mult[row]))
             .collect();
         let tilt_mult = if p.plane { 0.0 } else { sol.mult[tilt_row] };
-        let next_d = p.derivatives(&next);
         let g_old = lagrangian_grad(p, &cur.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
-        let g_new = lagrangian_grad(p, &next.x, &next_d, &sol.eq_mult, &clear, tilt_mult);
+        p.derivatives_into(&next, &mut cur_d);
+        let g_new = lagrangian_grad(p, &next.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
         let mut s = [0.0f32; MAX_VARS];
         let mut y = [0.0f32; MAX_VARS];
         for k in 0..n {
@@ -297,7 +297,6 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         }
         bfgs_update(&mut h, &s, &y, n);
         cur = next;
-        cur_d = next_d;
     }
     Some(LocalSolution {
         eval: cur,
