@@ -4,12 +4,12 @@
 //! onto the target and scored; the best distinct ones are refined by the SQP; the best refined
 //! path is re-checked by [`crate::verify`] and reported with the numbers the check measured.
 
+use crate::escape::escape;
 use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::kinematics::{entry_basis, insertion_frame, V3};
 use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::problem::{Problem, Vars};
 use crate::scenario::{Scenario, Workspace};
-use crate::escape::escape;
 use crate::seeds::{sweep, SeedSink};
 use crate::sqp::{self, LocalSolution};
 use crate::verify::check;
@@ -56,7 +56,11 @@ impl SeedSink for Shortlist {
     }
 
     fn near_miss(&mut self, min_clearance: f32, x: &dyn Fn() -> Option<Vars>) {
-        let worst = self.near.iter().map(|(c, _)| -*c).fold(f32::NEG_INFINITY, f32::max);
+        let worst = self
+            .near
+            .iter()
+            .map(|(c, _)| -*c)
+            .fold(f32::NEG_INFINITY, f32::max);
         if self.near.is_full() && -min_clearance >= worst {
             return;
         }

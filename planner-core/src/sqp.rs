@@ -209,45 +209,22 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     let mut step_norm = f32::INFINITY;
     while iterations < MAX_ITERATIONS {
         iterations += 1;
-        // Build the QP of the tangent step.
-        let mut qp = Qp::new(n, h, cur_d.grad);
-        for r in 0..p.m_eq {
-            qp.push_eq(&cur_d.jac[r]);
-        }
-        for k in 0..n {
-            let mut unit = [0.0; MAX_VARS];
-            unit[k] = 1.0;
-            qp.push_row(&unit, (p.lower[k] - cur.x[k]).max(-TRUST));
-            unit[k] = -1.0;
-            qp.push_row(&unit, -(p.upper[k] - cur.x[k]).min(TRUST));
-        }
-        let tilt_row = qp.m;
-        if !p.plane {
-            qp.push_row(&p.tilt_margin_grad(&cur.x), -p.tilt_margin(&cur.x));
-        }
-        let mut clear_rows = [(0usize, 0usize); QP_CLEARANCES];
-        let mut n_clear = 0;
-        let mut taken = [false; MAX_OBSTACLES];
-        for _ in 0..QP_CLEARANCES.min(p.scenario.obstacles.len()) {
-            let mut best: Option<usize> = None;
-            for o in 0..p.scenario.obstacles.len() {
-                if !taken[o] && best.is_none_or(|b| cur.clearance[o] < cur.clearance[b]) {
-                    best = Some(o);
-                }
-            }
-            let Some(o) = best else { break };
-            taken[o] = true;
-            let row = qp.m;
-            if qp.push_row(&cur_d.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
-                clear_rows[n_clear] = (o, row);
-                n_clear += 1;
+        // The QP of the tangent step. In a passage between obstacles the linearised clearances
+        // can be dependent (a singular working set): the QP is then retried with fewer of them,
+        // since the line search keeps every clearance anyway.
+        let mut solved = None;
+        for clear_limit in [QP_CLEARANCES, 1, 0] {
+            let (qp, rows) = tangent_qp(p, &cur, &cur_d, &h, clear_limit);
+            if let Ok(sol) = qp.solve() {
+                solved = Some((sol, rows));
+                break;
             }
         }
-        let Ok(sol) = qp.solve() else {
-            // Only a degenerate working set gets here; the iterate is still feasible.
+        let Some((sol, rows)) = solved else {
             status = SolveStatus::BudgetExhausted;
             break;
         };
+        let (clear_rows, n_clear, tilt_row) = (rows.clearances, rows.n_clear, rows.tilt);
         let mut slope = 0.0;
         step_norm = 0.0f32;
         for k in 0..n {
@@ -305,6 +282,62 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         evaluations: evals,
         step_norm,
     })
+}
+
+/// Which QP rows hold the nonlinear inequalities (for their multipliers).
+struct QpRows {
+    /// (obstacle, row) of each clearance row.
+    clearances: [(usize, usize); QP_CLEARANCES],
+    n_clear: usize,
+    tilt: usize,
+}
+
+/// The QP of the tangent step at `cur`: bounds within the trust box, the tilt cone (3-D) and the
+/// `clear_limit` nearest clearances, linearised.
+fn tangent_qp(
+    p: &Problem,
+    cur: &Value,
+    cur_d: &Derivatives,
+    h: &[Vars; MAX_VARS],
+    clear_limit: usize,
+) -> (Qp, QpRows) {
+    let n = p.n;
+    let mut qp = Qp::new(n, *h, cur_d.grad);
+    for r in 0..p.m_eq {
+        qp.push_eq(&cur_d.jac[r]);
+    }
+    for k in 0..n {
+        let mut unit = [0.0; MAX_VARS];
+        unit[k] = 1.0;
+        qp.push_row(&unit, (p.lower[k] - cur.x[k]).max(-TRUST));
+        unit[k] = -1.0;
+        qp.push_row(&unit, -(p.upper[k] - cur.x[k]).min(TRUST));
+    }
+    let mut rows = QpRows {
+        clearances: [(0, 0); QP_CLEARANCES],
+        n_clear: 0,
+        tilt: qp.m,
+    };
+    if !p.plane {
+        qp.push_row(&p.tilt_margin_grad(&cur.x), -p.tilt_margin(&cur.x));
+    }
+    let mut taken = [false; MAX_OBSTACLES];
+    for _ in 0..clear_limit.min(p.scenario.obstacles.len()) {
+        let mut best: Option<usize> = None;
+        for o in 0..p.scenario.obstacles.len() {
+            if !taken[o] && best.is_none_or(|b| cur.clearance[o] < cur.clearance[b]) {
+                best = Some(o);
+            }
+        }
+        let Some(o) = best else { break };
+        taken[o] = true;
+        let row = qp.m;
+        if qp.push_row(&cur_d.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
+            rows.clearances[rows.n_clear] = (o, row);
+            rows.n_clear += 1;
+        }
+    }
+    (qp, rows)
 }
 
 /// Powell-damped BFGS update of `h` with step `s` and gradient change `y`.
