@@ -225,21 +225,27 @@ impl Qp {
 
 /// Solves the `dim`-square system in place; `None` when a pivot vanishes.
 fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Option<[f32; KKT]> {
-    let mut scale = 0.0f32;
-    for row in a.iter().take(dim) {
-        for v in row.iter().take(dim) {
-            scale = scale.max(libm::fabsf(*v));
+    // Scaled partial pivoting: the KKT rows mix scales (Hessian entries in the 10^5 next to unit
+    // bound rows), so a pivot is judged against its own row's size, not the matrix's.
+    let mut inv_scale = [0.0f32; KKT];
+    for (s, row) in inv_scale.iter_mut().zip(a.iter()).take(dim) {
+        let size = row.iter().take(dim).fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+        if !(size > 0.0) {
+            return None;
         }
+        *s = 1.0 / size;
     }
-    let tiny = scale * 1e-9;
     for col in 0..dim {
         let mut piv = col;
-        for r in col + 1..dim {
-            if libm::fabsf(a[r][col]) > libm::fabsf(a[piv][col]) {
+        let mut best = 0.0f32;
+        for r in col..dim {
+            let rel = libm::fabsf(a[r][col]) * inv_scale[r];
+            if rel > best {
+                best = rel;
                 piv = r;
             }
         }
-        if !(libm::fabsf(a[piv][col]) > tiny) {
+        if !(best > 1e-6) {
             return None;
         }
         if piv != col {
@@ -250,6 +256,7 @@ fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Opt
                 a[piv][c] = t;
             }
             b.swap(col, piv);
+            inv_scale.swap(col, piv);
         }
         for r in col + 1..dim {
             let f = a[r][col] / a[col][col];
