@@ -212,11 +212,21 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
         // can be dependent (a singular working set): the QP is then retried with fewer of them,
         // since the line search keeps every clearance anyway.
+        // A quasi-Newton matrix that has soaked up the huge curvature of 1/d in a thin passage
+        // can make even that QP singular in f32: it is then reset to the model Hessian.
         let mut solved = None;
-        for clear_limit in [QP_CLEARANCES, 1, 0] {
-            let (qp, rows) = tangent_qp(p, &cur, &cur_d, &h, clear_limit);
-            if let Ok(sol) = qp.solve() {
-                solved = Some((sol, rows));
+        for attempt in 0..2 {
+            if attempt == 1 {
+                h = model_hessian(p, &cur, &cur_d);
+            }
+            for clear_limit in [QP_CLEARANCES, 1, 0] {
+                let (qp, rows) = tangent_qp(p, &cur, &cur_d, &h, clear_limit);
+                if let Ok(sol) = qp.solve() {
+                    solved = Some((sol, rows));
+                    break;
+                }
+            }
+            if solved.is_some() {
                 break;
             }
         }
@@ -282,6 +292,39 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         evaluations: evals,
         step_norm,
     })
+}
+
+/// Largest curvature of the model Hessian relative to its diagonal floor.
+const MAX_CONDITION: f32 = 1e4;
+
+/// A Hessian model from scratch: the length term's scale on the diagonal plus the Gauss–Newton
+/// curvature of the risk term, 2 a2 s / d³ ∇d ∇dᵀ per obstacle (s: 1/count for the mean), which
+/// dominates near an obstacle.
+fn model_hessian(p: &Problem, cur: &Value, cur_d: &Derivatives) -> [Vars; MAX_VARS] {
+    let n = p.n;
+    let gamma = p.scenario.weights.length * p.radius + 1.0;
+    let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
+    for (i, row) in h.iter_mut().enumerate().take(n) {
+        row[i] = gamma;
+    }
+    let risk = p.scenario.weights.risk * p.risk_scale();
+    for o in 0..p.scenario.obstacles.len() {
+        let d = cur.clearance[o];
+        if !(d > 0.0) || risk == 0.0 {
+            continue;
+        }
+        let g = &cur_d.clearance_grad[o];
+        // Capped so that the matrix stays well conditioned in f32; the line search makes up for
+        // the steps this lets grow too long.
+        let g2: f32 = g.iter().take(n).map(|v| v * v).sum();
+        let w = (2.0 * risk / (d * d * d)).min(MAX_CONDITION * gamma / g2.max(1e-12));
+        for i in 0..n {
+            for j in 0..n {
+                h[i][j] += w * g[i] * g[j];
+            }
+        }
+    }
+    h
 }
 
 /// Which QP rows hold the nonlinear inequalities (for their multipliers).
