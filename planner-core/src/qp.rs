@@ -229,7 +229,10 @@ fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Opt
     // bound rows), so a pivot is judged against its own row's size, not the matrix's.
     let mut inv_scale = [0.0f32; KKT];
     for (s, row) in inv_scale.iter_mut().zip(a.iter()).take(dim) {
-        let size = row.iter().take(dim).fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+        let size = row
+            .iter()
+            .take(dim)
+            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
         if !(size > 0.0) {
             return None;
         }
