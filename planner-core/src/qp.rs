@@ -70,6 +70,16 @@ impl Qp {
         }
     }
 
+    /// Empties the QP and gives it a new objective, keeping the buffers (rows past the new count
+    /// are never read): an SQP iteration reuses one QP instead of building kilobytes afresh.
+    pub fn reset(&mut self, n: usize, h: &[Vars; MAX_VARS], g: &Vars) {
+        self.n = n;
+        self.h = *h;
+        self.g = *g;
+        self.m_eq = 0;
+        self.m = 0;
+    }
+
     /// Adds an equality row; returns false when full.
     pub fn push_eq(&mut self, a: &Vars) -> bool {
         if self.m_eq >= MAX_EQ {
