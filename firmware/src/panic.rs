@@ -5,6 +5,7 @@
 use crate::board;
 use crate::link::Link;
 use core::panic::PanicInfo;
+use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody};
 
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
@@ -12,6 +13,13 @@ fn panic(info: &PanicInfo) -> ! {
     let mut link = board::panic_link();
     // A lone delimiter ends any frame the host was receiving, so the error frame stands alone.
     link.write_all(&[0]);
+    let fault = Reply {
+        header: Header::new(0),
+        body: ReplyBody::Fault(Fault::Internal),
+    };
+    let mut scratch = [0u8; 16];
+    // The message is a few bytes; should it not fit, the host still sees a device that went quiet.
+    let _ = encode_frame(&fault, &mut scratch, &mut |bytes: &[u8]| link.write_all(bytes));
     if let Some(location) = info.location() {
         defmt::error!("panic at {=str}:{=u32}", location.file(), location.line());
     } else {

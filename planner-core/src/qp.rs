@@ -70,6 +70,16 @@ impl Qp {
         }
     }
 
+    /// Empties the QP and gives it a new objective, keeping the buffers (rows past the new count
+    /// are never read): an SQP iteration reuses one QP instead of building kilobytes afresh.
+    pub fn reset(&mut self, n: usize, h: &[Vars; MAX_VARS], g: &Vars) {
+        self.n = n;
+        self.h = *h;
+        self.g = *g;
+        self.m_eq = 0;
+        self.m = 0;
+    }
+
     /// Adds an equality row; returns false when full.
     pub fn push_eq(&mut self, a: &Vars) -> bool {
         if self.m_eq >= MAX_EQ {
@@ -229,7 +239,10 @@ fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Opt
     // bound rows), so a pivot is judged against its own row's size, not the matrix's.
     let mut inv_scale = [0.0f32; KKT];
     for (s, row) in inv_scale.iter_mut().zip(a.iter()).take(dim) {
-        let size = row.iter().take(dim).fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+        let size = row
+            .iter()
+            .take(dim)
+            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
         if !(size > 0.0) {
             return None;
         }

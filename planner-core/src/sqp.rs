@@ -207,6 +207,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     let mut status = SolveStatus::BudgetExhausted;
     let mut iterations = 0;
     let mut step_norm = f32::INFINITY;
+    let mut qp = Qp::new(n, h, cur_d.grad);
     while iterations < MAX_ITERATIONS {
         iterations += 1;
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
@@ -220,7 +221,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
                 h = model_hessian(p, &cur, &cur_d);
             }
             for clear_limit in [QP_CLEARANCES, 1, 0] {
-                let (qp, rows) = tangent_qp(p, &cur, &cur_d, &h, clear_limit);
+                let rows = tangent_qp(&mut qp, p, &cur, &cur_d, &h, clear_limit);
                 if let Ok(sol) = qp.solve() {
                     solved = Some((sol, rows));
                     break;
@@ -338,14 +339,15 @@ struct QpRows {
 /// The QP of the tangent step at `cur`: bounds within the trust box, the tilt cone (3-D) and the
 /// `clear_limit` nearest clearances, linearised.
 fn tangent_qp(
+    qp: &mut Qp,
     p: &Problem,
     cur: &Value,
     cur_d: &Derivatives,
     h: &[Vars; MAX_VARS],
     clear_limit: usize,
-) -> (Qp, QpRows) {
+) -> QpRows {
     let n = p.n;
-    let mut qp = Qp::new(n, *h, cur_d.grad);
+    qp.reset(n, h, &cur_d.grad);
     for r in 0..p.m_eq {
         qp.push_eq(&cur_d.jac[r]);
     }
@@ -380,7 +382,7 @@ fn tangent_qp(
             rows.n_clear += 1;
         }
     }
-    (qp, rows)
+    rows
 }
 
 /// Powell-damped BFGS update of `h` with step `s` and gradient change `y`.

@@ -110,6 +110,10 @@ impl fmt::Display for LinkError {
                 "the device did not answer ({what}: {attempts} attempts, {:.1} s each)",
                 timeout.as_secs_f64()
             ),
+            LinkError::Device(Fault::Internal) => f.write_str(
+                "the device hit an internal error and is restarting; the request was lost \
+                 (a firmware bug: please report it with the device's log)",
+            ),
             LinkError::Device(fault) => write!(f, "the device refused the request: {fault:?}"),
             LinkError::Version { device } => write!(
                 f,
@@ -327,6 +331,9 @@ impl<T: Transport> Client<T> {
                 return Err(LinkError::Version {
                     device: reply.header.version,
                 });
+            }
+            if reply.body == ReplyBody::Fault(Fault::Internal) {
+                return Err(LinkError::Device(Fault::Internal));
             }
             if let ReplyBody::Fault(f) = reply.body {
                 if is_line_fault(f) && (reply.header.id == 0 || f == Fault::Undecodable) {

@@ -198,6 +198,9 @@ pub enum Fault {
     BadScenario,
     /// The complete plan request does not match the CRC-32 its chunks announced.
     BadUploadCrc,
+    /// The device hit an internal error (a firmware bug) and restarts; every request in progress
+    /// is lost. Sent with id 0 by the firmware's panic handler.
+    Internal,
 }
 
 /// What a device reports about itself.
