@@ -146,12 +146,19 @@ fn plane_seed_299_lrr_at_the_tilt_bound() {
     assert_form_agrees(true, 299, "LRR", Ask::AllForms);
 }
 
-/// Known gap: RRL through a 0.09 mm passage (reference F = 110.922: theta1 = -5.10, R 11.48,
-/// R 69.25 @180, L 23.68); the planner's RRL is its RL with an empty first arc, F = 111.686.
+/// Fixed by the QP's scaled pivoting and Hessian reset. RRL through a 0.09 mm passage (reference
+/// F = 110.922: theta1 = -5.10, R 11.48, R 69.25 @180, L 23.68); was its RL with an empty first
+/// arc, F = 111.686.
 #[test]
-#[ignore]
 fn plane_seed_265_rrl_thin_clearance() {
     assert_form_agrees(true, 265, "RRL", Ask::AllForms);
+}
+
+/// Fixed by the Hessian reset. RRR through a 0.024 mm passage: planner F was 188.94 (clearance
+/// 0.008 mm, the SQP stopped on a singular QP), reference F = 147.08.
+#[test]
+fn plane_seed_399_rrr_thin_clearance() {
+    assert_form_agrees(true, 399, "RRR", Ask::AllForms);
 }
 
 #[test]
