@@ -258,6 +258,13 @@ fn sweep_pieces(
         let Some(heading) = grid_heading(hi) else {
             continue;
         };
+        // The bound is one line in the grid's space: it gets a finer grid of lengths.
+        let (steps, combos) = if hi < headings {
+            (steps, combos)
+        } else {
+            let finer = steps * BOUND_FINER;
+            (finer, finer.pow(free as u32))
+        };
         for combo in 0..combos {
             let mut cell = [0.0f32; MAX_CONTROL_DEGREE];
             let mut c = combo;
@@ -292,6 +299,8 @@ fn sweep_pieces(
 /// Clearance shortfall (mm) under which a probe's cell is searched again more finely, and a seed
 /// counts as a near miss.
 pub const NEAR_MISS: f32 = 4.0;
+/// How much finer the lengths are gridded on the tilt-bound headings.
+const BOUND_FINER: usize = 4;
 /// Subdivisions per dimension of a refined cell.
 const REFINE: usize = 4;
 
