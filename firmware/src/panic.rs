@@ -19,7 +19,9 @@ fn panic(info: &PanicInfo) -> ! {
     };
     let mut scratch = [0u8; 16];
     // The message is a few bytes; should it not fit, the host still sees a device that went quiet.
-    let _ = encode_frame(&fault, &mut scratch, &mut |bytes: &[u8]| link.write_all(bytes));
+    let _ = encode_frame(&fault, &mut scratch, &mut |bytes: &[u8]| {
+        link.write_all(bytes)
+    });
     if let Some(location) = info.location() {
         defmt::error!("panic at {=str}:{=u32}", location.file(), location.line());
     } else {
