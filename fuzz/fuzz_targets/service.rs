@@ -12,7 +12,9 @@ use planner_core::wire::{FrameDecoder, Reply, MAX_FRAME};
 
 fuzz_target!(|data: &[u8]| {
     // The first byte picks the split size, so chunk boundaries vary too.
-    let Some((&split, rest)) = data.split_first() else { return };
+    let Some((&split, rest)) = data.split_first() else {
+        return;
+    };
     let split = usize::from(split % 64) + 1;
     let mut device = Box::new(DeviceService::new());
     let mut out = Vec::new();
