@@ -65,8 +65,8 @@ fn assert_form_agrees(plane: bool, seed: u64, word: &str, ask: Ask) {
     );
 }
 
-// Regression cases the reference found (see docs/optimality.md). All failed on some earlier
-// planner; the commit that fixed each is named. The two `#[ignore]`d cases are the known gaps.
+// Regression cases the reference found (see docs/optimality.md). Each failed on some earlier
+// planner; what fixed it is named.
 
 /// Fixed in 1e0750f. RL near the tilt bound (theta1 = 57.9 of 60 degrees, F = 116.659): was reported
 /// infeasible.
@@ -137,11 +137,10 @@ fn space_seed_122_rl() {
     assert_form_agrees(false, 122, "RL", Ask::AllForms);
 }
 
-/// Known gap: LRR with theta1 on the tilt bound (reference F = 109.949: theta1 = -42.84, L 9.69,
-/// R 80.25 @180, R 9.31 @180); the planner's seeds of that side assignment all cut into an
-/// obstacle, their escapes converge to F = 110.211 (theta1 = -39.6), 0.24 % worse.
+/// Fixed by the finer grid on the tilt bound. LRR with theta1 on the bound (reference
+/// F = 109.949: theta1 = -42.84, L 9.69, R 80.25 @180, R 9.31 @180); the planner's was
+/// F = 110.211 (theta1 = -39.6).
 #[test]
-#[ignore]
 fn plane_seed_299_lrr_at_the_tilt_bound() {
     assert_form_agrees(true, 299, "LRR", Ask::AllForms);
 }
@@ -159,6 +158,13 @@ fn plane_seed_265_rrl_thin_clearance() {
 #[test]
 fn plane_seed_399_rrr_thin_clearance() {
     assert_form_agrees(true, 399, "RRR", Ask::AllForms);
+}
+
+/// Fixed by the finer grid on the tilt bound. LRL with theta1 on the -60 degree bound: planner F
+/// was 127.361 (theta1 = -58.8), reference F = 126.164.
+#[test]
+fn plane_seed_359_lrl_at_the_tilt_bound() {
+    assert_form_agrees(true, 359, "LRL", Ask::AllForms);
 }
 
 #[test]
