@@ -5,10 +5,9 @@
 //! wide). Gauss–Newton steps on the violated clearances, taken along the target manifold and with
 //! every other clearance held at the floor, walk into such a region when it is there.
 
-use crate::problem::{Problem, Vars, MAX_VARS};
+use crate::problem::{Problem, Value, Vars, MAX_VARS};
 use crate::qp::Qp;
-use crate::scenario::MAX_OBSTACLES;
-use crate::sqp::{restore, QP_CLEARANCES, TRUST};
+use crate::sqp::{push_nearest_clearances, push_step_limits, restore, QP_CLEARANCES};
 
 /// Gauss–Newton steps tried.
 const MAX_STEPS: u32 = 8;
@@ -24,8 +23,8 @@ fn violation(p: &Problem, clearance: &[f32]) -> f32 {
 }
 
 /// From `x0` (on the target or near it), a point on the target that keeps every clearance and
-/// bound, if the steps find one. `evals` counts evaluations.
-pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Vars> {
+/// bound, with its value, if the steps find one. `evals` counts evaluations.
+pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
     let mut x = *x0;
     if !restore(p, &mut x, evals) {
         return None;
@@ -36,7 +35,7 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Vars> {
     *evals += 1;
     for _ in 0..MAX_STEPS {
         if cur.admissible(p) {
-            return Some(cur.x);
+            return Some(cur);
         }
         let depth = violation(p, &cur.clearance[..obstacles]);
         let d = p.derivatives(&cur);
@@ -62,29 +61,10 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Vars> {
             row[i] += 1e-3 * trace + 1e-6;
         }
         let mut qp = Qp::new(n, h, grad);
-        for r in 0..p.m_eq {
-            qp.push_eq(&d.jac[r]);
-        }
-        for k in 0..n {
-            let mut unit = [0.0; MAX_VARS];
-            unit[k] = 1.0;
-            qp.push_row(&unit, (p.lower[k] - cur.x[k]).max(-TRUST));
-            unit[k] = -1.0;
-            qp.push_row(&unit, -(p.upper[k] - cur.x[k]).min(TRUST));
-        }
-        if !p.plane {
-            qp.push_row(&p.tilt_margin_grad(&cur.x), -p.tilt_margin(&cur.x));
-        }
+        push_step_limits(&mut qp, p, &cur.x, &d);
         // The clear obstacles nearest to the floor stay clear (to first order).
-        let mut taken = [false; MAX_OBSTACLES];
-        for _ in 0..QP_CLEARANCES.min(obstacles) {
-            let nearest = (0..obstacles)
-                .filter(|&o| !taken[o] && cur.clearance[o] > p.min_clearance)
-                .min_by(|&a, &b| cur.clearance[a].total_cmp(&cur.clearance[b]));
-            let Some(o) = nearest else { break };
-            taken[o] = true;
-            qp.push_row(&d.clearance_grad[o], p.min_clearance - cur.clearance[o]);
-        }
+        let clear = |o: usize| cur.clearance[o] > p.min_clearance;
+        push_nearest_clearances(&mut qp, p, &cur, &d, QP_CLEARANCES, clear, |_, _| {});
         let step = qp.solve().ok()?;
         // Halve the step until the violation shrinks.
         let mut t = 1.0f32;
@@ -106,5 +86,5 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Vars> {
         }
         cur = next?;
     }
-    cur.admissible(p).then_some(cur.x)
+    cur.admissible(p).then_some(cur)
 }

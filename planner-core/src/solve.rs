@@ -129,8 +129,8 @@ fn solve_group(
     if !list.items.is_full() {
         let near = core::mem::take(&mut list.near);
         for (_, x) in near.iter() {
-            if let Some(x) = escape(p, x, &mut effort.evaluations) {
-                list.offer(p.value(&x).objective, &x);
+            if let Some(v) = escape(p, x, &mut effort.evaluations) {
+                list.offer(v.objective, &v.x);
             }
         }
     }

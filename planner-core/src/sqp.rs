@@ -20,7 +20,7 @@ pub const MAX_BACKTRACKS: u32 = 8;
 /// Gauss–Newton steps per restoration.
 pub const MAX_RESTORE: u32 = 8;
 /// Largest change of any variable in one step (radians or radius-lengths).
-pub(crate) const TRUST: f32 = 0.5;
+const TRUST: f32 = 0.5;
 /// Clearance rows given to the QP: the nearest obstacles only.
 pub(crate) const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
 
@@ -346,43 +346,75 @@ fn tangent_qp(
     h: &[Vars; MAX_VARS],
     clear_limit: usize,
 ) -> QpRows {
-    let n = p.n;
-    qp.reset(n, h, &cur_d.grad);
-    for r in 0..p.m_eq {
-        qp.push_eq(&cur_d.jac[r]);
-    }
-    for k in 0..n {
-        let mut unit = [0.0; MAX_VARS];
-        unit[k] = 1.0;
-        qp.push_row(&unit, (p.lower[k] - cur.x[k]).max(-TRUST));
-        unit[k] = -1.0;
-        qp.push_row(&unit, -(p.upper[k] - cur.x[k]).min(TRUST));
-    }
+    qp.reset(p.n, h, &cur_d.grad);
     let mut rows = QpRows {
         clearances: [(0, 0); QP_CLEARANCES],
         n_clear: 0,
-        tilt: qp.m,
+        tilt: push_step_limits(qp, p, &cur.x, cur_d),
     };
-    if !p.plane {
-        qp.push_row(&p.tilt_margin_grad(&cur.x), -p.tilt_margin(&cur.x));
+    push_nearest_clearances(
+        qp,
+        p,
+        cur,
+        cur_d,
+        clear_limit,
+        |_| true,
+        |o, row| {
+            rows.clearances[rows.n_clear] = (o, row);
+            rows.n_clear += 1;
+        },
+    );
+    rows
+}
+
+/// Pushes the rows every step at `x` keeps: the end point fixed (Aₑ p = 0), each variable within
+/// its bounds and the trust box, and in 3-D the tilt cone (linearised). Returns the tilt row.
+pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivatives) -> usize {
+    for r in 0..p.m_eq {
+        qp.push_eq(&d.jac[r]);
     }
+    for k in 0..p.n {
+        let mut unit = [0.0; MAX_VARS];
+        unit[k] = 1.0;
+        qp.push_row(&unit, (p.lower[k] - x[k]).max(-TRUST));
+        unit[k] = -1.0;
+        qp.push_row(&unit, -(p.upper[k] - x[k]).min(TRUST));
+    }
+    let tilt = qp.m;
+    if !p.plane {
+        qp.push_row(&p.tilt_margin_grad(x), -p.tilt_margin(x));
+    }
+    tilt
+}
+
+/// Pushes the linearised clearances (kept at the floor) of up to `limit` obstacles for which
+/// `eligible` holds, nearest first; `pushed(obstacle, row)` is told each row.
+pub(crate) fn push_nearest_clearances(
+    qp: &mut Qp,
+    p: &Problem,
+    cur: &Value,
+    d: &Derivatives,
+    limit: usize,
+    eligible: impl Fn(usize) -> bool,
+    mut pushed: impl FnMut(usize, usize),
+) {
+    let obstacles = p.scenario.obstacles.len();
     let mut taken = [false; MAX_OBSTACLES];
-    for _ in 0..clear_limit.min(p.scenario.obstacles.len()) {
+    for _ in 0..limit.min(obstacles) {
         let mut best: Option<usize> = None;
-        for o in 0..p.scenario.obstacles.len() {
-            if !taken[o] && best.is_none_or(|b| cur.clearance[o] < cur.clearance[b]) {
+        for o in 0..obstacles {
+            if !taken[o] && eligible(o) && best.is_none_or(|b| cur.clearance[o] < cur.clearance[b])
+            {
                 best = Some(o);
             }
         }
         let Some(o) = best else { break };
         taken[o] = true;
         let row = qp.m;
-        if qp.push_row(&cur_d.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
-            rows.clearances[rows.n_clear] = (o, row);
-            rows.n_clear += 1;
+        if qp.push_row(&d.clearance_grad[o], p.min_clearance - cur.clearance[o]) {
+            pushed(o, row);
         }
     }
-    rows
 }
 
 /// Powell-damped BFGS update of `h` with step `s` and gradient change `y`.
