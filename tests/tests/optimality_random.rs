@@ -167,50 +167,36 @@ fn plane_seed_359_lrl_at_the_tilt_bound() {
     assert_form_agrees(true, 359, "LRL", Ask::AllForms);
 }
 
-#[test]
-#[ignore]
-fn extended_plane() {
+/// An extended run: `NEEDLE_OPT_COUNT` (default `count`) scenarios from seed `NEEDLE_OPT_START`
+/// (default 100); every form must agree with the reference.
+fn extended(plane: bool, count: u64, ask: Ask) {
     let start = env("NEEDLE_OPT_START", 100);
     let sum = run_suite(
-        seeds(true, start..start + env("NEEDLE_OPT_COUNT", 200)),
+        seeds(plane, start..start + env("NEEDLE_OPT_COUNT", count)),
         Effort(1.0),
-        Ask::AllForms,
+        ask,
     );
     assert!(
         sum.mismatches.is_empty(),
         "{} mismatches\n{sum}",
         sum.mismatches.len()
     );
+}
+
+#[test]
+#[ignore]
+fn extended_plane() {
+    extended(true, 200, Ask::AllForms);
 }
 
 #[test]
 #[ignore]
 fn extended_space() {
-    let start = env("NEEDLE_OPT_START", 100);
-    let sum = run_suite(
-        seeds(false, start..start + env("NEEDLE_OPT_COUNT", 40)),
-        Effort(1.0),
-        Ask::AllForms,
-    );
-    assert!(
-        sum.mismatches.is_empty(),
-        "{} mismatches\n{sum}",
-        sum.mismatches.len()
-    );
+    extended(false, 40, Ask::AllForms);
 }
 
 #[test]
 #[ignore]
 fn extended_each_form() {
-    let start = env("NEEDLE_OPT_START", 100);
-    let sum = run_suite(
-        seeds(true, start..start + env("NEEDLE_OPT_COUNT", 50)),
-        Effort(1.0),
-        Ask::EachForm,
-    );
-    assert!(
-        sum.mismatches.is_empty(),
-        "{} mismatches\n{sum}",
-        sum.mismatches.len()
-    );
+    extended(true, 50, Ask::EachForm);
 }
