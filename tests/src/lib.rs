@@ -62,3 +62,15 @@ pub fn needle() -> Command {
     c.current_dir(workspace());
     c
 }
+
+/// Runs `needle` with `args` (which ask for JSON), asserts that it succeeds and returns what it
+/// printed.
+pub fn needle_json(args: &[&str]) -> serde_json::Value {
+    let out = needle().args(args).output().expect("run needle");
+    assert!(
+        out.status.success(),
+        "needle {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("needle prints JSON")
+}

@@ -3,8 +3,7 @@
 
 use needle_cli::analysis::approx::{approximate, Method, Polygon};
 use needle_cli::scenario_file::{load_scenario_shapes, ScenarioFile};
-use needle_e2e::{needle, workspace};
-use serde_json::Value;
+use needle_e2e::{needle, needle_json, workspace};
 
 fn shapes() -> Vec<(&'static str, Vec<[f64; 2]>)> {
     let star: Vec<[f64; 2]> = (0..10)
@@ -236,22 +235,13 @@ fn bad_polygon_obstacles_are_clear_errors() {
 
 #[test]
 fn approx_command_reports_circles_and_added_area() {
-    let out = needle()
-        .args([
-            "approx",
-            "tests/data/polygons.toml",
-            "--method",
-            "segmented",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = needle_json(&[
+        "approx",
+        "tests/data/polygons.toml",
+        "--method",
+        "segmented",
+        "--json",
+    ]);
     let obs = v["obstacles"].as_array().unwrap();
     assert_eq!(obs.len(), 3);
     for o in obs {

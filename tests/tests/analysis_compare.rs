@@ -1,23 +1,14 @@
 //! The RRT baseline and the comparison with the optimiser (the paper's Table 4).
 
 use needle_cli::analysis::rrt::{self, merge, score, Piece};
-use needle_e2e::needle;
+use needle_e2e::{needle, needle_json};
 use planner_core::kinematics::{entry_basis, insertion_frame, V3};
 use planner_core::Scenario;
 use serde_json::Value;
 
 #[test]
 fn optimiser_beats_the_rrt_median_and_rrt_error_is_honest() {
-    let out = needle()
-        .args(["compare", "examples/paper.toml", "--json", "--runs", "9"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = needle_json(&["compare", "examples/paper.toml", "--json", "--runs", "9"]);
     let keys = [
         "length",
         "risk",

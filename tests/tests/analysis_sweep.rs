@@ -2,22 +2,12 @@
 //! `needle sweep --json`, and the parallel sweep giving the same points as a serial one.
 
 use needle_cli::analysis::sweep::{self, Range, Weight};
-use needle_e2e::needle;
+use needle_e2e::{needle, needle_json};
 use planner_core::Scenario;
 use serde_json::Value;
 
 fn sweep_json(args: &[&str]) -> Value {
-    let out = needle()
-        .args(["sweep", "examples/paper.toml", "--json"])
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    needle_json(&[&["sweep", "examples/paper.toml", "--json"], args].concat())
 }
 
 fn best(p: &Value) -> (String, f64, f64) {

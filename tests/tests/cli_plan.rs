@@ -1,22 +1,11 @@
 //! `needle plan` end to end: the JSON contract, the table, restrictions and errors.
 
-use needle_e2e::{example, needle};
+use needle_e2e::{example, needle, needle_json};
 use serde_json::Value;
 use std::fmt::Write;
 
 fn plan_json(args: &[&str]) -> Value {
-    let out = needle()
-        .arg("plan")
-        .args(args)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    needle_json(&[&["plan"], args, &["--json"]].concat())
 }
 
 fn dist(a: &Value, b: [f64; 3]) -> f64 {
