@@ -6,20 +6,18 @@
 //! emulated UART, and reads the stack's high-water mark from the painted stack at the end. Each
 //! device plan is also checked against the host's plan, bit for bit.
 
-mod artifacts;
 mod by_function;
 mod client;
 mod elf;
 mod qemu;
 
 use anyhow::{bail, Context, Result};
+use needle_cli::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
 use planner_core::wire::PlanResult;
 use planner_core::Scenario;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-
-use artifacts::{ensure_qemu, ensure_target};
 
 /// The value cortex-m-rt paints the stack with at reset (feature `paint-stack`).
 const STACK_PAINT: u32 = 0xCCCC_CCCC;

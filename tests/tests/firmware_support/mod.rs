@@ -2,55 +2,32 @@
 //! QEMU process with the guest's UART on a local TCP port.
 #![allow(dead_code)]
 
+use needle_cli::firmware_artifacts as artifacts;
 use needle_e2e::workspace;
 use std::net::{TcpListener, TcpStream};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-const TARGET: &str = "thumbv7em-none-eabihf";
-
 fn in_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| v == "true")
 }
 
-fn qemu_runs() -> bool {
-    Command::new("qemu-system-arm")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 /// Whether the firmware can be built and emulated here. Adds the rustup target if missing.
-/// Without QEMU: under CI (`CI=true`) it is installed (`apt-get install qemu-system-arm`) and a
-/// failure to do so fails the test; elsewhere the test is skipped with a note.
+/// Without QEMU: under CI (`CI=true`) it is installed (`scripts/install-emulator`) and a failure
+/// to do so fails the test; elsewhere the test is skipped with a note.
 pub fn emulator_ready(test: &str) -> bool {
-    let installed = Command::new("rustup")
-        .args(["target", "list", "--installed"])
-        .output()
-        .map(|o| {
-            String::from_utf8_lossy(&o.stdout)
-                .lines()
-                .any(|l| l.trim() == TARGET)
-        })
-        .unwrap_or(false);
-    if !installed {
-        let ok = Command::new("rustup")
-            .args(["target", "add", TARGET])
-            .status()
-            .is_ok_and(|s| s.success());
-        assert!(ok, "rustup target add {TARGET} failed");
+    if let Err(e) = artifacts::ensure_target() {
+        panic!("{e:#}");
     }
-    if qemu_runs() {
+    if artifacts::qemu_available() {
         return true;
     }
     if in_ci() {
         let script = workspace().join("scripts/install-emulator");
         let _ = Command::new("bash").arg(script).status();
         assert!(
-            qemu_runs(),
+            artifacts::qemu_available(),
             "CI=true and qemu-system-arm is missing and could not be installed"
         );
         return true;
@@ -64,31 +41,10 @@ pub fn emulator_ready(test: &str) -> bool {
 /// Builds the release firmware for `board` (its own target dir, as `needle device-bench` does)
 /// and returns the image.
 pub fn build_firmware(board: &str, features: &str) -> PathBuf {
-    let dir = workspace().join("firmware");
-    let target_dir = dir.join("target").join(board);
-    let mut cmd = Command::new(env!("CARGO"));
-    cmd.current_dir(&dir)
-        .args([
-            "build",
-            "--quiet",
-            "--release",
-            "--features",
-            features,
-            "--target-dir",
-        ])
-        .arg(&target_dir);
-    for var in [
-        "RUSTFLAGS",
-        "CARGO_ENCODED_RUSTFLAGS",
-        "CARGO_BUILD_RUSTFLAGS",
-        "CARGO_TARGET_DIR",
-        "CARGO_BUILD_TARGET",
-    ] {
-        cmd.env_remove(var);
+    match artifacts::build_firmware(&workspace(), board, features) {
+        Ok(image) => image,
+        Err(e) => panic!("building the {board} firmware: {e:#}"),
     }
-    let status = cmd.status().expect("run cargo build for the firmware");
-    assert!(status.success(), "building the {board} firmware failed");
-    target_dir.join(TARGET).join("release/needle-firmware")
 }
 
 /// QEMU running a firmware image, its UART on `addr`; killed (by its own handle) when dropped.

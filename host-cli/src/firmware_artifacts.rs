@@ -1,4 +1,5 @@
-//! What a measurement needs: the thumbv7em target, QEMU, the firmware images and the plugin.
+//! What a firmware measurement or test needs: the thumbv7em target, QEMU, the firmware images and
+//! the instruction-count plugin.
 //! Missing tools are installed (rustup target, `apt-get install qemu-system-arm`) when possible.
 
 use anyhow::{bail, Context, Result};
