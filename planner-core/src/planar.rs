@@ -51,35 +51,71 @@ pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pos
     }
 }
 
-/// Squared distance from the point `q` to the segment of `kind` and length `len` that starts at
-/// `p` and bends to side `s` (exact: the nearest point of the circle or line, else an end).
-pub fn distance_squared(
-    p: Pose,
+/// A segment laid out in the plane, with what distance queries need worked out once (a seed is
+/// measured against every obstacle).
+#[derive(Clone, Copy, Debug)]
+pub struct Drawn {
     kind: SegmentKind,
+    start: Pose,
     len: f32,
-    s: f32,
+    side: f32,
     radius: f32,
-    q: (f32, f32),
-) -> f32 {
-    let sq = |x: f32, y: f32| x * x + y * y;
-    match kind {
-        SegmentKind::Line => {
-            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
-            let t = ((q.0 - p.x) * dx + (q.1 - p.y) * dy).clamp(0.0, len);
-            sq(q.0 - p.x - t * dx, q.1 - p.y - t * dy)
+    /// Line: the heading's unit vector. Arc: the unit normal it bends towards.
+    unit: (f32, f32),
+    /// Arc: the circle's centre.
+    centre: (f32, f32),
+    /// Where the segment ends.
+    pub end: Pose,
+}
+
+impl Drawn {
+    /// The segment of `kind` and length `len` that starts at `start` and bends to side `s`.
+    pub fn new(start: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Drawn {
+        let (unit, centre) = match kind {
+            SegmentKind::Line => (
+                (crate::fmath::cos(start.psi), crate::fmath::sin(start.psi)),
+                (0.0, 0.0),
+            ),
+            SegmentKind::Arc => {
+                let n = bend(start.psi, s);
+                (n, (start.x + radius * n.0, start.y + radius * n.1))
+            }
+        };
+        Drawn {
+            kind,
+            start,
+            len,
+            side: s,
+            radius,
+            unit,
+            centre,
+            end: advance(start, kind, len, s, radius),
         }
-        SegmentKind::Arc => {
-            let (nx, ny) = bend(p.psi, s);
-            let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
-            let (vx, vy) = (q.0 - cx, q.1 - cy);
-            // The radius to the start is -n; along the arc it turns clockwise for s = +1.
-            let ccw = crate::fmath::atan2(-nx * vy + ny * vx, -nx * vx - ny * vy);
-            if crate::fmath::wrap_positive(-s * ccw) * radius <= len {
-                let off = crate::fmath::sqrt(sq(vx, vy)) - radius;
-                off * off
-            } else {
-                let end = advance(p, kind, len, s, radius);
-                sq(q.0 - p.x, q.1 - p.y).min(sq(q.0 - end.x, q.1 - end.y))
+    }
+
+    /// Squared distance from the point `q` to the segment (exact: the nearest point of the
+    /// circle or line, else an end).
+    pub fn distance_squared(&self, q: (f32, f32)) -> f32 {
+        let sq = |x: f32, y: f32| x * x + y * y;
+        let p = &self.start;
+        match self.kind {
+            SegmentKind::Line => {
+                let (dx, dy) = self.unit;
+                let t = ((q.0 - p.x) * dx + (q.1 - p.y) * dy).clamp(0.0, self.len);
+                sq(q.0 - p.x - t * dx, q.1 - p.y - t * dy)
+            }
+            SegmentKind::Arc => {
+                let (nx, ny) = self.unit;
+                let (vx, vy) = (q.0 - self.centre.0, q.1 - self.centre.1);
+                // The radius to the start is -n; along the arc it turns clockwise for s = +1.
+                let ccw = crate::fmath::atan2(-nx * vy + ny * vx, -nx * vx - ny * vy);
+                if crate::fmath::wrap_positive(-self.side * ccw) * self.radius <= self.len {
+                    let off = crate::fmath::sqrt(sq(vx, vy)) - self.radius;
+                    off * off
+                } else {
+                    let end = &self.end;
+                    sq(q.0 - p.x, q.1 - p.y).min(sq(q.0 - end.x, q.1 - end.y))
+                }
             }
         }
     }
@@ -191,7 +227,8 @@ mod tests {
                 300.0 * uniform(&mut rng) - 150.0,
                 300.0 * uniform(&mut rng) - 150.0,
             );
-            let exact = crate::fmath::sqrt(distance_squared(start, kind, len, side, radius, q));
+            let exact =
+                crate::fmath::sqrt(Drawn::new(start, kind, len, side, radius).distance_squared(q));
             let samples = 20_000;
             let sampled = (0..=samples)
                 .map(|k| {

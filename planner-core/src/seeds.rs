@@ -11,7 +11,7 @@
 
 use crate::form::SegmentKind;
 use crate::kinematics::{insertion_frame, V3};
-use crate::planar::{advance, complete, distance_squared, heading_of_bend, turn, Pose};
+use crate::planar::{advance, complete, heading_of_bend, turn, Drawn, Pose};
 use crate::problem::{Problem, Vars, MAX_VARS};
 use crate::scenario::MAX_OBSTACLES;
 use crate::MAX_CONTROL_DEGREE;
@@ -388,25 +388,25 @@ impl SeedPlane {
         pieces: &Pieces,
         lengths: &[f32; MAX_CONTROL_DEGREE],
     ) -> (f32, f32) {
-        let r = p.radius;
-        let mut starts = [Pose {
+        let mut drawn: heapless::Vec<Drawn, MAX_CONTROL_DEGREE> = heapless::Vec::new();
+        let mut at = Pose {
             x: 0.0,
             y: 0.0,
             psi: heading,
-        }; MAX_CONTROL_DEGREE];
-        for i in 1..pieces.len() {
-            let prev = &pieces[i - 1];
-            starts[i] = advance(starts[i - 1], prev.kind, lengths[i - 1], prev.side, r);
+        };
+        for (piece, &len) in pieces.iter().zip(lengths) {
+            let d = Drawn::new(at, piece.kind, len, piece.side, p.radius);
+            at = d.end;
+            // As many as there are pieces.
+            let _ = drawn.push(d);
         }
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
         let mut blocked = false;
         for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
-            let mut nearest = f32::INFINITY;
-            for (i, piece) in pieces.iter().enumerate() {
-                let d2 = distance_squared(starts[i], piece.kind, lengths[i], piece.side, r, (x, y));
-                nearest = nearest.min(d2);
-            }
+            let nearest = drawn
+                .iter()
+                .fold(f32::INFINITY, |m, d| m.min(d.distance_squared((x, y))));
             let d = crate::fmath::sqrt(nearest + h2) - ob.radius;
             min_clearance = min_clearance.min(d);
             if d > p.min_clearance {
