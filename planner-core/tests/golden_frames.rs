@@ -1,0 +1,153 @@
+//! Frames on the line stay byte for byte what they were when the protocol was first fielded
+//! (planner-core/tests/data/golden_frames.txt): a host or device built before a change to the
+//! framing code (COBS, CRC-32, postcard layout) still understands one built after it.
+//!
+//! `GOLDEN_BLESS=1 cargo test --test golden_frames` rewrites the file; do that only for a change
+//! that also raises `PROTOCOL_VERSION`.
+
+use planner_core::wire::crc::crc32;
+use planner_core::wire::{
+    encode_frame, Chunk, Directed, Fault, Header, PlanRequest, PlanResult, Reply, ReplyBody,
+    Request, RequestBody, MAX_CHUNK, MAX_PAYLOAD,
+};
+use planner_core::{Form, PlanError, Scenario};
+use serde::Serialize;
+use std::fmt::Write;
+
+fn frame<T: Serialize + Directed>(msg: &T) -> String {
+    let mut bytes = Vec::new();
+    let mut scratch = [0u8; MAX_PAYLOAD + 4];
+    encode_frame(msg, &mut scratch, &mut |b: &[u8]| {
+        bytes.extend_from_slice(b)
+    })
+    .unwrap();
+    bytes.iter().fold(String::new(), |mut s, b| {
+        write!(s, "{b:02x}").unwrap();
+        s
+    })
+}
+
+fn chunk(bytes: &[u8]) -> Chunk {
+    Chunk::from_slice(&bytes[..bytes.len().min(MAX_CHUNK)]).unwrap()
+}
+
+/// The frames of a whole exchange for the paper's scenario, one `name hex` line each.
+fn exchange() -> String {
+    let scenario = Scenario::paper();
+    let request = postcard::to_stdvec(&PlanRequest::new(&scenario)).unwrap();
+    // The plan itself may improve; the layout of a result must not: a typed error stands in.
+    let result: PlanResult = Err(PlanError::TooManyObstacles {
+        given: 40,
+        capacity: 32,
+    });
+    let result = postcard::to_stdvec(&result).unwrap();
+    let req = |id, body| Request {
+        header: Header::new(id),
+        body,
+    };
+    let rep = |id, body| Reply {
+        header: Header::new(id),
+        body,
+    };
+    let lines = [
+        ("hello", frame(&req(1, RequestBody::Hello))),
+        (
+            "ping",
+            frame(&req(2, RequestBody::Ping { nonce: 0xDEAD_BEEF })),
+        ),
+        (
+            "upload",
+            frame(&req(
+                3,
+                RequestBody::Upload {
+                    offset: 0,
+                    total: request.len() as u16,
+                    crc: crc32(&request),
+                    data: chunk(&request),
+                },
+            )),
+        ),
+        ("status", frame(&req(3, RequestBody::Status))),
+        (
+            "fetch",
+            frame(&req(
+                3,
+                RequestBody::Fetch {
+                    offset: 192,
+                    max_len: 192,
+                },
+            )),
+        ),
+        ("cancel", frame(&req(3, RequestBody::Cancel))),
+        (
+            "pong",
+            frame(&rep(2, ReplyBody::Pong { nonce: 0xDEAD_BEEF })),
+        ),
+        (
+            "uploaded",
+            frame(&rep(
+                3,
+                ReplyBody::Uploaded {
+                    received: 192,
+                    total: request.len() as u16,
+                },
+            )),
+        ),
+        (
+            "progress",
+            frame(&rep(
+                3,
+                ReplyBody::Progress {
+                    done: 4,
+                    total: 10,
+                    form: Form::parse("RL"),
+                    feasible: true,
+                },
+            )),
+        ),
+        (
+            "finished",
+            frame(&rep(
+                3,
+                ReplyBody::Finished {
+                    len: result.len() as u16,
+                    crc: crc32(&result),
+                },
+            )),
+        ),
+        (
+            "part",
+            frame(&rep(
+                3,
+                ReplyBody::Part {
+                    offset: 0,
+                    total: result.len() as u16,
+                    data: chunk(&result),
+                },
+            )),
+        ),
+        (
+            "result",
+            result.iter().map(|b| format!("{b:02x}")).collect(),
+        ),
+        ("fault", frame(&rep(9, ReplyBody::Fault(Fault::BadCrc)))),
+    ];
+    lines.iter().fold(String::new(), |mut s, (name, hex)| {
+        writeln!(s, "{name} {hex}").unwrap();
+        s
+    })
+}
+
+#[test]
+fn frames_are_byte_for_byte_the_fielded_ones() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/golden_frames.txt");
+    let now = exchange();
+    if std::env::var_os("GOLDEN_BLESS").is_some() {
+        std::fs::write(path, &now).unwrap();
+    }
+    let stored = std::fs::read_to_string(path).expect("golden frames");
+    for (a, b) in stored.lines().zip(now.lines()) {
+        assert_eq!(a, b, "frame changed");
+    }
+    assert_eq!(stored.lines().count(), now.lines().count());
+}
