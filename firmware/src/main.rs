@@ -24,7 +24,7 @@ mod panic;
 mod pump;
 
 use cortex_m_rt::entry;
-use planner_core::service::{DeviceIdentity, DeviceService};
+use planner_core::device::{DeviceIdentity, DeviceService};
 
 /// How the firmware introduces itself in the protocol's hello.
 const IDENTITY: DeviceIdentity = DeviceIdentity {

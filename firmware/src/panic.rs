@@ -5,7 +5,7 @@
 use crate::board;
 use crate::link::Link;
 use core::panic::PanicInfo;
-use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody};
+use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody, FAULT_SCRATCH};
 
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {
@@ -17,8 +17,8 @@ fn panic(info: &PanicInfo) -> ! {
         header: Header::new(0),
         body: ReplyBody::Fault(Fault::Internal),
     };
-    let mut scratch = [0u8; 16];
-    // The message is a few bytes; should it not fit, the host still sees a device that went quiet.
+    let mut scratch = [0u8; FAULT_SCRATCH];
+    // Sized from the message types (a test encodes this very reply into it).
     let _ = encode_frame(&fault, &mut scratch, &mut |bytes: &[u8]| {
         link.write_all(bytes)
     });

@@ -11,7 +11,7 @@
 
 use crate::link::Link;
 use crate::marker;
-use planner_core::service::DeviceService;
+use planner_core::device::DeviceService;
 use planner_core::wire::MAX_WIRE_FRAME;
 
 /// Received bytes held until a frame delimiter (0x00) arrives, then handed to the service.

@@ -7,7 +7,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use planner_core::service::DeviceService;
+use planner_core::device::DeviceService;
 use planner_core::wire::{FrameDecoder, Reply, MAX_FRAME};
 
 fuzz_target!(|data: &[u8]| {

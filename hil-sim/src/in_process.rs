@@ -2,7 +2,7 @@
 //! device until it has nothing left to do, so a "timeout" costs no time at all.
 
 use crate::line::{FaultyLine, LineConfig, LineStats};
-use planner_core::service::{DeviceService, DeviceStats};
+use planner_core::device::{DeviceService, DeviceStats};
 use planner_core::wire::{FrameDecoder, MAX_FRAME};
 use std::collections::HashSet;
 

@@ -12,7 +12,7 @@ pub mod serve;
 
 pub use in_process::{AuditReport, InProcess};
 pub use line::{FaultyLine, LineConfig, LineStats, Pacer};
-pub use planner_core::service::{DeviceIdentity, DeviceService};
+pub use planner_core::device::{DeviceIdentity, DeviceService};
 pub use serve::serve;
 
 /// How the simulator introduces itself.

@@ -1,7 +1,7 @@
 //! Serving the simulated device on a byte stream (a pty master or a TCP connection).
 
 use crate::line::{FaultyLine, LineConfig, Pacer};
-use planner_core::service::DeviceService;
+use planner_core::device::DeviceService;
 use std::io::{self, ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;

@@ -8,7 +8,7 @@ use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
 use needle_cli::scenario_file::{load_scenario, parse_form};
-use planner_core::form::FormSet;
+use planner_core::model::form::FormSet;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

@@ -3,8 +3,8 @@
 //! `needle send` prints through the same functions, so a plan from a device reads exactly like a
 //! local one.
 
-use planner_core::kinematics::V3;
-use planner_core::verify::{rebuild, sample_points};
+use planner_core::check::{rebuild, sample_points};
+use planner_core::model::kinematics::V3;
 use planner_core::{FormOutcome, PlanReport, Scenario, SegmentKind};
 use serde_json::{json, Value};
 

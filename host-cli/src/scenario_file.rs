@@ -3,8 +3,8 @@
 
 use crate::analysis::approx::{approximate, Approximation, Method, Polygon};
 use anyhow::{bail, Context, Result};
-use planner_core::form::{Form, FormSet};
-use planner_core::scenario::{
+use planner_core::model::form::{Form, FormSet};
+use planner_core::model::scenario::{
     Entry, Needle, Obstacle, PlannerOptions, RiskMeasure, Target, Weights, Workspace,
 };
 use planner_core::{PlanError, Scenario, MAX_OBSTACLES};

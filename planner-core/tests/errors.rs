@@ -1,6 +1,6 @@
 //! Every kind of bad input gets its typed error (and never a panic).
 
-use planner_core::scenario::{Obstacle, Workspace};
+use planner_core::model::scenario::{Obstacle, Workspace};
 use planner_core::{plan, Field, Form, PlanError, Scenario};
 
 fn err(s: &Scenario) -> PlanError {

@@ -8,7 +8,7 @@
 use planner_core::wire::crc::crc32;
 use planner_core::wire::{
     encode_frame, Chunk, Directed, Fault, Header, PlanRequest, PlanResult, Reply, ReplyBody,
-    Request, RequestBody, MAX_CHUNK, MAX_PAYLOAD,
+    Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK,
 };
 use planner_core::{Form, PlanError, Scenario};
 use serde::Serialize;
@@ -16,7 +16,7 @@ use std::fmt::Write;
 
 fn frame<T: Serialize + Directed>(msg: &T) -> String {
     let mut bytes = Vec::new();
-    let mut scratch = [0u8; MAX_PAYLOAD + 4];
+    let mut scratch = [0u8; ENCODE_SCRATCH];
     encode_frame(msg, &mut scratch, &mut |b: &[u8]| {
         bytes.extend_from_slice(b)
     })

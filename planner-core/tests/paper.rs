@@ -1,6 +1,6 @@
 //! The paper's simulation scenario: the figures of its Table 3 and the text around it.
 
-use planner_core::verify::check;
+use planner_core::check::check;
 use planner_core::{plan, Form, PlanReport, Scenario};
 
 fn outcome<'a>(r: &'a PlanReport, word: &str) -> &'a planner_core::FormOutcome {

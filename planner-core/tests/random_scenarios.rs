@@ -1,8 +1,8 @@
 //! Property tests on random scenarios: planning never panics, every plan reported feasible passes
 //! the independent check, and the same scenario gives the same plan twice.
 
-use planner_core::scenario::{Obstacle, Workspace};
-use planner_core::verify::check;
+use planner_core::check::check;
+use planner_core::model::scenario::{Obstacle, Workspace};
 use planner_core::{plan, PlanError, Scenario};
 use proptest::prelude::*;
 

@@ -1,16 +1,16 @@
 //! The device service fed directly: state machine behaviour and random byte streams.
 
-use planner_core::service::DeviceService;
+use planner_core::device::DeviceService;
 use planner_core::wire::crc::crc32;
 use planner_core::wire::{
     encode_frame, Chunk, Fault, FrameDecoder, Header, PlanRequest, Reply, ReplyBody, Request,
-    RequestBody, MAX_FRAME, MAX_PAYLOAD,
+    RequestBody, ENCODE_SCRATCH, MAX_FRAME,
 };
 use planner_core::Scenario;
 use proptest::prelude::*;
 
 fn frame(id: u16, body: RequestBody) -> Vec<u8> {
-    let mut scratch = [0u8; MAX_PAYLOAD + 4];
+    let mut scratch = [0u8; ENCODE_SCRATCH];
     let mut out = Vec::new();
     let req = Request {
         header: Header::new(id),

@@ -2,7 +2,7 @@
 
 use needle_cli::analysis::rrt::{self, merge, score, Piece};
 use needle_e2e::{needle, needle_json};
-use planner_core::kinematics::{entry_basis, insertion_frame, V3};
+use planner_core::model::kinematics::{entry_basis, insertion_frame, V3};
 use planner_core::Scenario;
 use serde_json::Value;
 

@@ -79,7 +79,7 @@ fn plan_plot_has_one_path_per_feasible_form_and_a_legend() {
 fn space_scenarios_are_drawn_as_two_projections() {
     let s = Scenario::paper();
     let mut space = s.clone();
-    space.options.workspace = planner_core::scenario::Workspace::Space;
+    space.options.workspace = planner_core::model::scenario::Workspace::Space;
     let path = PlotPath {
         label: "hand-made".into(),
         form: "RL".into(),

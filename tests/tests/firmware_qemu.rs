@@ -7,7 +7,7 @@ mod firmware_support;
 use firmware_support::{build_firmware, emulator_ready, Qemu};
 use needle_cli::device::{open, Client, ClientConfig, LinkTarget};
 use needle_e2e::{example, needle};
-use planner_core::wire::{cobs, frame_crc, Directed, Fault, ReplyBody, Request};
+use planner_core::wire::{encode_payload, Directed, Fault, ReplyBody, Request, ENCODE_SCRATCH};
 use planner_core::PlanError;
 use serde_json::Value;
 use std::time::Duration;
@@ -45,11 +45,14 @@ fn assert_device_plan_equals_host(addr: &str, scenario: &str) {
 
 /// A frame whose CRC is right but whose payload is no message of the protocol.
 fn undecodable_frame() -> Vec<u8> {
-    let mut raw = vec![0xFF, 0xFF, 0xFF, 0x7F, 0x13];
-    raw.extend_from_slice(&frame_crc(<Request as Directed>::DIRECTION, &raw).to_le_bytes());
-    let mut frame = vec![0];
-    cobs::encode(&raw, &mut |b: &[u8]| frame.extend_from_slice(b));
-    frame.push(0);
+    let raw = [0xFF, 0xFF, 0xFF, 0x7F, 0x13];
+    let mut frame = Vec::new();
+    let mut scratch = [0u8; ENCODE_SCRATCH];
+    let direction = <Request as Directed>::DIRECTION;
+    encode_payload(direction, &raw, &mut scratch, &mut |b: &[u8]| {
+        frame.extend_from_slice(b)
+    })
+    .expect("five bytes fit");
     frame
 }
 
@@ -59,7 +62,7 @@ fn over_capacity_request() -> Vec<u8> {
     let mut bytes = postcard::to_stdvec(&(s.needle, s.entry, s.target)).expect("encode");
     bytes.push(40); // obstacle count (a one-byte varint)
     for i in 0..40 {
-        let o = planner_core::scenario::Obstacle {
+        let o = planner_core::model::scenario::Obstacle {
             center: [0.0, 100.0 + i as f32, 50.0],
             radius: 1.0,
         };

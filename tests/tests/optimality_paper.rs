@@ -3,7 +3,7 @@
 
 use needle_e2e::reference::compare::{run_suite, Ask};
 use needle_e2e::reference::{solve_form, Effort};
-use planner_core::scenario::Workspace;
+use planner_core::model::scenario::Workspace;
 use planner_core::{plan, Form, Scenario};
 
 fn paper() -> Vec<(String, Scenario)> {

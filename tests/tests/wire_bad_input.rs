@@ -4,10 +4,10 @@ mod wire_support;
 
 use hil_sim::InProcess;
 use needle_cli::device::{Client, ClientConfig, LinkError};
-use planner_core::scenario::Obstacle;
+use planner_core::model::scenario::Obstacle;
 use planner_core::wire::{
-    encode_frame, Fault, Header, PlanRequest, Reply, ReplyBody, Request, RequestBody, MAX_FRAME,
-    MAX_PAYLOAD, MAX_PLAN_REQUEST, WIRE_MAX_OBSTACLES,
+    encode_frame, encode_payload, Fault, Header, PlanRequest, Reply, ReplyBody, Request,
+    RequestBody, ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, WIRE_MAX_OBSTACLES,
 };
 use planner_core::{plan, Field, PlanError, Scenario, MAX_OBSTACLES};
 use std::time::Duration;
@@ -22,7 +22,7 @@ fn client() -> Client<Sim> {
 }
 
 fn frame(req: &Request) -> Vec<u8> {
-    let mut scratch = [0u8; MAX_PAYLOAD + 4];
+    let mut scratch = [0u8; ENCODE_SCRATCH];
     let mut out = Vec::new();
     encode_frame(req, &mut scratch, &mut |b: &[u8]| out.extend_from_slice(b)).unwrap();
     out
@@ -30,11 +30,12 @@ fn frame(req: &Request) -> Vec<u8> {
 
 /// Frames a raw payload with a valid CRC (for payloads that are not messages).
 fn frame_payload(payload: &[u8]) -> Vec<u8> {
-    let mut raw = payload.to_vec();
-    raw.extend_from_slice(&planner_core::wire::frame::frame_crc(1, payload).to_le_bytes());
-    let mut out = vec![0u8];
-    planner_core::wire::cobs::encode(&raw, &mut |b: &[u8]| out.extend_from_slice(b));
-    out.push(0);
+    let mut out = Vec::new();
+    let mut scratch = [0u8; ENCODE_SCRATCH];
+    encode_payload(1, payload, &mut scratch, &mut |b: &[u8]| {
+        out.extend_from_slice(b)
+    })
+    .unwrap();
     out
 }
 
@@ -60,7 +61,7 @@ fn faults(c: &mut Client<Sim>) -> Vec<(u16, Fault)> {
 /// A good request after the bad one: planned exactly as locally.
 fn assert_still_serves(c: &mut Client<Sim>) {
     let mut s = Scenario::paper();
-    s.options.forms = planner_core::form::FormSet::default();
+    s.options.forms = planner_core::model::form::FormSet::default();
     s.options.max_control_degree = 2;
     let local = plan(&s);
     let remote = c.plan(&s, &mut |_| {}).expect("the device serves again");

@@ -2,7 +2,7 @@
 //! host stop with a clear error at once, instead of retrying into a timeout.
 
 use needle_cli::device::{Client, ClientConfig, Transport};
-use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody};
+use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody, FAULT_SCRATCH};
 use std::io;
 use std::time::{Duration, Instant};
 
@@ -19,12 +19,12 @@ impl Transport for PanickedDevice {
             header: Header::new(0),
             body: ReplyBody::Fault(Fault::Internal),
         };
-        let mut scratch = [0u8; 16];
+        let mut scratch = [0u8; FAULT_SCRATCH];
         let mut frame = vec![0u8];
         encode_frame(&fault, &mut scratch, &mut |b: &[u8]| {
             frame.extend_from_slice(b)
         })
-        .expect("the fault fits 16 bytes, as in the firmware");
+        .expect("a fault fits FAULT_SCRATCH, as in the firmware");
         self.pending.extend(frame);
         Ok(())
     }

@@ -138,7 +138,7 @@ fn wire_bytes_for_the_paper_scenario() {
         s.bytes_in - before.bytes_in,
     );
     assert_eq!(s.retried, 0);
-    let ram = std::mem::size_of::<planner_core::service::DeviceService>();
+    let ram = std::mem::size_of::<planner_core::device::DeviceService>();
     println!(
         "frames: max payload {} bytes, max frame {} bytes with delimiters; upload buffer {}, \
          result buffer {}; DeviceService {} bytes of RAM (host layout)",

@@ -9,7 +9,7 @@ use crate::report::path_points;
 use crate::scenario_file::{load_scenario_shapes, parse_form, ObstacleShape, ScenarioFile};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use planner_core::form::FormSet;
+use planner_core::model::form::FormSet;
 use planner_core::{PlanReport, Scenario};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

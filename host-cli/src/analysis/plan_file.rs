@@ -4,8 +4,8 @@
 
 use super::plot::{colour_of, PlotPath};
 use anyhow::{bail, Result};
-use planner_core::plan::{Insertion, SegmentPlan};
-use planner_core::verify::{rebuild, sample_points};
+use planner_core::check::{rebuild, sample_points};
+use planner_core::report::{Insertion, SegmentPlan};
 use planner_core::{Form, Scenario, SegmentKind};
 use serde_json::Value;
 

@@ -7,7 +7,7 @@
 
 use super::svg::{esc, form_colour, ticks, Svg};
 use crate::scenario_file::ObstacleShape;
-use planner_core::scenario::Workspace;
+use planner_core::model::scenario::Workspace;
 use planner_core::Scenario;
 
 /// One path to draw.

@@ -7,9 +7,9 @@
 //! counted as the number of pieces after merging consecutive steps that need no bevel change.
 
 use super::rng::Pcg32;
-use planner_core::clearance::closest;
-use planner_core::kinematics::{entry_basis, insertion_frame, Frame, V3};
-use planner_core::scenario::{RiskMeasure, Workspace};
+use planner_core::model::clearance::closest;
+use planner_core::model::kinematics::{entry_basis, insertion_frame, Frame, V3};
+use planner_core::model::scenario::{RiskMeasure, Workspace};
 use planner_core::{PlanError, Scenario, SegmentKind};
 use std::time::Instant;
 

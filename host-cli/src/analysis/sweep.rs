@@ -3,7 +3,7 @@
 
 use super::parallel;
 use anyhow::{bail, Result};
-use planner_core::form::FormSet;
+use planner_core::model::form::FormSet;
 use planner_core::{Form, PlanError, PlanReport, Scenario};
 use serde_json::{json, Value};
 use std::fmt;

@@ -6,11 +6,11 @@
 //! idempotent, so a repeat never does harm. Chunk sizes shrink when frames get damaged and grow
 //! back as they get through, so a noisy line still carries a plan.
 
-use planner_core::form::Form;
+use planner_core::model::form::Form;
 use planner_core::wire::crc::crc32;
 use planner_core::wire::{
     encode_frame, Chunk, DeviceInfo, Fault, FrameDecoder, Header, PlanRequest, PlanResult, Reply,
-    ReplyBody, Request, RequestBody, MAX_CHUNK, MAX_FRAME, MAX_PAYLOAD, MAX_PLAN_REQUEST,
+    ReplyBody, Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK, MAX_FRAME, MAX_PLAN_REQUEST,
     PROTOCOL_VERSION,
 };
 use planner_core::Scenario;
@@ -209,7 +209,7 @@ impl<T: Transport> Client<T> {
             header: Header::new(id),
             body: body.clone(),
         };
-        let mut scratch = [0u8; MAX_PAYLOAD + 4];
+        let mut scratch = [0u8; ENCODE_SCRATCH];
         let mut out = Vec::with_capacity(MAX_FRAME + 2);
         encode_frame(&req, &mut scratch, &mut |b: &[u8]| out.extend_from_slice(b))
             .map_err(|_| LinkError::Io(io::Error::other("request too large to encode")))?;

@@ -5,7 +5,7 @@
 use anyhow::{anyhow, bail, Context, Result};
 use planner_core::wire::{
     encode_frame, Chunk, DeviceInfo, FrameDecoder, Header, PlanRequest, PlanResult, Reply,
-    ReplyBody, Request, RequestBody, MAX_CHUNK, MAX_FRAME, MAX_PAYLOAD, MAX_PLAN_REQUEST,
+    ReplyBody, Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK, MAX_FRAME, MAX_PLAN_REQUEST,
 };
 use planner_core::Scenario;
 use std::io::{ErrorKind, Read, Write};
@@ -38,7 +38,7 @@ impl Device {
             header: Header::new(id),
             body,
         };
-        let mut scratch = [0u8; MAX_PAYLOAD + 4];
+        let mut scratch = [0u8; ENCODE_SCRATCH];
         let mut frame = Vec::new();
         encode_frame(&request, &mut scratch, &mut |b: &[u8]| {
             frame.extend_from_slice(b)

@@ -7,10 +7,9 @@
 //! that echoes or loops back the host's own frames (a misconfigured port, a loopback adapter)
 //! shows up as damaged frames, never as replies.
 
-use super::cobs;
-use super::crc::Crc32;
+use super::crc::CRC32;
 use super::max_size::{max, MaxSize};
-use super::messages::{Reply, Request};
+use super::messages::{Fault, Header, Reply, Request};
 use serde::Serialize;
 
 /// Bytes of the checksum after the payload.
@@ -20,10 +19,21 @@ pub const CRC_LEN: usize = 4;
 pub const MAX_PAYLOAD: usize = max(Request::MAX_SIZE, Reply::MAX_SIZE);
 
 /// Largest frame between delimiters (COBS of payload and CRC).
-pub const MAX_FRAME: usize = cobs::max_encoded_len(MAX_PAYLOAD + CRC_LEN);
+pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_PAYLOAD + CRC_LEN);
 
 /// Largest frame on the wire, both delimiters included.
 pub const MAX_WIRE_FRAME: usize = MAX_FRAME + 2;
+
+/// Scratch [`encode_frame`] needs for any message: the payload with its CRC, and the frame.
+pub const ENCODE_SCRATCH: usize = scratch_for(MAX_PAYLOAD);
+
+/// Scratch [`encode_frame`] needs for a [`ReplyBody::Fault`](super::ReplyBody::Fault) reply: what
+/// a panic handler can afford on whatever stack is left.
+pub const FAULT_SCRATCH: usize = scratch_for(Header::MAX_SIZE + 1 + Fault::MAX_SIZE);
+
+const fn scratch_for(payload: usize) -> usize {
+    payload + CRC_LEN + cobs::max_encoding_length(payload + CRC_LEN) + 2
+}
 
 /// Why a frame could not be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,33 +59,72 @@ impl Directed for Reply {
 
 /// The frame checksum of `payload` travelling in `direction`.
 pub fn frame_crc(direction: u8, payload: &[u8]) -> u32 {
-    let mut c = Crc32::new();
+    let mut c = CRC32.digest();
     c.update(&[direction]);
     c.update(payload);
-    c.value()
+    c.finalize()
 }
 
-/// Serialises `msg` into `scratch` and hands the complete frame to `out` piece by piece.
-/// Returns the number of bytes handed out.
+/// Serialises `msg` into `scratch` (at least [`ENCODE_SCRATCH`] bytes for any message) and
+/// hands the complete frame, delimiters included, to `out`. Returns its length.
+///
+/// ```
+/// use planner_core::wire::{encode_frame, Header, Request, RequestBody, ENCODE_SCRATCH};
+///
+/// let ping = Request { header: Header::new(7), body: RequestBody::Ping { nonce: 1 } };
+/// let mut scratch = [0u8; ENCODE_SCRATCH];
+/// let mut line = Vec::new();
+/// let n = encode_frame(&ping, &mut scratch, &mut |b: &[u8]| line.extend_from_slice(b)).unwrap();
+/// assert_eq!((line.len(), line[0], line[n - 1]), (n, 0, 0));
+/// ```
 pub fn encode_frame<T: Serialize + Directed>(
     msg: &T,
     scratch: &mut [u8],
     out: &mut dyn FnMut(&[u8]),
 ) -> Result<usize, EncodeError> {
-    let payload_cap = scratch.len().saturating_sub(CRC_LEN);
+    let payload_cap = scratch.len().saturating_sub(CRC_LEN).min(MAX_PAYLOAD);
     let n = postcard::to_slice(msg, &mut scratch[..payload_cap])
         .map_err(|_| EncodeError::TooLarge)?
         .len();
-    let crc = frame_crc(T::DIRECTION, &scratch[..n]);
-    scratch[n..n + CRC_LEN].copy_from_slice(&crc.to_le_bytes());
-    let mut written = 2;
-    out(&[0]);
-    cobs::encode(&scratch[..n + CRC_LEN], &mut |b: &[u8]| {
-        written += b.len();
-        out(b);
-    });
-    out(&[0]);
-    Ok(written)
+    frame_in_place(T::DIRECTION, n, scratch, out)
+}
+
+/// Frames bytes that are not necessarily a message (tests of the receiving side use it to build
+/// frames with a valid CRC around garbage), like [`encode_frame`].
+pub fn encode_payload(
+    direction: u8,
+    payload: &[u8],
+    scratch: &mut [u8],
+    out: &mut dyn FnMut(&[u8]),
+) -> Result<usize, EncodeError> {
+    scratch
+        .get_mut(..payload.len())
+        .ok_or(EncodeError::TooLarge)?
+        .copy_from_slice(payload);
+    frame_in_place(direction, payload.len(), scratch, out)
+}
+
+/// Appends the CRC to the `n` payload bytes at the start of `scratch`, stuffs them into the rest
+/// of `scratch` and hands out the delimited frame.
+fn frame_in_place(
+    direction: u8,
+    n: usize,
+    scratch: &mut [u8],
+    out: &mut dyn FnMut(&[u8]),
+) -> Result<usize, EncodeError> {
+    let crc = frame_crc(direction, &scratch[..n]);
+    scratch
+        .get_mut(n..n + CRC_LEN)
+        .ok_or(EncodeError::TooLarge)?
+        .copy_from_slice(&crc.to_le_bytes());
+    let (raw, frame) = scratch.split_at_mut(n + CRC_LEN);
+    let body = frame.get_mut(1..).ok_or(EncodeError::TooLarge)?;
+    let len = cobs::try_encode(raw, body).map_err(|_| EncodeError::TooLarge)?;
+    let wire = frame.get_mut(..len + 2).ok_or(EncodeError::TooLarge)?;
+    wire[0] = 0;
+    wire[len + 1] = 0;
+    out(wire);
+    Ok(wire.len())
 }
 
 /// A frame that was received but must not be used.
@@ -158,7 +207,8 @@ impl<const N: usize> FrameDecoder<N> {
         if len == 0 {
             return None;
         }
-        let n = match cobs::decode_in_place(&mut self.buf, len) {
+        // The buffer holds no zero (zeros delimit), so the crate decodes exactly `len` bytes.
+        let n = match cobs::decode_in_place(&mut self.buf[..len]) {
             Ok(n) if n > CRC_LEN => n,
             _ => return Some(Err(FrameError::Truncated)),
         };

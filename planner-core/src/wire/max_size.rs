@@ -6,9 +6,9 @@
 //! field added to a type breaks them until its bound is updated too.
 
 use crate::error::{Field, PlanError};
-use crate::form::{Form, FormSet, SegmentKind};
-use crate::plan::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
-use crate::scenario::{Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
+use crate::model::form::{Form, FormSet, SegmentKind};
+use crate::model::scenario::{Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
+use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
 
 /// A type whose postcard encoding never exceeds `MAX_SIZE` bytes.
 pub trait MaxSize {
@@ -49,8 +49,8 @@ fixed! {
     // Unit-only enums below 128 variants: one varint byte.
     SegmentKind => 1,
     SolveStatus => 1,
-    crate::scenario::Workspace => 1,
-    crate::scenario::RiskMeasure => 1,
+    crate::model::scenario::Workspace => 1,
+    crate::model::scenario::RiskMeasure => 1,
     Form => 2,
     FormSet => u32::MAX_SIZE,
 }
@@ -113,9 +113,9 @@ impl MaxSize for FormOutcome {
         + bool::MAX_SIZE
         + 7 * f32::MAX_SIZE
         + Insertion::MAX_SIZE
-        + crate::plan::Segments::MAX_SIZE
+        + crate::report::Segments::MAX_SIZE
         + 2 * u32::MAX_SIZE;
 }
 impl MaxSize for PlanReport {
-    const MAX_SIZE: usize = crate::plan::FormOutcomes::MAX_SIZE + u8::MAX_SIZE;
+    const MAX_SIZE: usize = crate::report::FormOutcomes::MAX_SIZE + u8::MAX_SIZE;
 }

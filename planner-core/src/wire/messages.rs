@@ -7,9 +7,9 @@
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
-use crate::form::Form;
-use crate::plan::PlanReport;
-use crate::scenario::{Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights};
+use crate::model::form::Form;
+use crate::model::scenario::{Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights};
+use crate::report::PlanReport;
 use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with

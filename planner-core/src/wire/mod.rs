@@ -6,7 +6,6 @@
 //! and the host fetches the encoded [`PlanResult`] in chunks, each checked by its frame's CRC and
 //! the whole by the CRC in `Finished`. See `docs/protocol.md`.
 
-pub mod cobs;
 pub mod crc;
 pub mod frame;
 pub mod max_size;
@@ -14,8 +13,8 @@ pub mod messages;
 pub mod obstacles;
 
 pub use frame::{
-    encode_frame, frame_crc, Directed, EncodeError, FrameDecoder, FrameError, MAX_FRAME,
-    MAX_PAYLOAD, MAX_WIRE_FRAME,
+    encode_frame, encode_payload, frame_crc, Directed, EncodeError, FrameDecoder, FrameError,
+    ENCODE_SCRATCH, FAULT_SCRATCH, MAX_FRAME, MAX_PAYLOAD, MAX_WIRE_FRAME,
 };
 pub use max_size::MaxSize;
 pub use messages::{

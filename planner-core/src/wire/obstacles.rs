@@ -3,7 +3,7 @@
 //! ([`PlanError::TooManyObstacles`]) instead of an undecodable request.
 
 use crate::error::PlanError;
-use crate::scenario::{Obstacle, Obstacles, MAX_OBSTACLES};
+use crate::model::scenario::{Obstacle, Obstacles, MAX_OBSTACLES};
 use core::fmt;
 use serde::de::{SeqAccess, Visitor};
 use serde::ser::SerializeSeq;

@@ -1,9 +1,9 @@
 //! Size bounds, framing round trips and the decoder's faults.
 
 use super::*;
-use crate::form::{Form, FormSet, SegmentKind};
-use crate::plan::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
-use crate::scenario::{Obstacle, Scenario};
+use crate::model::form::{Form, FormSet, SegmentKind};
+use crate::model::scenario::{Obstacle, Scenario};
+use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
 use crate::{Field, PlanError};
 use serde::Serialize;
 
@@ -13,7 +13,7 @@ fn encoded_len<T: Serialize>(v: &T) -> usize {
 }
 
 fn worst_outcome() -> FormOutcome {
-    let mut segments = crate::plan::Segments::new();
+    let mut segments = crate::report::Segments::new();
     for _ in 0..crate::MAX_CONTROL_DEGREE {
         segments
             .push(SegmentPlan {
@@ -47,7 +47,7 @@ fn worst_outcome() -> FormOutcome {
 }
 
 fn worst_report() -> PlanReport {
-    let mut forms = crate::plan::FormOutcomes::new();
+    let mut forms = crate::report::FormOutcomes::new();
     while forms.push(worst_outcome()).is_ok() {}
     PlanReport { forms, best: 255 }
 }
@@ -145,7 +145,7 @@ fn frames_take_one_cobs_block() {
 fn frame_bytes<T: Serialize + frame::Directed>(msg: &T) -> std::vec::Vec<u8> {
     extern crate std;
     let mut out = std::vec::Vec::new();
-    let mut scratch = [0u8; MAX_PAYLOAD + frame::CRC_LEN];
+    let mut scratch = [0u8; ENCODE_SCRATCH];
     encode_frame(msg, &mut scratch, &mut |b: &[u8]| out.extend_from_slice(b)).unwrap();
     out
 }

@@ -2,7 +2,7 @@
 
 use super::distance::{to_arc, to_line};
 use super::frame::{entry_basis, insertion, Frame, V3};
-use planner_core::scenario::{RiskMeasure, Workspace};
+use planner_core::model::scenario::{RiskMeasure, Workspace};
 use planner_core::{Scenario, SegmentKind};
 
 /// Most segments a candidate holds.

@@ -2,7 +2,7 @@
 //! the target, none containing either (with a margin), in the y-z plane or in space.
 
 use super::rng::Rng;
-use planner_core::scenario::{Obstacle, Workspace};
+use planner_core::model::scenario::{Obstacle, Workspace};
 use planner_core::Scenario;
 
 /// Margin kept between an obstacle's surface and the entry or the target (mm).

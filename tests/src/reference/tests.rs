@@ -6,9 +6,9 @@ use super::problem::{Cand, Problem};
 use super::random::random_scenario;
 use super::rng::Rng;
 use super::*;
-use planner_core::form::catalogue;
-use planner_core::scenario::Workspace;
-use planner_core::verify::check;
+use planner_core::check::check;
+use planner_core::model::form::catalogue;
+use planner_core::model::scenario::Workspace;
 use planner_core::{Insertion, SegmentPlan};
 
 fn form(word: &str) -> Form {

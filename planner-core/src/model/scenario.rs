@@ -2,7 +2,8 @@
 //! Lengths in millimetres, angles in degrees, as in the scenario files.
 
 use crate::error::{Field, PlanError};
-use crate::form::{FormSet, MAX_CONTROL_DEGREE};
+use crate::model::form::{FormSet, MAX_CONTROL_DEGREE};
+use crate::model::kinematics::V3;
 use serde::{Deserialize, Serialize};
 
 /// Obstacles a scenario can hold.
@@ -182,6 +183,18 @@ fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
 }
 
 impl Scenario {
+    /// Longest line segment allowed (mm): the needle's setting, or by default twice the
+    /// entry-target distance plus half a turn of arc.
+    pub fn max_line_length(&self) -> f32 {
+        let n = &self.needle;
+        if n.max_line_length > 0.0 {
+            return n.max_line_length;
+        }
+        let (a, b) = (self.entry.position, self.target.position);
+        let d = V3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+        2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
+    }
+
     /// Checks every number and relation the planner relies on; the first problem found is returned.
     pub fn validate(&self) -> Result<(), PlanError> {
         let n = &self.needle;

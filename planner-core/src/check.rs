@@ -2,11 +2,11 @@
 //! numbers (insertion angles, segment kinds, lengths and bevel angles), not from the optimiser's
 //! state, and its end point, every clearance and every bound are measured afresh.
 
-use crate::clearance::closest;
-use crate::form::{Form, SegmentKind};
-use crate::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
-use crate::plan::{Insertion, SegmentPlan};
-use crate::scenario::{RiskMeasure, Scenario};
+use crate::model::clearance::closest;
+use crate::model::form::{Form, SegmentKind};
+use crate::model::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
+use crate::model::scenario::{RiskMeasure, Scenario};
+use crate::report::{Insertion, SegmentPlan};
 use crate::MAX_CONTROL_DEGREE;
 
 /// What the check measured.
@@ -57,17 +57,6 @@ pub fn rebuild(
     )
 }
 
-/// Longest line segment allowed (mm).
-pub fn max_line_length(scenario: &Scenario) -> f32 {
-    let n = &scenario.needle;
-    if n.max_line_length > 0.0 {
-        return n.max_line_length;
-    }
-    let (a, b) = (scenario.entry.position, scenario.target.position);
-    let d = V3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
-}
-
 /// Checks a reported path against the scenario.
 pub fn check(
     scenario: &Scenario,
@@ -102,7 +91,7 @@ pub fn check(
         _ => inverse_sum,
     };
     let max_arc = scenario.needle.curvature_radius * scenario.needle.max_arc_deg.to_radians();
-    let max_line = max_line_length(scenario);
+    let max_line = scenario.max_line_length();
     // Bounds are checked with a relative slack of one part in 10^5 (f32 rounding of the report).
     let slack = |bound: f32| bound * 1e-5;
     let lengths_ok = segments.len() == form.len()

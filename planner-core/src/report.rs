@@ -1,6 +1,6 @@
 //! What the planner reports: one outcome per form tried, and the best of them.
 
-use crate::form::{Form, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
+use crate::model::form::{Form, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
 use serde::{Deserialize, Serialize};
 
 /// How a form's optimisation ended.

@@ -1,7 +1,7 @@
 //! Planar needle geometry in a seed plane: poses, arcs, and the closed-form completions of the
 //! last two segments onto the target (which lies at `(tx, 0)`, the entry at the origin).
 
-use crate::form::SegmentKind;
+use crate::model::form::SegmentKind;
 
 /// In-plane pose: position in (chord, m) coordinates and heading angle.
 #[derive(Clone, Copy, Debug)]

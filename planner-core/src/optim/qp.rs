@@ -6,7 +6,7 @@
 //! Each iteration solves the equality-constrained KKT system of the working set by Gaussian
 //! elimination with partial pivoting (Nocedal & Wright, Algorithm 16.3).
 
-use crate::problem::{Vars, MAX_VARS};
+use crate::optim::problem::{Vars, MAX_VARS};
 
 /// Inequality rows the QP can hold: two bounds per variable, the tilt cone and clearances.
 pub const MAX_ROWS: usize = 2 * MAX_VARS + 1 + 12;

@@ -7,7 +7,7 @@
 //! so the derivative of any downstream point `P` is `w × P + v` for the parameter's
 //! [`Screw`]: that one rule gives the exact Jacobian of the end point and of every clearance.
 
-use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
+use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use nalgebra::{Matrix3, Vector3};
 
 /// 3-vector of the core's float type.

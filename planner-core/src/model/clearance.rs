@@ -4,8 +4,8 @@
 //! its circle's plane, and the nearest point of the whole circle is on the arc or else one of the
 //! two ends is nearest (the distance to a circle point is unimodal in the angle).
 
-use crate::form::SegmentKind;
-use crate::kinematics::{Frame, V3};
+use crate::model::form::SegmentKind;
+use crate::model::kinematics::{Frame, V3};
 
 /// Where on a segment the nearest point lies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,7 +98,7 @@ fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::{entry_basis, insertion_frame};
+    use crate::model::kinematics::{entry_basis, insertion_frame};
     use proptest::prelude::*;
 
     fn frame(t1: f32, t2: f32, roll: f32) -> Frame {

@@ -5,9 +5,10 @@
 //! wide). Gauss–Newton steps on the violated clearances, taken along the target manifold and with
 //! every other clearance held at the floor, walk into such a region when it is there.
 
-use crate::problem::{Problem, Value, Vars, MAX_VARS};
-use crate::qp::Qp;
-use crate::sqp::{push_nearest_clearances, push_step_limits, restore, QP_CLEARANCES};
+use crate::optim::objective::Value;
+use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::optim::qp::Qp;
+use crate::optim::sqp::{push_nearest_clearances, push_step_limits, restore, QP_CLEARANCES};
 
 /// Gauss–Newton steps tried.
 const MAX_STEPS: u32 = 8;

@@ -8,10 +8,11 @@
 //! positive definite). Work is bounded: at most [`MAX_ITERATIONS`] iterations, each with at most
 //! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
 
-use crate::plan::SolveStatus;
-use crate::problem::{Derivatives, Problem, Value, Vars, MAX_VARS};
-use crate::qp::{Qp, MAX_ROWS};
-use crate::scenario::MAX_OBSTACLES;
+use crate::model::scenario::MAX_OBSTACLES;
+use crate::optim::objective::{Derivatives, Value};
+use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::optim::qp::{Qp, MAX_ROWS};
+use crate::report::SolveStatus;
 
 /// Iteration budget of one local solve.
 pub const MAX_ITERATIONS: u32 = 40;

@@ -2,17 +2,17 @@
 //!
 //! For every side assignment of the arcs (plane mode) or every seed plane (3-D), seeds are moved
 //! onto the target and scored; the best distinct ones are refined by the SQP; the best refined
-//! path is re-checked by [`crate::verify`] and reported with the numbers the check measured.
+//! path is re-checked by [`crate::check`] and reported with the numbers the check measured.
 
-use crate::escape::escape;
-use crate::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
-use crate::kinematics::{entry_basis, insertion_frame, V3};
-use crate::plan::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
-use crate::problem::{Problem, Vars};
-use crate::scenario::{Scenario, Workspace};
-use crate::seeds::{sweep, SeedSink};
-use crate::sqp::{self, LocalSolution};
-use crate::verify::check;
+use crate::check::check;
+use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
+use crate::model::kinematics::{entry_basis, insertion_frame, V3};
+use crate::model::scenario::{Scenario, Workspace};
+use crate::optim::problem::{Problem, Vars};
+use crate::optim::sqp::{self, LocalSolution};
+use crate::report::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
+use crate::search::escape::escape;
+use crate::search::seeds::{sweep, SeedSink};
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
@@ -189,7 +189,7 @@ fn extension_starts(
                 }
             }
             let p = Problem::new(scenario, form, sides);
-            let mut x = [0.0; crate::problem::MAX_VARS];
+            let mut x = [0.0; crate::optim::problem::MAX_VARS];
             x[0] = o.insertion.theta1_deg.to_radians();
             if !p.plane {
                 x[1] = o.insertion.theta2_deg.to_radians();

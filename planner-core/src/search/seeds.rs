@@ -1,7 +1,7 @@
 //! Deterministic starting points: a sweep over planar paths that end exactly on the target.
 //!
 //! A seed lies in a plane through the entry and the target (the y-z plane in plane mode; in 3-D,
-//! [`crate::solve::SPACE_PLANES`] planes turned about the entry-target line). In that plane the
+//! [`crate::search::solve::SPACE_PLANES`] planes turned about the entry-target line). In that plane the
 //! free parameters of a form (the heading, and the lengths of all but the last two segments) run
 //! over a grid, and the last two segments are solved in closed form so that the path ends on
 //! the target: arc then line is the tangent from the arc's circle to the target; line then arc is
@@ -9,11 +9,11 @@
 //! therefore samples the constraint manifold itself, and the sweep sees every basin wider than
 //! its spacing. Seeds are handed on as problem variables.
 
-use crate::form::SegmentKind;
-use crate::kinematics::{insertion_frame, V3};
-use crate::planar::{advance, complete, heading_of_bend, turn, Drawn, Pose};
-use crate::problem::{Problem, Vars, MAX_VARS};
-use crate::scenario::MAX_OBSTACLES;
+use crate::model::form::SegmentKind;
+use crate::model::kinematics::{insertion_frame, V3};
+use crate::model::planar::{advance, complete, heading_of_bend, turn, Drawn, Pose};
+use crate::model::scenario::MAX_OBSTACLES;
+use crate::optim::problem::{Problem, Vars, MAX_VARS};
 use crate::MAX_CONTROL_DEGREE;
 
 /// Widest heading from the chord swept (radians, about 86 degrees).

@@ -4,10 +4,10 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
-use crate::form::FormSet;
-use crate::plan::{FormOutcome, FormOutcomes, PlanReport};
-use crate::scenario::Scenario;
-use crate::solve::solve_form;
+use crate::model::form::FormSet;
+use crate::model::scenario::Scenario;
+use crate::report::{FormOutcome, FormOutcomes, PlanReport};
+use crate::search::solve::solve_form;
 
 /// A planning run in progress.
 pub struct PlanSession {

@@ -1,0 +1,176 @@
+//! The device-side request handler: bytes in, reply frames out, no knowledge of the transport.
+//!
+//! The firmware and `hil-sim` drive it the same way: hand every received byte to
+//! [`DeviceService::receive`], then call [`DeviceService::poll`] until it returns `false`;
+//! `poll` does one bounded unit of work (handle one frame, or plan one form) and passes outgoing
+//! bytes to `tx`. Received frames are handled before the next form is planned, so pings, status
+//! queries and cancels are answered between forms. All buffers are fixed and sized from the
+//! message types (see [`crate::wire::max_size`]).
+//!
+//! The service is split by concern: [`receive`] (the queue of received bytes), `dispatch`
+//! (frame checks and routing), `upload` (the request arriving in chunks) and `job` (planning
+//! form by form and serving the result).
+
+mod dispatch;
+mod job;
+pub mod receive;
+mod upload;
+
+use crate::wire::{
+    encode_frame, Fault, FrameDecoder, Header, Reply, ReplyBody, ENCODE_SCRATCH, MAX_FRAME,
+    MAX_PLAN_REQUEST, MAX_PLAN_RESULT,
+};
+use job::Job;
+use receive::Inbox;
+pub use receive::RX_QUEUE;
+
+/// How a device names itself in [`ReplyBody::Hello`].
+#[derive(Clone, Copy, Debug)]
+pub struct DeviceIdentity {
+    /// Board or simulator (up to 16 bytes are sent).
+    pub name: &'static str,
+    /// Firmware version (up to 16 bytes are sent).
+    pub firmware: &'static str,
+    /// Build details (up to 32 bytes are sent).
+    pub build: &'static str,
+}
+
+impl DeviceIdentity {
+    /// The core library itself, for tests.
+    pub const CORE: DeviceIdentity = DeviceIdentity {
+        name: "planner-core",
+        firmware: env!("CARGO_PKG_VERSION"),
+        build: "",
+    };
+}
+
+/// Counters of what the service has seen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DeviceStats {
+    /// Frames that passed the CRC and decoded.
+    pub frames: u32,
+    /// Frames rejected by their CRC.
+    pub bad_crc: u32,
+    /// Frames over the maximum size.
+    pub too_long: u32,
+    /// Frames cut short.
+    pub truncated: u32,
+    /// Frames that passed the CRC but did not decode (or spoke another version).
+    pub undecodable: u32,
+    /// Times the receive queue overflowed.
+    pub overruns: u32,
+    /// Plans run to the end.
+    pub plans: u32,
+}
+
+/// Everything but the frame decoder, so a decoded payload (borrowed from the decoder) can be
+/// handled while the rest of the state changes.
+struct Core {
+    identity: DeviceIdentity,
+    job: Job,
+    upload: [u8; MAX_PLAN_REQUEST],
+    result: [u8; MAX_PLAN_RESULT],
+    scratch: [u8; ENCODE_SCRATCH],
+    stats: DeviceStats,
+}
+
+/// The device's request handler.
+pub struct DeviceService {
+    inbox: Inbox,
+    decoder: FrameDecoder<MAX_FRAME>,
+    core: Core,
+}
+
+impl Default for DeviceService {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl DeviceService {
+    /// A service with empty buffers and no request in progress.
+    pub const fn new() -> Self {
+        Self::with_identity(DeviceIdentity::CORE)
+    }
+
+    /// A service that introduces itself as `identity`.
+    pub const fn with_identity(identity: DeviceIdentity) -> Self {
+        DeviceService {
+            inbox: Inbox::new(),
+            decoder: FrameDecoder::for_requests(),
+            core: Core {
+                identity,
+                job: Job::Idle,
+                upload: [0; MAX_PLAN_REQUEST],
+                result: [0; MAX_PLAN_RESULT],
+                scratch: [0; ENCODE_SCRATCH],
+                stats: DeviceStats {
+                    frames: 0,
+                    bad_crc: 0,
+                    too_long: 0,
+                    truncated: 0,
+                    undecodable: 0,
+                    overruns: 0,
+                    plans: 0,
+                },
+            },
+        }
+    }
+
+    /// Counters of frames seen and plans run.
+    pub fn stats(&self) -> DeviceStats {
+        self.core.stats
+    }
+
+    /// Whether a plan is being computed.
+    pub fn is_planning(&self) -> bool {
+        matches!(self.core.job, Job::Planning { .. })
+    }
+
+    /// Takes received bytes; never blocks and never fails (overflow is reported on the wire).
+    pub fn receive(&mut self, bytes: &[u8]) {
+        self.inbox.receive(bytes);
+    }
+
+    /// Takes as many of `bytes` as the receive queue has room for and returns how many; the
+    /// caller polls and offers the rest again (flow control for transports that can wait).
+    pub fn receive_partial(&mut self, bytes: &[u8]) -> usize {
+        self.inbox.receive_partial(bytes)
+    }
+
+    /// Does one bounded unit of work, writing reply bytes to `tx`; `true` while work is pending.
+    pub fn poll(&mut self, tx: &mut dyn FnMut(&[u8])) -> bool {
+        if self.inbox.take_overrun() {
+            self.core.stats.overruns += 1;
+            self.decoder.resync();
+            self.core.send(0, ReplyBody::Fault(Fault::Overrun), tx);
+            return true;
+        }
+        while let Some(b) = self.inbox.pop() {
+            if let Some(event) = self.decoder.push(b) {
+                self.core.handle_frame(event, tx);
+                return true;
+            }
+        }
+        if self.core.step(tx) {
+            return true;
+        }
+        self.inbox.pending()
+    }
+}
+
+impl Core {
+    fn send(&mut self, id: u16, body: ReplyBody, tx: &mut dyn FnMut(&[u8])) {
+        let reply = Reply {
+            header: Header::new(id),
+            body,
+        };
+        // Cannot fail: the scratch buffer is sized from `Reply::MAX_SIZE`, checked by tests.
+        let _ = encode_frame(&reply, &mut self.scratch, tx);
+    }
+
+    fn fault(&mut self, id: u16, fault: Fault, tx: &mut dyn FnMut(&[u8])) {
+        self.send(id, ReplyBody::Fault(fault), tx);
+    }
+}
