@@ -6,6 +6,7 @@
 //! Each iteration solves the equality-constrained KKT system of the working set by Gaussian
 //! elimination with partial pivoting (Nocedal & Wright, Algorithm 16.3).
 
+use crate::optim::linalg::solve;
 use crate::optim::problem::{Vars, MAX_VARS};
 
 /// Inequality rows the QP can hold: two bounds per variable, the tilt cone and clearances.
@@ -150,7 +151,7 @@ impl Qp {
                     k[j][n + r] = -a[j];
                 }
             }
-            let sol = solve_dense(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
+            let sol = solve(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
             let d = &sol[..n];
 
             let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
@@ -230,69 +231,6 @@ impl Qp {
             }
         }
         Err(QpError::Budget)
-    }
-}
-
-/// Solves the `dim`-square system in place; `None` when a pivot vanishes.
-fn solve_dense(a: &mut [[f32; KKT]; KKT], b: &mut [f32; KKT], dim: usize) -> Option<[f32; KKT]> {
-    // Scaled partial pivoting: the KKT rows mix scales (Hessian entries in the 10^5 next to unit
-    // bound rows), so a pivot is judged against its own row's size, not the matrix's.
-    let mut inv_scale = [0.0f32; KKT];
-    for (s, row) in inv_scale.iter_mut().zip(a.iter()).take(dim) {
-        let size = row
-            .iter()
-            .take(dim)
-            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
-        if !(size > 0.0) {
-            return None;
-        }
-        *s = 1.0 / size;
-    }
-    for col in 0..dim {
-        let mut piv = col;
-        let mut best = 0.0f32;
-        for r in col..dim {
-            let rel = libm::fabsf(a[r][col]) * inv_scale[r];
-            if rel > best {
-                best = rel;
-                piv = r;
-            }
-        }
-        if !(best > 1e-6) {
-            return None;
-        }
-        if piv != col {
-            // Only columns from `col` on are read again (the rest is eliminated).
-            for c in col..dim {
-                let t = a[col][c];
-                a[col][c] = a[piv][c];
-                a[piv][c] = t;
-            }
-            b.swap(col, piv);
-            inv_scale.swap(col, piv);
-        }
-        for r in col + 1..dim {
-            let f = a[r][col] / a[col][col];
-            if f != 0.0 {
-                for c in col..dim {
-                    a[r][c] -= f * a[col][c];
-                }
-                b[r] -= f * b[col];
-            }
-        }
-    }
-    let mut x = [0.0f32; KKT];
-    for r in (0..dim).rev() {
-        let mut s = b[r];
-        for c in r + 1..dim {
-            s -= a[r][c] * x[c];
-        }
-        x[r] = s / a[r][r];
-    }
-    if x[..dim].iter().all(|v| v.is_finite()) {
-        Some(x)
-    } else {
-        None
     }
 }
 

@@ -9,6 +9,7 @@
 //! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
 
 use crate::model::scenario::MAX_OBSTACLES;
+use crate::optim::linalg;
 use crate::optim::objective::{Derivatives, Value};
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
 use crate::optim::qp::{Qp, MAX_ROWS};
@@ -116,9 +117,9 @@ fn min_norm_step(
         row[i] += 1e-7 * trace + 1e-12;
     }
     let mut y = [r[0], r[1], r[2]];
-    if !solve_small(&mut a, &mut y, m) {
+    let Some(y) = linalg::solve(&mut a, &mut y, m) else {
         return false;
-    }
+    };
     for k in 0..MAX_VARS {
         delta[k] = 0.0;
         if k < p.n && free[k] {
@@ -128,38 +129,6 @@ fn min_norm_step(
         }
     }
     true
-}
-
-/// Cholesky-free Gaussian elimination for the 2×2 / 3×3 normal equations.
-fn solve_small(a: &mut [[f32; 3]; 3], b: &mut [f32; 3], m: usize) -> bool {
-    for col in 0..m {
-        let mut piv = col;
-        for r in col + 1..m {
-            if libm::fabsf(a[r][col]) > libm::fabsf(a[piv][col]) {
-                piv = r;
-            }
-        }
-        if !(libm::fabsf(a[piv][col]) > 0.0) {
-            return false;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in col + 1..m {
-            let f = a[r][col] / a[col][col];
-            for c in col..m {
-                a[r][c] -= f * a[col][c];
-            }
-            b[r] -= f * b[col];
-        }
-    }
-    for r in (0..m).rev() {
-        let mut s = b[r];
-        for c in r + 1..m {
-            s -= a[r][c] * b[c];
-        }
-        b[r] = s / a[r][r];
-    }
-    b.iter().take(m).all(|v| v.is_finite())
 }
 
 /// Gradient of the Lagrangian for the nonlinear constraints (end point, clearances, tilt).
