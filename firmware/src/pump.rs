@@ -11,74 +11,63 @@
 
 use crate::link::Link;
 use crate::marker;
+use heapless::Vec;
 use planner_core::device::DeviceService;
 use planner_core::wire::MAX_WIRE_FRAME;
 
 /// Received bytes held until a frame delimiter (0x00) arrives, then handed to the service.
-pub struct Inbox {
-    buf: [u8; MAX_WIRE_FRAME],
-    len: usize,
-}
+pub struct Inbox(Vec<u8, MAX_WIRE_FRAME>);
 
 impl Inbox {
     /// An empty inbox.
     pub const fn new() -> Self {
-        Inbox {
-            buf: [0; MAX_WIRE_FRAME],
-            len: 0,
-        }
+        Inbox(Vec::new())
     }
 
     fn take(&mut self, bytes: &[u8], service: &mut DeviceService) {
         for &b in bytes {
-            if self.len == self.buf.len() {
+            if self.0.push(b).is_err() {
                 // Longer than any frame: pass it on, the service reports it as too long.
-                service.receive(&self.buf);
-                self.len = 0;
+                service.receive(&self.0);
+                self.0.clear();
+                // Cannot fail: just cleared.
+                let _ = self.0.push(b);
             }
-            self.buf[self.len] = b;
-            self.len += 1;
             if b == 0 {
-                service.receive(&self.buf[..self.len]);
-                self.len = 0;
+                service.receive(&self.0);
+                self.0.clear();
             }
         }
     }
 }
 
 /// Reply bytes staged between polls (a plan reply fits; a larger burst is flushed early).
-pub struct Outbox {
-    buf: [u8; OUTBOX_BYTES],
-    len: usize,
-}
+pub struct Outbox(Vec<u8, OUTBOX_BYTES>);
 
 const OUTBOX_BYTES: usize = 2048;
 
 impl Outbox {
     /// An empty outbox.
     pub const fn new() -> Self {
-        Outbox {
-            buf: [0; OUTBOX_BYTES],
-            len: 0,
-        }
+        Outbox(Vec::new())
     }
 
     fn push(&mut self, mut bytes: &[u8], link: &mut impl Link) {
         while !bytes.is_empty() {
-            if self.len == self.buf.len() {
+            if self.0.is_full() {
                 self.flush(link);
             }
-            let n = bytes.len().min(self.buf.len() - self.len);
-            self.buf[self.len..self.len + n].copy_from_slice(&bytes[..n]);
-            self.len += n;
+            let n = bytes.len().min(OUTBOX_BYTES - self.0.len());
+            // Cannot fail: `n` bytes are free.
+            let _ = self.0.extend_from_slice(&bytes[..n]);
             bytes = &bytes[n..];
         }
     }
 
     fn flush(&mut self, link: &mut impl Link) {
-        if self.len > 0 {
-            link.write_all(&self.buf[..self.len]);
-            self.len = 0;
+        if !self.0.is_empty() {
+            link.write_all(&self.0);
+            self.0.clear();
         }
     }
 }
