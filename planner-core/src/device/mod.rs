@@ -174,3 +174,16 @@ impl Core {
         self.send(id, ReplyBody::Fault(fault), tx);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// docs/protocol.md quotes this size (`cargo test -p planner-core device -- --nocapture`).
+    #[test]
+    fn the_service_fits_its_ram_budget() {
+        let size = core::mem::size_of::<DeviceService>();
+        std::println!("DeviceService: {size} bytes");
+        assert!(size <= 8 * 1024, "{size} bytes");
+    }
+}
