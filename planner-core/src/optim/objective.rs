@@ -2,8 +2,8 @@
 //! their exact first derivatives (every parameter moves the downstream path as a rigid screw).
 
 use super::problem::{v3, Problem, Vars, MAX_VARS};
-use crate::model::clearance::{closest, Nearest};
-use crate::model::kinematics::PathGeometry;
+use crate::model::clearance::{closest, Closest, Nearest};
+use crate::model::kinematics::{PathGeometry, V3};
 use crate::model::scenario::{RiskMeasure, MAX_OBSTACLES};
 
 /// The objective and the clearances at one point (no derivatives: what seeds and line searches
@@ -93,13 +93,7 @@ impl Problem<'_> {
             let mut best = f32::INFINITY;
             let mut nearest = 0u8;
             for seg in 0..self.form.len() {
-                let cl = closest(
-                    &geo.starts[seg],
-                    self.form.kind(seg),
-                    geo.lengths[seg],
-                    self.radius,
-                    &c,
-                );
+                let cl = self.closest_on(geo, seg, &c);
                 if cl.distance < best {
                     best = cl.distance;
                     nearest = seg as u8;
@@ -125,6 +119,17 @@ impl Problem<'_> {
             inv_sum * self.risk_scale()
         };
         (risk, min_clearance)
+    }
+
+    /// The point of segment `seg` of the path `geo` nearest to the point `c`.
+    fn closest_on(&self, geo: &PathGeometry, seg: usize, c: &V3) -> Closest {
+        closest(
+            &geo.starts[seg],
+            self.form.kind(seg),
+            geo.lengths[seg],
+            self.radius,
+            c,
+        )
     }
 
     /// The factor that turns the sum of 1/d over obstacles into D (1/count for the mean).
@@ -163,13 +168,7 @@ impl Problem<'_> {
         for (o, ob) in self.scenario.obstacles.iter().enumerate() {
             let c = v3(ob.center);
             let seg = usize::from(v.nearest_segment[o]);
-            let cl = closest(
-                &geo.starts[seg],
-                self.form.kind(seg),
-                geo.lengths[seg],
-                self.radius,
-                &c,
-            );
+            let cl = self.closest_on(geo, seg, &c);
             clearance_grad[o] = [0.0; MAX_VARS];
             if cl.distance > 0.0 {
                 let normal = (cl.point - c) / cl.distance;
