@@ -1,7 +1,7 @@
 //! Deterministic starting points: a sweep over planar paths that end exactly on the target.
 //!
 //! A seed lies in a plane through the entry and the target (the y-z plane in plane mode; in 3-D,
-//! [`crate::search::solve::SPACE_PLANES`] planes turned about the entry-target line). In that plane the
+//! one of the planes the per-form solve turns about the entry-target line). In that plane the
 //! free parameters of a form (the heading, and the lengths of all but the last two segments) run
 //! over a grid, and the last two segments are solved in closed form so that the path ends on
 //! the target: arc then line is the tangent from the arc's circle to the target; line then arc is
