@@ -4,7 +4,7 @@
 //! start address; blocks are mapped here to the function containing them. Figures at region edges
 //! are approximate (a block is counted whole); the totals of `instructions` stay exact.
 
-use super::elf::{functions, Function};
+use crate::elf::{functions, Function};
 use anyhow::{Context, Result};
 use std::collections::HashMap;
 use std::path::Path;

@@ -6,12 +6,9 @@
 //! emulated UART, and reads the stack's high-water mark from the painted stack at the end. Each
 //! device plan is also checked against the host's plan, bit for bit.
 
-mod by_function;
-mod elf;
-mod qemu;
-
+use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
+use crate::{elf, profile, qemu};
 use anyhow::{bail, Context, Result};
-use needle_cli::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
 use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;
 use planner_core::Scenario;
@@ -147,8 +144,12 @@ pub struct NamedScenario {
     pub scenario: Scenario,
 }
 
-/// Loads scenario files, named by their stem.
-pub fn load_scenarios(files: &[PathBuf]) -> Result<Vec<NamedScenario>> {
+/// Reads a scenario file (`needle`'s TOML reader; passed in, since this crate sits below
+/// `needle-cli`).
+pub type LoadScenario<'a> = &'a dyn Fn(&Path) -> Result<Scenario>;
+
+/// Loads scenario files with `load`, named by their stem.
+pub fn load_scenarios(files: &[PathBuf], load: LoadScenario) -> Result<Vec<NamedScenario>> {
     files
         .iter()
         .map(|f| {
@@ -157,7 +158,7 @@ pub fn load_scenarios(files: &[PathBuf]) -> Result<Vec<NamedScenario>> {
                 .and_then(|s| s.to_str())
                 .unwrap_or("scenario")
                 .to_owned();
-            let scenario = needle_cli::scenario_file::load_scenario(f)?;
+            let scenario = load(f)?;
             Ok(NamedScenario { name, scenario })
         })
         .collect()
@@ -218,7 +219,7 @@ pub fn measure(
     let len = footprint.stack_top - footprint.stack_bottom;
     let memory = qemu.read_memory_and_quit(footprint.stack_bottom, len)?;
     if profile {
-        let text = by_function::report(&image, &dir.join("profile.txt"), 30)?;
+        let text = profile::report(&image, &dir.join("profile.txt"), 30)?;
         eprintln!("{}: {text}", board.name);
     }
     Ok(BoardFigures {
@@ -291,8 +292,8 @@ pub struct Args {
     root: Option<PathBuf>,
 }
 
-/// Runs `needle device-bench`.
-pub fn run(args: &Args) -> Result<()> {
+/// Runs `needle device-bench`, reading scenario files with `load`.
+pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     let root = match &args.root {
         Some(r) => r.clone(),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join(".."),
@@ -311,7 +312,7 @@ pub fn run(args: &Args) -> Result<()> {
     } else {
         args.files.clone()
     };
-    let scenarios = load_scenarios(&files)?;
+    let scenarios = load_scenarios(&files, load)?;
     let figures = measure_all(&root, &scenarios, args.profile)?;
     if args.json {
         let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();
