@@ -1,12 +1,11 @@
-//! Sizes and symbols of a 32-bit little-endian ELF firmware image (what the linker produced).
+//! Sizes and symbols of a 32-bit little-endian ELF firmware image (what the linker produced), read
+//! with the `object` crate; symbol names demangled with `rustc-demangle`.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
+use object::elf::{SHF_ALLOC, SHF_WRITE, SHT_NOBITS, STT_FUNC};
+use object::read::elf::{ElfFile32, SectionHeader, Sym};
+use object::LittleEndian;
 use std::path::Path;
-
-const SHT_SYMTAB: u32 = 2;
-const SHT_NOBITS: u32 = 8;
-const SHF_WRITE: u32 = 0x1;
-const SHF_ALLOC: u32 = 0x2;
 
 /// What the image costs in memory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,65 +21,25 @@ pub struct Footprint {
     pub stack_top: u32,
 }
 
-struct Section {
-    kind: u32,
-    flags: u32,
-    offset: usize,
-    size: usize,
-    link: usize,
+/// The image as a 32-bit little-endian ELF file (what the Cortex-M linker writes).
+fn parse(data: &[u8]) -> Result<ElfFile32<'_, LittleEndian>> {
+    ElfFile32::parse(data).context("not a 32-bit little-endian ELF file")
 }
 
-fn u16_at(b: &[u8], at: usize) -> Result<u16> {
-    let s = b.get(at..at + 2).context("ELF truncated")?;
-    Ok(u16::from_le_bytes([s[0], s[1]]))
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).with_context(|| format!("reading {}", path.display()))
 }
 
-fn u32_at(b: &[u8], at: usize) -> Result<u32> {
-    let s = b.get(at..at + 4).context("ELF truncated")?;
-    Ok(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
-}
-
-fn sections(b: &[u8]) -> Result<Vec<Section>> {
-    if b.get(..6) != Some(&[0x7f, b'E', b'L', b'F', 1, 1][..]) {
-        bail!("not a 32-bit little-endian ELF file");
-    }
-    let shoff = u32_at(b, 0x20)? as usize;
-    let shentsize = usize::from(u16_at(b, 0x2E)?);
-    let shnum = usize::from(u16_at(b, 0x30)?);
-    (0..shnum)
-        .map(|i| {
-            let h = shoff + i * shentsize;
-            Ok(Section {
-                kind: u32_at(b, h + 4)?,
-                flags: u32_at(b, h + 8)?,
-                offset: u32_at(b, h + 16)? as usize,
-                size: u32_at(b, h + 20)? as usize,
-                link: u32_at(b, h + 24)? as usize,
-            })
-        })
-        .collect()
-}
-
-fn symbol(b: &[u8], sections: &[Section], name: &str) -> Result<u32> {
-    for symtab in sections.iter().filter(|s| s.kind == SHT_SYMTAB) {
-        let strtab = sections
-            .get(symtab.link)
-            .context("symbol table without strings")?;
-        for entry in (symtab.offset..symtab.offset + symtab.size).step_by(16) {
-            let name_at = strtab.offset + u32_at(b, entry)? as usize;
-            let end = b[name_at..]
-                .iter()
-                .position(|&c| c == 0)
-                .context("bad symbol name")?;
-            if &b[name_at..name_at + end] == name.as_bytes() {
-                return u32_at(b, entry + 4);
-            }
+/// The value of the symbol `name` in the symbol table.
+fn symbol(file: &ElfFile32<'_, LittleEndian>, name: &str) -> Result<u32> {
+    let symbols = file.elf_symbol_table();
+    for sym in symbols.iter() {
+        if symbols.symbol_name(file.endian(), sym).ok() == Some(name.as_bytes()) {
+            return Ok(sym.st_value(file.endian()));
         }
     }
-    bail!("symbol {name} not found (is this a cortex-m-rt image?)")
+    anyhow::bail!("symbol {name} not found (is this a cortex-m-rt image?)")
 }
-
-const STT_FUNC: u8 = 2;
 
 /// A function of the image: start address (Thumb bit cleared), size, demangled path.
 pub struct Function {
@@ -94,86 +53,53 @@ pub struct Function {
 
 /// The image's functions, sorted by address.
 pub fn functions(path: &Path) -> Result<Vec<Function>> {
-    let b = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let sections = sections(&b)?;
+    let data = read(path)?;
+    let file = parse(&data)?;
+    let (endian, symbols) = (file.endian(), file.elf_symbol_table());
     let mut out = Vec::new();
-    for symtab in sections.iter().filter(|s| s.kind == SHT_SYMTAB) {
-        let strtab = sections
-            .get(symtab.link)
-            .context("symbol table without strings")?;
-        for entry in (symtab.offset..symtab.offset + symtab.size).step_by(16) {
-            if b.get(entry + 12).map(|i| i & 0xF) != Some(STT_FUNC) {
-                continue;
-            }
-            let name_at = strtab.offset + u32_at(&b, entry)? as usize;
-            let end = b[name_at..]
-                .iter()
-                .position(|&c| c == 0)
-                .context("bad symbol name")?;
-            out.push(Function {
-                addr: u32_at(&b, entry + 4)? & !1,
-                size: u32_at(&b, entry + 8)?,
-                name: demangle(&String::from_utf8_lossy(&b[name_at..name_at + end])),
-            });
-        }
+    for sym in symbols.iter().filter(|s| s.st_type() == STT_FUNC) {
+        let name = symbols
+            .symbol_name(endian, sym)
+            .context("bad symbol name")?;
+        out.push(Function {
+            addr: sym.st_value(endian) & !1,
+            size: sym.st_size(endian),
+            name: readable(&String::from_utf8_lossy(name)),
+        });
     }
     out.sort_by_key(|f| f.addr);
     Ok(out)
 }
 
-/// Legacy Rust mangling (`_ZN` length-prefixed parts, a trailing hash) to `a::b::c`.
-fn demangle(name: &str) -> String {
-    let Some(mut rest) = name.strip_prefix("_ZN") else {
-        return name.to_owned();
-    };
-    let mut parts = Vec::new();
-    while let Some(digits) = rest.find(|c: char| !c.is_ascii_digit()).filter(|&d| d > 0) {
-        let Ok(len) = rest[..digits].parse::<usize>() else {
-            break;
-        };
-        let Some(part) = rest.get(digits..digits + len) else {
-            break;
-        };
-        parts.push(
-            part.replace("$LT$", "<")
-                .replace("$GT$", ">")
-                .replace("$u20$", " ")
-                .replace("..", "::"),
-        );
-        rest = &rest[digits + len..];
-    }
-    if parts
-        .last()
-        .is_some_and(|p| p.len() == 17 && p.starts_with('h'))
-    {
-        parts.pop();
-    }
-    if parts.is_empty() {
-        name.to_owned()
-    } else {
-        parts.join("::")
-    }
+/// A symbol as a Rust path without its hash (`{:#}`), legacy or v0 mangling; other names as
+/// they are.
+fn readable(name: &str) -> String {
+    format!("{:#}", rustc_demangle::demangle(name))
 }
 
 /// Reads the footprint of the image at `path`.
 pub fn footprint(path: &Path) -> Result<Footprint> {
-    let b = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let sections = sections(&b)?;
-    let alloc = sections.iter().filter(|s| s.flags & SHF_ALLOC != 0);
+    let data = read(path)?;
+    let file = parse(&data)?;
+    let endian = file.endian();
+    let alloc = file
+        .elf_section_table()
+        .iter()
+        .filter(|s| s.sh_flags(endian).0 & SHF_ALLOC.0 != 0);
     let flash_bytes = alloc
         .clone()
-        .filter(|s| s.kind != SHT_NOBITS)
-        .map(|s| s.size as u64)
+        .filter(|s| s.sh_type(endian) != SHT_NOBITS)
+        .map(|s| u64::from(s.sh_size(endian)))
         .sum();
     let static_ram_bytes = alloc
-        .filter(|s| s.flags & SHF_WRITE != 0)
-        .map(|s| s.size as u64)
+        .filter(|s| s.sh_flags(endian).0 & SHF_WRITE.0 != 0)
+        .map(|s| u64::from(s.sh_size(endian)))
         .sum();
     Ok(Footprint {
         flash_bytes,
         static_ram_bytes,
-        stack_bottom: symbol(&b, &sections, "_stack_end")?,
-        stack_top: symbol(&b, &sections, "_stack_start")?,
+        stack_bottom: symbol(&file, "_stack_end")?,
+        stack_top: symbol(&file, "_stack_start")?,
     })
 }
 
@@ -204,16 +130,24 @@ mod tests {
     }
 
     #[test]
-    fn demangles_legacy_rust_names() {
+    fn demangles_rust_names_without_their_hash() {
         assert_eq!(
-            demangle("_ZN12planner_core3sqp5solve17h0123456789abcdefE"),
+            readable("_ZN12planner_core3sqp5solve17h0123456789abcdefE"),
             "planner_core::sqp::solve"
         );
-        assert_eq!(demangle("memcpy"), "memcpy");
+        assert_eq!(
+            readable("_ZN12planner_core5seeds12sweep_pieces28_$u7b$$u7b$closure$u7d$$u7d$17h0123456789abcdefE"),
+            "planner_core::seeds::sweep_pieces::{{closure}}"
+        );
+        assert_eq!(
+            readable("_RNvNtCs7NhdfSRABLd_17compiler_builtins3mem6memcpy"),
+            "compiler_builtins::mem::memcpy"
+        );
+        assert_eq!(readable("memcpy"), "memcpy");
     }
 
     #[test]
     fn rejects_what_is_not_an_elf32_file() {
-        assert!(sections(b"not an elf").is_err());
+        assert!(parse(b"not an elf").is_err());
     }
 }
