@@ -26,8 +26,9 @@ const LINK: ClientConfig = ClientConfig {
     retries: 0,
 };
 
-/// Longest silence while the device plans; the client asks nothing meanwhile, since a status
-/// query would be counted (the space plan, 320 M instructions, has long forms under the plugin).
+/// Longest silence while the device plans (the client asks nothing meanwhile: a status query
+/// would be counted). Generous: a form takes well under a second in QEMU, so only a stuck
+/// board waits this long.
 const PLAN_SILENCE: Duration = Duration::from_secs(600);
 
 /// The "must" budgets of issue 4; `--check` fails when a board leaves them.
@@ -209,14 +210,17 @@ pub fn measure(
                 "{}: expected one instruction count for {}, the plugin gave {}",
                 board.name,
                 s.name,
-                counts.len() - before
+                counts.len().saturating_sub(before)
             );
         }
         instructions.push((s.name.clone(), counts[before]));
         matches_host.push((s.name.clone(), encoded(&on_device)? == host));
     }
     drop(device);
-    let len = footprint.stack_top - footprint.stack_bottom;
+    let len = footprint
+        .stack_top
+        .checked_sub(footprint.stack_bottom)
+        .context("the image's stack ends above its start (_stack_end > _stack_start)")?;
     let memory = qemu.read_memory_and_quit(footprint.stack_bottom, len)?;
     if profile {
         let text = profile::report(&image, &dir.join("profile.txt"), 30)?;

@@ -18,6 +18,8 @@
 //! uses, reading scenario files, is passed in by the caller ([`device_bench::run`]). It is a
 //! library and not an xtask binary for the same reason: its front end is `needle`.
 
+#![deny(missing_docs)]
+
 pub mod device_bench;
 pub mod elf;
 pub mod firmware_artifacts;

@@ -11,6 +11,8 @@
 //! retry policy); `hello` (greeting, ping, cancel), `upload`, `plan` (waiting while the device
 //! plans) and `fetch` are the requests built on it. [`LinkError`] says why a session failed.
 
+#![deny(missing_docs)]
+
 mod client;
 mod error;
 mod exchange;
