@@ -3,6 +3,5 @@
 pub mod analysis;
 pub mod bench;
 pub mod device;
-pub mod firmware_artifacts;
 pub mod report;
 pub mod scenario_file;

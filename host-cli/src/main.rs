@@ -1,7 +1,5 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
-mod device_bench;
-
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
@@ -83,7 +81,7 @@ enum Command {
     /// Time planning a scenario (release build: `cargo run --release -p needle-cli -- bench`).
     Bench(BenchArgs),
     /// Measure the firmware in QEMU: flash, RAM, stack and instructions per plan.
-    DeviceBench(device_bench::Args),
+    DeviceBench(needle_devtools::device_bench::Args),
 }
 
 /// `needle send`: the options of `plan` plus where the device is.
@@ -202,7 +200,7 @@ fn main() -> ExitCode {
         Command::Info { link, json } => device::commands::info(link, *json),
         Command::Ports => device::commands::ports(),
         Command::Bench(a) => bench(a),
-        Command::DeviceBench(a) => device_bench::run(a),
+        Command::DeviceBench(a) => needle_devtools::device_bench::run(a, &load_scenario),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

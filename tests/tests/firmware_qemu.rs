@@ -5,8 +5,8 @@
 mod firmware_support;
 
 use firmware_support::{build_firmware, emulator_ready, Qemu};
-use needle_cli::device::{open, Client, ClientConfig, LinkTarget};
 use needle_e2e::{example, needle};
+use needle_link::{open, Client, ClientConfig, LinkTarget};
 use planner_core::wire::{encode_payload, Directed, Fault, ReplyBody, Request, ENCODE_SCRATCH};
 use planner_core::PlanError;
 use serde_json::Value;
@@ -72,7 +72,7 @@ fn over_capacity_request() -> Vec<u8> {
     bytes
 }
 
-fn expect_fault(client: &mut Client<Box<dyn needle_cli::device::Transport>>, want: Fault) {
+fn expect_fault(client: &mut Client<Box<dyn needle_link::Transport>>, want: Fault) {
     match client.next_reply().expect("link") {
         Some(r) => assert_eq!(r.body, ReplyBody::Fault(want)),
         None => panic!("no answer to a malformed frame (expected {want:?})"),

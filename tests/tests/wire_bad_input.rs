@@ -3,7 +3,7 @@
 mod wire_support;
 
 use hil_sim::InProcess;
-use needle_cli::device::{Client, ClientConfig, LinkError};
+use needle_link::{Client, ClientConfig, LinkError};
 use planner_core::model::scenario::Obstacle;
 use planner_core::wire::{
     encode_frame, encode_payload, Fault, Header, PlanRequest, Reply, ReplyBody, Request,

@@ -1,7 +1,7 @@
 //! A device that reports an internal fault (what the firmware's panic handler sends) makes the
 //! host stop with a clear error at once, instead of retrying into a timeout.
 
-use needle_cli::device::{Client, ClientConfig, Transport};
+use needle_link::{Client, ClientConfig, Transport};
 use planner_core::wire::{encode_frame, Fault, Header, Reply, ReplyBody, FAULT_SCRATCH};
 use std::io;
 use std::time::{Duration, Instant};

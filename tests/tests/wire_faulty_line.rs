@@ -8,7 +8,7 @@
 mod wire_support;
 
 use hil_sim::{InProcess, LineConfig};
-use needle_cli::device::{Client, ClientConfig, LinkError};
+use needle_link::{Client, ClientConfig, LinkError};
 use planner_core::{plan, Scenario};
 use std::time::Duration;
 use wire_support::Sim;

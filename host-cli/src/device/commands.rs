@@ -1,9 +1,8 @@
 //! The device commands of `needle`: `send`, `ping`, `info`, `ports`.
 
-use super::client::{Client, ClientConfig, LinkStats, Progress};
-use super::transport::{open, LinkTarget, Transport};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use needle_link::{open, Client, ClientConfig, LinkStats, LinkTarget, Progress, Transport};
 use planner_core::wire::{DeviceInfo, PlanResult};
 use planner_core::Scenario;
 use std::time::{Duration, Instant};
@@ -58,15 +57,6 @@ impl LinkArgs {
             .hello()
             .with_context(|| format!("no planner device on {target}"))?;
         Ok((client, info))
-    }
-}
-
-impl<T: Transport + ?Sized> Transport for Box<T> {
-    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
-        (**self).send(bytes)
-    }
-    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
-        (**self).recv(buf, timeout)
     }
 }
 

@@ -2,7 +2,7 @@
 //! QEMU process with the guest's UART on a local TCP port.
 #![allow(dead_code)]
 
-use needle_cli::firmware_artifacts as artifacts;
+use needle_devtools::firmware_artifacts as artifacts;
 use needle_e2e::workspace;
 use std::net::{TcpListener, TcpStream};
 use std::path::PathBuf;

@@ -2,8 +2,8 @@
 //! in-process device as a `needle` transport.
 #![allow(dead_code)]
 
-use needle_cli::device::Transport;
 use needle_e2e::{needle_bin, workspace};
+use needle_link::Transport;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};

@@ -6,13 +6,10 @@
 //! emulated UART, and reads the stack's high-water mark from the painted stack at the end. Each
 //! device plan is also checked against the host's plan, bit for bit.
 
-mod by_function;
-mod client;
-mod elf;
-mod qemu;
-
+use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
+use crate::{elf, profile, qemu};
 use anyhow::{bail, Context, Result};
-use needle_cli::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
+use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;
 use planner_core::Scenario;
 use serde_json::{json, Map, Value};
@@ -21,6 +18,18 @@ use std::time::Duration;
 
 /// The value cortex-m-rt paints the stack with at reset (feature `paint-stack`).
 const STACK_PAINT: u32 = 0xCCCC_CCCC;
+
+/// The link to the emulated board: every answer within 5 s, and no request repeated (a repeat
+/// that reached the device while it plans would be counted, so the measurement fails instead).
+const LINK: ClientConfig = ClientConfig {
+    timeout: Duration::from_secs(5),
+    retries: 0,
+};
+
+/// Longest silence while the device plans (the client asks nothing meanwhile: a status query
+/// would be counted). Generous: a form takes well under a second in QEMU, so only a stuck
+/// board waits this long.
+const PLAN_SILENCE: Duration = Duration::from_secs(600);
 
 /// The "must" budgets of issue 4; `--check` fails when a board leaves them.
 pub const FLASH_BUDGET: u64 = 256 * 1024;
@@ -136,8 +145,12 @@ pub struct NamedScenario {
     pub scenario: Scenario,
 }
 
-/// Loads scenario files, named by their stem.
-pub fn load_scenarios(files: &[PathBuf]) -> Result<Vec<NamedScenario>> {
+/// Reads a scenario file (`needle`'s TOML reader; passed in, since this crate sits below
+/// `needle-cli`).
+pub type LoadScenario<'a> = &'a dyn Fn(&Path) -> Result<Scenario>;
+
+/// Loads scenario files with `load`, named by their stem.
+pub fn load_scenarios(files: &[PathBuf], load: LoadScenario) -> Result<Vec<NamedScenario>> {
     files
         .iter()
         .map(|f| {
@@ -146,7 +159,7 @@ pub fn load_scenarios(files: &[PathBuf]) -> Result<Vec<NamedScenario>> {
                 .and_then(|s| s.to_str())
                 .unwrap_or("scenario")
                 .to_owned();
-            let scenario = needle_cli::scenario_file::load_scenario(f)?;
+            let scenario = load(f)?;
             Ok(NamedScenario { name, scenario })
         })
         .collect()
@@ -176,9 +189,12 @@ pub fn measure(
         .join("device-bench")
         .join(board.name);
     let mut qemu = qemu::Qemu::start(board.machine, &image, plugin, &dir, profile)?;
-    let mut device = client::Device::new(qemu.connect()?)?;
+    // Ids from 1, as every run: an id's length on the wire changes the device's count.
+    let mut device = Client::new(needle_link::tcp(qemu.connect()?)?, LINK)
+        .with_first_id(1)
+        .with_quiet_planning(PLAN_SILENCE);
     device
-        .hello(Duration::from_secs(20))
+        .hello_within(Duration::from_secs(20), Duration::from_millis(300))
         .with_context(|| format!("{} in QEMU {}", board.name, board.machine))?;
     let mut instructions = Vec::new();
     let mut matches_host = Vec::new();
@@ -186,7 +202,7 @@ pub fn measure(
         let host = encoded(&planner_core::plan(&s.scenario))?;
         let before = qemu.counts()?.len();
         let on_device = device
-            .plan(&s.scenario)
+            .plan(&s.scenario, &mut |_| {})
             .with_context(|| format!("planning {} on {}", s.name, board.name))?;
         let counts = qemu.counts()?;
         if counts.len() != before + 1 {
@@ -194,17 +210,20 @@ pub fn measure(
                 "{}: expected one instruction count for {}, the plugin gave {}",
                 board.name,
                 s.name,
-                counts.len() - before
+                counts.len().saturating_sub(before)
             );
         }
         instructions.push((s.name.clone(), counts[before]));
         matches_host.push((s.name.clone(), encoded(&on_device)? == host));
     }
     drop(device);
-    let len = footprint.stack_top - footprint.stack_bottom;
+    let len = footprint
+        .stack_top
+        .checked_sub(footprint.stack_bottom)
+        .context("the image's stack ends above its start (_stack_end > _stack_start)")?;
     let memory = qemu.read_memory_and_quit(footprint.stack_bottom, len)?;
     if profile {
-        let text = by_function::report(&image, &dir.join("profile.txt"), 30)?;
+        let text = profile::report(&image, &dir.join("profile.txt"), 30)?;
         eprintln!("{}: {text}", board.name);
     }
     Ok(BoardFigures {
@@ -277,8 +296,8 @@ pub struct Args {
     root: Option<PathBuf>,
 }
 
-/// Runs `needle device-bench`.
-pub fn run(args: &Args) -> Result<()> {
+/// Runs `needle device-bench`, reading scenario files with `load`.
+pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     let root = match &args.root {
         Some(r) => r.clone(),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join(".."),
@@ -297,7 +316,7 @@ pub fn run(args: &Args) -> Result<()> {
     } else {
         args.files.clone()
     };
-    let scenarios = load_scenarios(&files)?;
+    let scenarios = load_scenarios(&files, load)?;
     let figures = measure_all(&root, &scenarios, args.profile)?;
     if args.json {
         let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();

@@ -36,6 +36,15 @@ impl std::fmt::Display for LinkTarget {
     }
 }
 
+impl<T: Transport + ?Sized> Transport for Box<T> {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        (**self).send(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        (**self).recv(buf, timeout)
+    }
+}
+
 struct Serial(Box<dyn serialport::SerialPort>);
 
 impl Transport for Serial {
@@ -74,6 +83,13 @@ impl Transport for Tcp {
     }
 }
 
+/// A transport on a connected TCP stream (QEMU's UART once it accepted the connection, say).
+pub fn tcp(stream: TcpStream) -> io::Result<Box<dyn Transport>> {
+    // Frames are small and each waits for an answer: send them at once.
+    stream.set_nodelay(true)?;
+    Ok(Box::new(Tcp(stream)))
+}
+
 /// Opens the link.
 pub fn open(target: &LinkTarget) -> Result<Box<dyn Transport>> {
     match target {
@@ -89,8 +105,7 @@ pub fn open(target: &LinkTarget) -> Result<Box<dyn Transport>> {
         LinkTarget::Tcp(addr) => {
             let s =
                 TcpStream::connect(addr).with_context(|| format!("cannot connect to {addr}"))?;
-            s.set_nodelay(true)?;
-            Ok(Box::new(Tcp(s)))
+            Ok(tcp(s)?)
         }
     }
 }

@@ -4,7 +4,7 @@
 //! start address; blocks are mapped here to the function containing them. Figures at region edges
 //! are approximate (a block is counted whole); the totals of `instructions` stay exact.
 
-use super::elf::{functions, Function};
+use crate::elf::{functions, Function};
 use anyhow::{Context, Result};
 use std::collections::HashMap;
 use std::path::Path;
@@ -43,7 +43,8 @@ pub fn report(image: &Path, profile: &Path, top: usize) -> Result<String> {
 fn containing(funcs: &[Function], addr: u32) -> &str {
     let i = funcs.partition_point(|f| f.addr <= addr);
     match i.checked_sub(1).map(|i| &funcs[i]) {
-        Some(f) if addr < f.addr + f.size.max(1) => &f.name,
+        // `addr >= f.addr` here, so the difference cannot wrap (a sum near 4 GiB could).
+        Some(f) if addr - f.addr < f.size.max(1) => &f.name,
         _ => "?",
     }
 }

@@ -1,0 +1,28 @@
+//! The host side of the needle-planner device protocol ([`planner_core::wire`]): byte transports
+//! (serial port, TCP) and the one protocol client, used by `needle send|ping|info` and by
+//! `needle device-bench`.
+//!
+//! It is a crate of its own so that both users can depend on it without a cycle: `needle-cli`
+//! (the `needle` command) depends on `needle-devtools` (device-bench) to run its subcommand, and
+//! both depend on this crate; it depends on `planner-core` alone.
+//!
+//! The modules, by concern: [`transport`] moves bytes with timeouts; `client` holds the session
+//! state and turns bytes into frames; `exchange` sends one request until it is answered (the
+//! retry policy); `hello` (greeting, ping, cancel), `upload`, `plan` (waiting while the device
+//! plans) and `fetch` are the requests built on it. [`LinkError`] says why a session failed.
+
+#![deny(missing_docs)]
+
+mod client;
+mod error;
+mod exchange;
+mod fetch;
+mod hello;
+mod plan;
+pub mod transport;
+mod upload;
+
+pub use client::{Client, ClientConfig, LinkStats};
+pub use error::LinkError;
+pub use plan::Progress;
+pub use transport::{open, tcp, LinkTarget, Transport};

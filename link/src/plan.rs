@@ -1,0 +1,136 @@
+//! A whole plan on the device: upload the request, wait while it plans, fetch the result.
+
+use crate::client::{Client, Event};
+use crate::error::{too_large, LinkError};
+use crate::exchange::is_line_fault;
+use crate::transport::Transport;
+use planner_core::model::form::Form;
+use planner_core::wire::{PlanRequest, PlanResult, ReplyBody, RequestBody, MAX_PLAN_REQUEST};
+use planner_core::Scenario;
+use std::time::Instant;
+
+/// One progress report of the device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Progress {
+    /// Forms done.
+    pub done: u8,
+    /// Forms in all.
+    pub total: u8,
+    /// The form just finished.
+    pub form: Option<Form>,
+    /// Whether it gave a feasible path.
+    pub feasible: bool,
+}
+
+impl<T: Transport> Client<T> {
+    /// Plans `scenario` on the device: upload, wait (reporting progress), fetch.
+    pub fn plan(
+        &mut self,
+        scenario: &Scenario,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<PlanResult, LinkError> {
+        let mut buf = vec![0u8; MAX_PLAN_REQUEST];
+        let request = postcard::to_slice(&PlanRequest::new(scenario), &mut buf)
+            .map_err(|_| too_large("scenario too large to encode"))?
+            .to_vec();
+        self.plan_encoded(&request, progress)
+    }
+
+    /// Plans an already encoded [`PlanRequest`] (tests use it to send what a scenario cannot hold).
+    pub fn plan_encoded(
+        &mut self,
+        request: &[u8],
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<PlanResult, LinkError> {
+        let id = self.new_id();
+        self.finished = None;
+        let result = self.upload(id, request).and_then(|()| {
+            let (len, crc) = self.await_plan(id, progress)?;
+            self.fetch(id, len, crc)
+        });
+        match result {
+            Ok(bytes) => {
+                postcard::from_bytes::<PlanResult>(&bytes).map_err(|_| LinkError::CorruptResult)
+            }
+            Err(e) => {
+                // Leave the device free for the next request: one cancel, without waiting (the
+                // line may be dead), and remember the id in case it never arrived.
+                self.abandoned = Some(id);
+                let _ = self.send(id, &RequestBody::Cancel);
+                Err(e)
+            }
+        }
+    }
+
+    /// Waits for request `id`'s `Finished { len, crc }`, passing on progress reports. After a
+    /// silence of `timeout`, or a damaged frame, it asks for the status, unless planning is quiet.
+    fn await_plan(
+        &mut self,
+        id: u16,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(u16, u32), LinkError> {
+        loop {
+            if let Some((fid, len, crc)) = self.finished.take() {
+                if fid == id {
+                    return Ok((len, crc));
+                }
+            }
+            let silence = self.quiet_planning.unwrap_or(self.config.timeout);
+            let deadline = Instant::now() + silence;
+            let ask = match self.next_event(deadline)? {
+                None => {
+                    self.stats.timeouts += 1;
+                    if self.quiet_planning.is_some() {
+                        return Err(LinkError::NoResult { waited: silence });
+                    }
+                    true
+                }
+                Some(Event::Damaged) => {
+                    // Perhaps the report that the plan is done: ask rather than wait. A quiet
+                    // session runs on a clean line and keeps waiting instead.
+                    self.stats.detected += 1;
+                    self.quiet_planning.is_none()
+                }
+                Some(Event::Reply(r)) if r.header.id == id => {
+                    self.on_plan_news(id, &r.body, progress)?;
+                    false
+                }
+                Some(Event::Reply(_)) => false,
+            };
+            if ask {
+                let news = self.exchange("plan status", id, &RequestBody::Status, |b| {
+                    matches!(b, ReplyBody::Progress { .. } | ReplyBody::Finished { .. })
+                        .then(|| b.clone())
+                })?;
+                self.on_plan_news(id, &news, progress)?;
+            }
+        }
+    }
+
+    fn on_plan_news(
+        &mut self,
+        id: u16,
+        body: &ReplyBody,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<(), LinkError> {
+        match *body {
+            ReplyBody::Progress {
+                done,
+                total,
+                form,
+                feasible,
+            } => progress(Progress {
+                done,
+                total,
+                form,
+                feasible,
+            }),
+            ReplyBody::Finished { len, crc } => {
+                self.finished = Some((id, len, crc));
+            }
+            ReplyBody::Fault(f) if !is_line_fault(f) => return Err(LinkError::Device(f)),
+            _ => {}
+        }
+        Ok(())
+    }
+}
