@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
-use needle_cli::scenario_file::{load_scenario, parse_form};
+use needle_cli::scenario::{load_scenario, load_scenario_shapes, parse_form};
 use planner_core::form::FormSet;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -43,7 +43,7 @@ struct PlanArgs {
     plot: Option<PathBuf>,
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
     #[arg(long)]
-    approx: Option<needle_cli::analysis::approx::Method>,
+    approx: Option<needle_cli::scenario::approx::Method>,
 }
 
 #[derive(Subcommand)]
@@ -110,7 +110,7 @@ struct BenchArgs {
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
     let mut scenario = match args.approx {
         None => load_scenario(&args.file)?,
-        Some(m) => needle_cli::scenario_file::load_scenario_shapes(&args.file, Some(m))?.0,
+        Some(m) => load_scenario_shapes(&args.file, Some(m))?.0,
     };
     if let Some(n) = args.max_degree {
         scenario.options.max_control_degree = n;

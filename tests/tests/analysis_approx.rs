@@ -1,8 +1,9 @@
 //! Polygon obstacles become circles that cover them entirely, for every method, on convex and
 //! concave outlines; scenario files carry polygons inline or in a file.
 
-use needle_cli::analysis::approx::{approximate, Method, Polygon};
-use needle_cli::scenario_file::{load_scenario_shapes, ScenarioFile};
+use needle_cli::scenario::approx::{approximate, Method};
+use needle_cli::scenario::polygon::Polygon;
+use needle_cli::scenario::{load_scenario_shapes, ScenarioFile};
 use needle_e2e::{needle, needle_json, workspace};
 
 fn shapes() -> Vec<(&'static str, Vec<[f64; 2]>)> {

@@ -1,12 +1,12 @@
 //! The analysis subcommands of `needle` (sweep, rrt, compare, approx, plot, `plan --plot`): argument
 //! parsing and output; the work itself is in the sibling modules.
 
-use super::approx::Method;
 use super::plot::{colour_of, scene_svg, PlotPath, Scene};
 use super::sweep_plot::sweep_svg;
 use super::{compare, parallel, rrt, sweep};
 use crate::report::path_points;
-use crate::scenario_file::{load_scenario_shapes, parse_form, ObstacleShape, ScenarioFile};
+use crate::scenario::approx::Method;
+use crate::scenario::{load_scenario_shapes, parse_form, ObstacleShape, ScenarioFile};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use planner_core::form::FormSet;

@@ -6,7 +6,7 @@
 //! so tests and scripts can read the structure back.
 
 use super::svg::{esc, form_colour, ticks, Svg};
-use crate::scenario_file::ObstacleShape;
+use crate::scenario::ObstacleShape;
 use planner_core::scenario::Workspace;
 use planner_core::Scenario;
 
