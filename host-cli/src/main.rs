@@ -42,7 +42,7 @@ struct PlanArgs {
     #[arg(long)]
     plot: Option<PathBuf>,
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
-    #[arg(long)]
+    #[arg(long, ignore_case = true)]
     approx: Option<needle_cli::scenario::approx::Method>,
 }
 

@@ -26,7 +26,7 @@ pub struct ScenarioArgs {
     #[arg(long, value_delimiter = ',')]
     pub forms: Option<Vec<String>>,
     /// Turn every polygon obstacle into circles this way: circumscribed, segmented or bordered.
-    #[arg(long)]
+    #[arg(long, ignore_case = true)]
     pub approx: Option<Method>,
 }
 
@@ -85,7 +85,7 @@ pub struct SweepArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     /// Weight to vary: length, risk, penalty or control.
-    #[arg(long)]
+    #[arg(long, ignore_case = true)]
     pub weight: sweep::Weight,
     /// First value.
     #[arg(long)]
@@ -374,7 +374,7 @@ pub struct ApproxArgs {
     /// Scenario file with polygon obstacles.
     pub file: PathBuf,
     /// circumscribed, segmented or bordered (default: each obstacle's own `approx`).
-    #[arg(long)]
+    #[arg(long, ignore_case = true)]
     pub method: Option<Method>,
     /// Print one JSON object instead of the table.
     #[arg(long)]

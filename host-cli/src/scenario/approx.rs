@@ -15,22 +15,24 @@ use super::geometry::{
     clip_slab, dist, dist_to_boundary, enclosing_circle, principal_axis, union_area, Circle,
 };
 use super::polygon::Polygon;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, Result};
 use std::fmt;
 use std::str::FromStr;
 
 /// Most slabs the segmented method tries.
 pub const MAX_SEGMENTS: usize = 8;
 
-/// How a polygon becomes circles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How a polygon becomes circles; `circle` and `edged` are accepted as older names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {
     /// One smallest enclosing circle: regular, compact obstacles.
+    #[value(alias = "circle")]
     Circumscribed,
     /// A few circles over slabs of the polygon: irregular obstacles without deep notches.
     #[default]
     Segmented,
     /// Small circles along the outline: very irregular or thin obstacles.
+    #[value(alias = "edged")]
     Bordered,
 }
 
@@ -54,15 +56,17 @@ impl fmt::Display for Method {
     }
 }
 
+/// A scenario file's `approx` key: the command line's spellings, in any case, spaces around.
 impl FromStr for Method {
     type Err = anyhow::Error;
     fn from_str(s: &str) -> Result<Method> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "circumscribed" | "circle" => Ok(Method::Circumscribed),
-            "segmented" => Ok(Method::Segmented),
-            "bordered" | "edged" => Ok(Method::Bordered),
-            other => bail!("approximation {other:?}: use circumscribed, segmented or bordered"),
-        }
+        let name = s.trim();
+        <Method as clap::ValueEnum>::from_str(name, true).map_err(|_| {
+            anyhow!(
+                "approximation {:?}: use circumscribed, segmented or bordered",
+                name.to_ascii_lowercase()
+            )
+        })
     }
 }
 
