@@ -4,7 +4,7 @@
 use super::plot::{colour_of, scene_svg, PlotPath, Scene};
 use super::sweep_plot::sweep_svg;
 use super::{compare, parallel, rrt, sweep};
-use crate::report::path_points;
+use crate::report::{path_points, PlanJson};
 use crate::scenario::approx::Method;
 use crate::scenario::{load_scenario_shapes, parse_form, ObstacleShape, ScenarioFile};
 use anyhow::{bail, Context, Result};
@@ -519,13 +519,13 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read plan {}", p.display()))?;
-            let v: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+            let plan: PlanJson = serde_json::from_str(&text).with_context(|| {
                 format!(
-                    "{} is not JSON (expected `needle plan --json` output)",
+                    "{} is not a plan (expected `needle plan --json` output)",
                     p.display()
                 )
             })?;
-            super::plan_file::scene_paths(&scenario, &v)
+            super::plan_file::scene_paths(&scenario, &plan)
                 .with_context(|| format!("in plan {}", p.display()))?
         }
     };

@@ -2,10 +2,10 @@
 //! value of one weight, the others fixed, and report the best form, L, D, N and F per value.
 
 use super::parallel;
+use crate::report::sweep::{SweepJson, SweepPointJson};
 use anyhow::{bail, Result};
 use planner_core::form::FormSet;
 use planner_core::{Form, PlanError, PlanReport, Scenario};
-use serde_json::{json, Value};
 use std::fmt;
 
 /// Which weight of F = a1 L + a2 D + a3 H + a4 N is swept (by its name or by a1..a4).
@@ -147,49 +147,15 @@ pub fn run(
     ))
 }
 
-fn num(v: f32) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
+/// The `needle sweep --json` report.
+pub fn to_json(weight: Weight, points: &[Point]) -> SweepJson {
+    SweepJson {
+        weight: weight.name().to_string(),
+        points: points
+            .iter()
+            .map(|p| SweepPointJson::new(p.value, &p.plan))
+            .collect(),
     }
-}
-
-/// The `needle sweep --json` object.
-pub fn to_json(weight: Weight, points: &[Point]) -> Value {
-    let points: Vec<Value> = points
-        .iter()
-        .map(|p| {
-            let forms: Vec<Value> = p
-                .plan
-                .iter()
-                .flat_map(|r| r.forms.iter())
-                .map(|o| {
-                    json!({
-                        "form": o.form.to_string(),
-                        "feasible": o.feasible,
-                        "objective": if o.feasible { num(o.objective) } else { Value::Null },
-                        "length": if o.feasible { num(o.length) } else { Value::Null },
-                    })
-                })
-                .collect();
-            let best = p.best().map_or(Value::Null, |b| {
-                json!({
-                    "form": b.form.to_string(),
-                    "control_degree": b.form.len(),
-                    "length": num(b.length),
-                    "risk": num(b.risk),
-                    "objective": num(b.objective),
-                })
-            });
-            let mut v = json!({ "value": p.value, "best": best, "forms": forms });
-            if let Err(e) = &p.plan {
-                v["error"] = json!(e.to_string());
-            }
-            v
-        })
-        .collect();
-    json!({ "weight": weight.name(), "points": points })
 }
 
 /// Every form that appears in any point, in catalogue order.

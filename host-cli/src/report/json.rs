@@ -1,0 +1,253 @@
+//! The typed `needle plan --json` report. Its keys and nesting are a contract: scripts, the golden
+//! tests and `needle plot --plan` read them.
+//!
+//! Numbers are the planner's `f32` values widened to `f64` (so they print exactly, e.g.
+//! `91.85139465332031`), and `null` where the value is not finite or the form is infeasible. The
+//! reading side takes every key as optional, so a trimmed or hand-written plan still plots.
+
+use planner_core::kinematics::V3;
+use planner_core::verify::{rebuild, sample_points};
+use planner_core::{FormOutcome, PlanReport, Scenario, SegmentKind};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Timing and effort figures shown in `stats`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Stats {
+    /// Wall-clock planning time (µs).
+    pub time_us: u64,
+}
+
+/// A finite `f32` as the `f64` the report carries, anything else as `None` (`null`).
+pub fn finite(v: f32) -> Option<f64> {
+    v.is_finite().then_some(f64::from(v))
+}
+
+fn widened(p: [f32; 3]) -> [f64; 3] {
+    p.map(f64::from)
+}
+
+/// Path points no more than 1 mm apart, entry to end.
+pub fn path_points(scenario: &Scenario, o: &FormOutcome) -> Vec<[f32; 3]> {
+    let geo = rebuild(scenario, o.form, &o.insertion, &o.segments);
+    let mut pts = Vec::new();
+    sample_points(&geo, 1.0, |p: V3| pts.push([p.x, p.y, p.z]));
+    pts
+}
+
+/// The `needle plan --json` object.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlanJson {
+    /// The best form's path, `null` when there is none.
+    #[serde(default)]
+    pub best: Option<BestPath>,
+    /// One entry per form tried, in catalogue order.
+    #[serde(default)]
+    pub forms: Vec<FormEntry>,
+    /// Time and effort of the whole plan.
+    #[serde(default)]
+    pub stats: StatsJson,
+}
+
+/// `best`: a form's entry with the figures only the chosen path carries.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BestPath {
+    /// The same keys as a `forms` entry.
+    #[serde(flatten)]
+    pub path: FormEntry,
+    /// H: the obstacle-entry penalty.
+    #[serde(default)]
+    pub penalty: Option<f64>,
+    /// N: the number of segments.
+    #[serde(default)]
+    pub control_degree: usize,
+}
+
+/// One form's outcome.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FormEntry {
+    /// The form word, e.g. `RL`.
+    #[serde(default)]
+    pub form: String,
+    /// Whether the form has a collision-free path to the target; absent reads as feasible.
+    #[serde(default = "feasible_unless_told")]
+    pub feasible: bool,
+    /// The solver's status, e.g. `Converged`.
+    #[serde(default)]
+    pub status: String,
+    /// L (mm).
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// D.
+    #[serde(default)]
+    pub risk: Option<f64>,
+    /// F.
+    #[serde(default)]
+    pub objective: Option<f64>,
+    /// Smallest clearance to an obstacle surface (mm).
+    #[serde(default)]
+    pub min_clearance: Option<f64>,
+    /// Distance from the path's end to the target (mm).
+    #[serde(default)]
+    pub target_error: Option<f64>,
+    /// Optimality residual of the solution.
+    #[serde(default)]
+    pub kkt_residual: Option<f64>,
+    /// Solver iterations.
+    #[serde(default)]
+    pub iterations: u32,
+    /// Objective and constraint evaluations.
+    #[serde(default)]
+    pub evaluations: u32,
+    /// The insertion posture, `null` for an infeasible form.
+    #[serde(default)]
+    pub insertion: Option<InsertionJson>,
+    /// The segments, `null` for an infeasible form.
+    #[serde(default)]
+    pub segments: Option<Vec<SegmentJson>>,
+    /// Points at most 1 mm apart from the entry to the end: written for the best path only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 3]>>,
+}
+
+fn feasible_unless_told() -> bool {
+    true
+}
+
+/// `insertion`: the posture of the needle at the entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InsertionJson {
+    /// Rotation about the entry frame's first axis (degrees).
+    #[serde(default)]
+    pub theta1_deg: Option<f64>,
+    /// Rotation about the entry frame's second axis (degrees).
+    #[serde(default)]
+    pub theta2_deg: Option<f64>,
+    /// Angle between the insertion direction and the nominal axis (degrees).
+    #[serde(default)]
+    pub tilt_deg: Option<f64>,
+    /// Unit insertion direction.
+    #[serde(default)]
+    pub direction: [f64; 3],
+}
+
+/// One entry of `segments`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentJson {
+    /// `R` (arc) or `L` (line).
+    #[serde(default)]
+    pub kind: String,
+    /// Length (mm).
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// Bevel rotation before the segment (degrees).
+    #[serde(default)]
+    pub bevel_deg: Option<f64>,
+}
+
+/// `stats`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StatsJson {
+    /// Wall-clock planning time (µs).
+    #[serde(default)]
+    pub time_us: u64,
+    /// Solver iterations over all forms.
+    #[serde(default)]
+    pub iterations: u32,
+    /// Evaluations over all forms.
+    #[serde(default)]
+    pub evaluations: u32,
+}
+
+impl SegmentJson {
+    /// The segment's kind: `R` is an arc, anything else a line.
+    pub fn segment_kind(&self) -> SegmentKind {
+        if self.kind == "R" {
+            SegmentKind::Arc
+        } else {
+            SegmentKind::Line
+        }
+    }
+}
+
+impl FormEntry {
+    /// A form's entry; an infeasible form's numbers, posture and segments are `null`.
+    pub fn of(o: &FormOutcome) -> FormEntry {
+        entry(o, o.feasible)
+    }
+}
+
+/// `o`'s entry, with its numbers, posture and segments only when `shown`.
+fn entry(o: &FormOutcome, shown: bool) -> FormEntry {
+    let number = |v: f32| finite(v).filter(|_| shown);
+    FormEntry {
+        form: o.form.to_string(),
+        feasible: o.feasible,
+        status: format!("{:?}", o.status),
+        length: number(o.length),
+        risk: number(o.risk),
+        objective: number(o.objective),
+        min_clearance: number(o.min_clearance),
+        target_error: number(o.target_error),
+        kkt_residual: number(o.kkt_residual),
+        iterations: o.iterations,
+        evaluations: o.evaluations,
+        insertion: shown.then(|| InsertionJson {
+            theta1_deg: finite(o.insertion.theta1_deg),
+            theta2_deg: finite(o.insertion.theta2_deg),
+            tilt_deg: finite(o.insertion.tilt_deg),
+            direction: widened(o.insertion.direction),
+        }),
+        segments: shown.then(|| {
+            o.segments
+                .iter()
+                .map(|s| SegmentJson {
+                    kind: s.kind.letter().to_string(),
+                    length: finite(s.length),
+                    bevel_deg: finite(s.bevel_deg),
+                })
+                .collect()
+        }),
+        points: None,
+    }
+}
+
+impl BestPath {
+    /// The chosen path with its points. Its numbers are written whatever `feasible` says (the
+    /// planner only chooses feasible forms, and a reader wants the figures of the path drawn).
+    pub fn of(scenario: &Scenario, o: &FormOutcome) -> BestPath {
+        let mut path = entry(o, true);
+        path.points = Some(path_points(scenario, o).into_iter().map(widened).collect());
+        BestPath {
+            path,
+            penalty: finite(o.penalty),
+            control_degree: o.form.len(),
+        }
+    }
+}
+
+/// The `needle plan --json` report of `report`.
+pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> PlanJson {
+    PlanJson {
+        best: report.best().map(|b| BestPath::of(scenario, b)),
+        forms: report.forms.iter().map(FormEntry::of).collect(),
+        stats: StatsJson {
+            time_us: stats.time_us,
+            iterations: report.iterations(),
+            evaluations: report.evaluations(),
+        },
+    }
+}
+
+impl fmt::Display for PlanJson {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_sorted(self, f)
+    }
+}
+
+/// Writes `report` as one line of JSON with its keys sorted, as `needle` has always printed its
+/// reports (a [`serde_json::Value`] map keeps its keys in order; struct fields would not).
+pub fn write_sorted(report: &impl Serialize, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let value = serde_json::to_value(report).map_err(|_| fmt::Error)?;
+    write!(f, "{value}")
+}
