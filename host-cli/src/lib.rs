@@ -4,6 +4,7 @@ pub mod analysis;
 pub mod bench;
 pub mod device;
 pub mod firmware_artifacts;
+pub mod random;
 pub mod report;
 pub mod scenario;
 

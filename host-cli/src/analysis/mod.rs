@@ -7,7 +7,6 @@ pub mod compare;
 pub mod parallel;
 pub mod plan_file;
 pub mod plot;
-pub mod rng;
 pub mod rrt;
 pub mod svg;
 pub mod sweep;

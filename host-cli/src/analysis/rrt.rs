@@ -6,7 +6,7 @@
 //! Its path is scored with the optimiser's objective (see [`score`]), with the control degree N
 //! counted as the number of pieces after merging consecutive steps that need no bevel change.
 
-use super::rng::Pcg32;
+use crate::random::{seeded, Draw};
 use planner_core::clearance::closest;
 use planner_core::kinematics::{entry_basis, insertion_frame, Frame, V3};
 use planner_core::scenario::{RiskMeasure, Workspace};
@@ -338,7 +338,7 @@ pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> 
     let first = insertion_frame(v3(e.position), &entry_basis(e.direction), 0.0, 0.0);
     let target = v3(scenario.target.position);
     let (lo, hi) = bounds(scenario, 2.0 * options.step);
-    let mut rng = Pcg32::new(options.seed);
+    let mut rng = seeded(options.seed);
     let mut tree = vec![Node {
         frame: first,
         parent: 0,
