@@ -3,8 +3,10 @@
 
 use super::parallel;
 use super::rrt::{self, Outcome, RrtError};
+use crate::report::json::{write_sorted, SegmentJson};
 use planner_core::{PlanError, PlanReport, Scenario};
-use serde_json::{json, Value};
+use serde::{Deserialize, Serialize};
+use std::fmt;
 use std::time::Instant;
 
 /// One row of the comparison.
@@ -25,16 +27,16 @@ pub struct Row {
 }
 
 impl Row {
-    fn to_json(self) -> Value {
-        let n = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-        json!({
-            "length": n(self.length),
-            "risk": n(self.risk),
-            "control_degree": n(self.control_degree),
-            "objective": n(self.objective),
-            "target_error": n(self.target_error),
-            "time_us": n(self.time_us),
-        })
+    fn to_json(self) -> RowJson {
+        let n = |v: f64| v.is_finite().then_some(v);
+        RowJson {
+            length: n(self.length),
+            risk: n(self.risk),
+            control_degree: n(self.control_degree),
+            objective: n(self.objective),
+            target_error: n(self.target_error),
+            time_us: n(self.time_us),
+        }
     }
 
     fn from_rrt(o: &Outcome) -> Row {
@@ -141,47 +143,138 @@ pub fn run(
 }
 
 /// The `needle compare --json` object.
-pub fn to_json(c: &Comparison) -> Value {
-    let optimizer = match (&c.optimizer, c.optimizer_row()) {
-        (Ok((report, _)), Some(row)) => {
-            let mut v = row.to_json();
-            if let Some(b) = report.best() {
-                v["form"] = json!(b.form.to_string());
-            }
-            v
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ComparisonJson {
+    /// The optimiser's best path, or why there is none.
+    pub optimizer: OptimizerJson,
+    /// The RRT runs and their statistics.
+    pub rrt: RrtRunsJson,
+}
+
+/// A [`Row`] in a report; `null` where a value is not finite.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RowJson {
+    /// L (mm).
+    pub length: Option<f64>,
+    /// D.
+    pub risk: Option<f64>,
+    /// N.
+    pub control_degree: Option<f64>,
+    /// F.
+    pub objective: Option<f64>,
+    /// Distance from the path's end to the target (mm).
+    pub target_error: Option<f64>,
+    /// Wall-clock time (µs).
+    pub time_us: Option<f64>,
+}
+
+/// `optimizer`: its row and form, or an error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OptimizerJson {
+    /// The best path's figures.
+    #[serde(flatten)]
+    pub row: Option<RowJson>,
+    /// The best form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<String>,
+    /// Why there is no plan.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// `rrt`: the runs, how many found a path, and column-wise median, minimum and maximum.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RrtRunsJson {
+    /// Median of the runs that found a path, `null` if none did.
+    pub median: Option<RowJson>,
+    /// Column-wise minimum (absent if no run found a path).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<RowJson>,
+    /// Column-wise maximum (absent if no run found a path).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<RowJson>,
+    /// Runs that found a path.
+    pub found: usize,
+    /// Every run, by seed.
+    pub runs: Vec<RunJson>,
+}
+
+/// One RRT run: its row, effort and segments, or why it found no path.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunJson {
+    /// The run's seed.
+    pub seed: u64,
+    /// The path's figures.
+    #[serde(flatten)]
+    pub row: Option<RowJson>,
+    /// Nodes grown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nodes: Option<usize>,
+    /// Samples drawn.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    /// The merged segments.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segments: Option<Vec<SegmentJson>>,
+    /// Why the run found no path.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+impl RunJson {
+    fn new(seed: u64, run: &Result<Outcome, RrtError>) -> RunJson {
+        let found = run.as_ref().ok();
+        RunJson {
+            seed,
+            row: found.map(|o| Row::from_rrt(o).to_json()),
+            nodes: found.map(|o| o.tree.len()),
+            iterations: found.map(|o| o.iterations),
+            segments: found.map(|o| o.segments.iter().map(|g| g.to_json()).collect()),
+            error: run.as_ref().err().map(ToString::to_string),
         }
-        (Err(e), _) => json!({ "error": e.to_string() }),
-        (Ok(_), None) => json!({ "error": "no best form" }),
-    };
-    let runs: Vec<Value> = c
-        .runs
-        .iter()
-        .map(|(seed, r)| match r {
-            Ok(o) => {
-                let mut v = Row::from_rrt(o).to_json();
-                v["seed"] = json!(seed);
-                v["nodes"] = json!(o.tree.len());
-                v["iterations"] = json!(o.iterations);
-                v["segments"] = json!(o
-                    .segments
-                    .iter()
-                    .map(|s| json!({"kind": s.kind.letter().to_string(), "length": s.length, "bevel_deg": s.bevel_deg}))
-                    .collect::<Vec<_>>());
-                v
-            }
-            Err(e) => json!({ "seed": seed, "error": e.to_string() }),
-        })
-        .collect();
-    let mut rrt = json!({
-        "median": c.rrt_median().map_or(Value::Null, Row::to_json),
-        "runs": runs,
-        "found": c.rrt_rows().len(),
-    });
-    if let Some((lo, hi)) = c.rrt_spread() {
-        rrt["min"] = lo.to_json();
-        rrt["max"] = hi.to_json();
     }
-    json!({ "optimizer": optimizer, "rrt": rrt })
+}
+
+/// The `needle compare --json` report of `c`.
+pub fn to_json(c: &Comparison) -> ComparisonJson {
+    let optimizer = match (&c.optimizer, c.optimizer_row()) {
+        (Ok((report, _)), Some(row)) => OptimizerJson {
+            row: Some(row.to_json()),
+            form: report.best().map(|b| b.form.to_string()),
+            error: None,
+        },
+        (Err(e), _) => OptimizerJson {
+            row: None,
+            form: None,
+            error: Some(e.to_string()),
+        },
+        (Ok(_), None) => OptimizerJson {
+            row: None,
+            form: None,
+            error: Some("no best form".to_string()),
+        },
+    };
+    let spread = c.rrt_spread();
+    ComparisonJson {
+        optimizer,
+        rrt: RrtRunsJson {
+            median: c.rrt_median().map(Row::to_json),
+            min: spread.map(|(lo, _)| lo.to_json()),
+            max: spread.map(|(_, hi)| hi.to_json()),
+            found: c.rrt_rows().len(),
+            runs: c
+                .runs
+                .iter()
+                .map(|(seed, r)| RunJson::new(*seed, r))
+                .collect(),
+        },
+    }
+}
+
+impl fmt::Display for ComparisonJson {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_sorted(self, f)
+    }
 }
 
 /// The side-by-side table printed by `needle compare`.

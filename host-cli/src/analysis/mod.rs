@@ -5,6 +5,7 @@
 pub mod cli;
 pub mod compare;
 pub mod parallel;
+pub mod pieces;
 pub mod plan_file;
 pub mod plot;
 pub mod rrt;

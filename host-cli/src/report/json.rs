@@ -246,7 +246,7 @@ impl fmt::Display for PlanJson {
 }
 
 /// Writes `report` as one line of JSON with its keys sorted, as `needle` has always printed its
-/// reports (a [`serde_json::Value`] map keeps its keys in order; struct fields would not).
+/// reports (a [`serde_json::Value`] map sorts its keys; a struct writes them in field order).
 pub fn write_sorted(report: &impl Serialize, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let value = serde_json::to_value(report).map_err(|_| fmt::Error)?;
     write!(f, "{value}")

@@ -110,6 +110,30 @@ pub fn parse_form(word: &str) -> Result<Form> {
     }
 }
 
+/// Applies the command line's `--max-degree` and `--forms` over the file's choice, then checks
+/// the options. Forms given without a degree may use the largest degree the core plans.
+pub fn restrict(
+    scenario: &mut Scenario,
+    max_degree: Option<u8>,
+    forms: Option<&[String]>,
+) -> Result<()> {
+    if let Some(n) = max_degree {
+        scenario.options.max_control_degree = n;
+    }
+    if let Some(words) = forms {
+        let mut set = FormSet::default();
+        for w in words {
+            set.insert(parse_form(w)?);
+        }
+        scenario.options.forms = set;
+        if max_degree.is_none() {
+            scenario.options.max_control_degree = planner_core::MAX_CONTROL_DEGREE as u8;
+        }
+    }
+    scenario.validate().context("invalid planning options")?;
+    Ok(())
+}
+
 /// Loads a scenario file into the core's type, approximating polygons by `approx` (or each
 /// obstacle's own method), and returns the obstacle shapes alongside for plotting.
 pub fn load_scenario_shapes(

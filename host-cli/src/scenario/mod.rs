@@ -11,6 +11,6 @@ pub mod geometry;
 pub mod polygon;
 pub mod shapes;
 
-pub use build::{load_scenario, load_scenario_shapes, parse_form};
+pub use build::{load_scenario, load_scenario_shapes, parse_form, restrict};
 pub use file::ScenarioFile;
 pub use shapes::ObstacleShape;
