@@ -2,15 +2,16 @@
 //! time of the optimiser's best path and of RRT paths over several seeds (median and spread).
 
 use super::parallel;
+use super::pieces::Segment;
 use super::rrt::{self, Outcome, RrtError};
 use crate::report::json::{write_sorted, SegmentJson};
 use planner_core::{PlanError, PlanReport, Scenario};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::fmt;
 use std::time::Instant;
 
-/// One row of the comparison.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One row of the comparison; in a report, a value that is not finite is written as `null`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Row {
     /// L (mm).
     pub length: f64,
@@ -27,18 +28,6 @@ pub struct Row {
 }
 
 impl Row {
-    fn to_json(self) -> RowJson {
-        let n = |v: f64| v.is_finite().then_some(v);
-        RowJson {
-            length: n(self.length),
-            risk: n(self.risk),
-            control_degree: n(self.control_degree),
-            objective: n(self.objective),
-            target_error: n(self.target_error),
-            time_us: n(self.time_us),
-        }
-    }
-
     fn from_rrt(o: &Outcome) -> Row {
         Row {
             length: f64::from(o.score.length),
@@ -142,8 +131,8 @@ pub fn run(
     Comparison { optimizer, runs }
 }
 
-/// The `needle compare --json` object.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// The `needle compare --json` object (written only: nothing reads it back).
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ComparisonJson {
     /// The optimiser's best path, or why there is none.
     pub optimizer: OptimizerJson,
@@ -151,86 +140,89 @@ pub struct ComparisonJson {
     pub rrt: RrtRunsJson,
 }
 
-/// A [`Row`] in a report; `null` where a value is not finite.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RowJson {
-    /// L (mm).
-    pub length: Option<f64>,
-    /// D.
-    pub risk: Option<f64>,
-    /// N.
-    pub control_degree: Option<f64>,
-    /// F.
-    pub objective: Option<f64>,
-    /// Distance from the path's end to the target (mm).
-    pub target_error: Option<f64>,
-    /// Wall-clock time (µs).
-    pub time_us: Option<f64>,
-}
-
-/// `optimizer`: its row and form, or an error.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct OptimizerJson {
-    /// The best path's figures.
-    #[serde(flatten)]
-    pub row: Option<RowJson>,
-    /// The best form.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub form: Option<String>,
-    /// Why there is no plan.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub error: Option<String>,
+/// `optimizer`: the best path's row and form, or why there is none.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum OptimizerJson {
+    /// The optimiser planned.
+    Planned {
+        /// The best path's figures.
+        #[serde(flatten)]
+        row: Row,
+        /// The best form.
+        form: String,
+    },
+    /// It did not.
+    Failed {
+        /// Why.
+        error: String,
+    },
 }
 
 /// `rrt`: the runs, how many found a path, and column-wise median, minimum and maximum.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RrtRunsJson {
     /// Median of the runs that found a path, `null` if none did.
-    pub median: Option<RowJson>,
-    /// Column-wise minimum (absent if no run found a path).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub min: Option<RowJson>,
-    /// Column-wise maximum (absent if no run found a path).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max: Option<RowJson>,
+    pub median: Option<Row>,
+    /// `min` and `max`, present when a run found a path.
+    #[serde(flatten)]
+    pub spread: Option<SpreadJson>,
     /// Runs that found a path.
     pub found: usize,
     /// Every run, by seed.
     pub runs: Vec<RunJson>,
 }
 
+/// Column-wise extremes of the runs that found a path.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpreadJson {
+    /// Column-wise minimum.
+    pub min: Row,
+    /// Column-wise maximum.
+    pub max: Row,
+}
+
 /// One RRT run: its row, effort and segments, or why it found no path.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunJson {
-    /// The run's seed.
-    pub seed: u64,
-    /// The path's figures.
-    #[serde(flatten)]
-    pub row: Option<RowJson>,
-    /// Nodes grown.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub nodes: Option<usize>,
-    /// Samples drawn.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub iterations: Option<usize>,
-    /// The merged segments.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub segments: Option<Vec<SegmentJson>>,
-    /// Why the run found no path.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub error: Option<String>,
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum RunJson {
+    /// The run found a path.
+    Found {
+        /// The run's seed.
+        seed: u64,
+        /// The path's figures.
+        #[serde(flatten)]
+        row: Row,
+        /// Nodes grown.
+        nodes: usize,
+        /// Samples drawn.
+        iterations: usize,
+        /// The merged segments.
+        segments: Vec<SegmentJson>,
+    },
+    /// It ran out of samples, or its options were wrong.
+    Failed {
+        /// The run's seed.
+        seed: u64,
+        /// Why.
+        error: String,
+    },
 }
 
 impl RunJson {
     fn new(seed: u64, run: &Result<Outcome, RrtError>) -> RunJson {
-        let found = run.as_ref().ok();
-        RunJson {
-            seed,
-            row: found.map(|o| Row::from_rrt(o).to_json()),
-            nodes: found.map(|o| o.tree.len()),
-            iterations: found.map(|o| o.iterations),
-            segments: found.map(|o| o.segments.iter().map(|g| g.to_json()).collect()),
-            error: run.as_ref().err().map(ToString::to_string),
+        match run {
+            Ok(o) => RunJson::Found {
+                seed,
+                row: Row::from_rrt(o),
+                nodes: o.tree.len(),
+                iterations: o.iterations,
+                segments: o.segments.iter().map(Segment::to_json).collect(),
+            },
+            Err(e) => RunJson::Failed {
+                seed,
+                error: e.to_string(),
+            },
         }
     }
 }
@@ -238,29 +230,27 @@ impl RunJson {
 /// The `needle compare --json` report of `c`.
 pub fn to_json(c: &Comparison) -> ComparisonJson {
     let optimizer = match (&c.optimizer, c.optimizer_row()) {
-        (Ok((report, _)), Some(row)) => OptimizerJson {
-            row: Some(row.to_json()),
-            form: report.best().map(|b| b.form.to_string()),
-            error: None,
+        (Ok((report, _)), Some(row)) => OptimizerJson::Planned {
+            row: row,
+            form: report
+                .best()
+                .map(|b| b.form.to_string())
+                .unwrap_or_default(),
         },
-        (Err(e), _) => OptimizerJson {
-            row: None,
-            form: None,
-            error: Some(e.to_string()),
+        (Err(e), _) => OptimizerJson::Failed {
+            error: e.to_string(),
         },
-        (Ok(_), None) => OptimizerJson {
-            row: None,
-            form: None,
-            error: Some("no best form".to_string()),
+        (Ok(_), None) => OptimizerJson::Failed {
+            error: "no best form".to_string(),
         },
     };
-    let spread = c.rrt_spread();
     ComparisonJson {
         optimizer,
         rrt: RrtRunsJson {
-            median: c.rrt_median().map(Row::to_json),
-            min: spread.map(|(lo, _)| lo.to_json()),
-            max: spread.map(|(_, hi)| hi.to_json()),
+            median: c.rrt_median(),
+            spread: c
+                .rrt_spread()
+                .map(|(lo, hi)| SpreadJson { min: lo, max: hi }),
             found: c.rrt_rows().len(),
             runs: c
                 .runs

@@ -27,25 +27,15 @@ fn widened(p: [f32; 3]) -> [f64; 3] {
     p.map(f64::from)
 }
 
-/// Path points no more than 1 mm apart, entry to end.
-pub fn path_points(scenario: &Scenario, o: &FormOutcome) -> Vec<[f32; 3]> {
-    let geo = rebuild(scenario, o.form, &o.insertion, &o.segments);
-    let mut pts = Vec::new();
-    sample_points(&geo, 1.0, |p: V3| pts.push([p.x, p.y, p.z]));
-    pts
-}
-
 /// The `needle plan --json` object.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct PlanJson {
     /// The best form's path, `null` when there is none.
-    #[serde(default)]
     pub best: Option<BestPath>,
     /// One entry per form tried, in catalogue order.
-    #[serde(default)]
     pub forms: Vec<FormEntry>,
     /// Time and effort of the whole plan.
-    #[serde(default)]
     pub stats: StatsJson,
 }
 
@@ -56,7 +46,6 @@ pub struct BestPath {
     #[serde(flatten)]
     pub path: FormEntry,
     /// H: the obstacle-entry penalty.
-    #[serde(default)]
     pub penalty: Option<f64>,
     /// N: the number of segments.
     #[serde(default)]
@@ -64,98 +53,76 @@ pub struct BestPath {
 }
 
 /// One form's outcome.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct FormEntry {
     /// The form word, e.g. `RL`.
-    #[serde(default)]
     pub form: String,
     /// Whether the form has a collision-free path to the target; absent reads as feasible.
     #[serde(default = "feasible_unless_told")]
     pub feasible: bool,
     /// The solver's status, e.g. `Converged`.
-    #[serde(default)]
     pub status: String,
     /// L (mm).
-    #[serde(default)]
     pub length: Option<f64>,
     /// D.
-    #[serde(default)]
     pub risk: Option<f64>,
     /// F.
-    #[serde(default)]
     pub objective: Option<f64>,
     /// Smallest clearance to an obstacle surface (mm).
-    #[serde(default)]
     pub min_clearance: Option<f64>,
     /// Distance from the path's end to the target (mm).
-    #[serde(default)]
     pub target_error: Option<f64>,
     /// Optimality residual of the solution.
-    #[serde(default)]
     pub kkt_residual: Option<f64>,
     /// Solver iterations.
-    #[serde(default)]
     pub iterations: u32,
     /// Objective and constraint evaluations.
-    #[serde(default)]
     pub evaluations: u32,
     /// The insertion posture, `null` for an infeasible form.
-    #[serde(default)]
     pub insertion: Option<InsertionJson>,
     /// The segments, `null` for an infeasible form.
-    #[serde(default)]
     pub segments: Option<Vec<SegmentJson>>,
     /// Points at most 1 mm apart from the entry to the end: written for the best path only.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub points: Option<Vec<[f64; 3]>>,
 }
 
-fn feasible_unless_told() -> bool {
-    true
-}
-
 /// `insertion`: the posture of the needle at the entry.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct InsertionJson {
     /// Rotation about the entry frame's first axis (degrees).
-    #[serde(default)]
     pub theta1_deg: Option<f64>,
     /// Rotation about the entry frame's second axis (degrees).
-    #[serde(default)]
     pub theta2_deg: Option<f64>,
     /// Angle between the insertion direction and the nominal axis (degrees).
-    #[serde(default)]
     pub tilt_deg: Option<f64>,
     /// Unit insertion direction.
-    #[serde(default)]
     pub direction: [f64; 3],
 }
 
 /// One entry of `segments`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct SegmentJson {
     /// `R` (arc) or `L` (line).
-    #[serde(default)]
     pub kind: String,
     /// Length (mm).
-    #[serde(default)]
     pub length: Option<f64>,
     /// Bevel rotation before the segment (degrees).
-    #[serde(default)]
     pub bevel_deg: Option<f64>,
 }
 
 /// `stats`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct StatsJson {
     /// Wall-clock planning time (µs).
-    #[serde(default)]
     pub time_us: u64,
     /// Solver iterations over all forms.
-    #[serde(default)]
     pub iterations: u32,
     /// Evaluations over all forms.
-    #[serde(default)]
     pub evaluations: u32,
 }
 
@@ -224,6 +191,19 @@ impl BestPath {
             control_degree: o.form.len(),
         }
     }
+}
+
+/// Path points no more than 1 mm apart, entry to end.
+pub fn path_points(scenario: &Scenario, o: &FormOutcome) -> Vec<[f32; 3]> {
+    let geo = rebuild(scenario, o.form, &o.insertion, &o.segments);
+    let mut pts = Vec::new();
+    sample_points(&geo, 1.0, |p: V3| pts.push([p.x, p.y, p.z]));
+    pts
+}
+
+/// A reader takes an entry without `feasible` as feasible, so a trimmed plan still draws.
+fn feasible_unless_told() -> bool {
+    true
 }
 
 /// The `needle plan --json` report of `report`.

@@ -47,14 +47,14 @@ pub struct SweepBestJson {
 /// One form at a sweep point.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepFormJson {
-    /// The form word.
-    pub form: String,
-    /// Whether it has a path.
-    pub feasible: bool,
     /// F, `null` when infeasible.
     pub objective: Option<f64>,
     /// L (mm), `null` when infeasible.
     pub length: Option<f64>,
+    /// The form word.
+    pub form: String,
+    /// Whether it has a path.
+    pub feasible: bool,
 }
 
 impl SweepPointJson {

@@ -12,7 +12,8 @@
 //! circles must never be able to pass through the obstacle.
 
 use super::geometry::{
-    clip_slab, dist, dist_to_boundary, enclosing_circle, principal_axis, union_area, Circle,
+    bounding_box, clip_slab, dist, dist_to_boundary, enclosing_circle, principal_axis, union_area,
+    Circle,
 };
 use super::polygon::Polygon;
 use anyhow::{anyhow, Result};
@@ -146,13 +147,7 @@ fn segmented(poly: &Polygon) -> Vec<Circle> {
 /// plus the grid's half-diagonal (the distance is 1-Lipschitz, so no interior point can be farther).
 fn inscribed_radius_bound(poly: &Polygon) -> f64 {
     let v = poly.vertices();
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in v {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = bounding_box(v);
     let n = 160;
     let step = (hi[0] - lo[0]).max(hi[1] - lo[1]) / n as f64;
     let mut best = 0.0f64;

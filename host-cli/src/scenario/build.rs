@@ -12,6 +12,13 @@ use planner_core::scenario::{
 use planner_core::{PlanError, Scenario, MAX_OBSTACLES};
 use std::path::Path;
 
+/// `needle.max_arc_deg` when the file has none: at most a half turn per arc.
+pub const DEFAULT_MAX_ARC_DEG: f32 = 180.0;
+/// `entry.max_tilt_deg` when the file has none.
+pub const DEFAULT_MAX_TILT_DEG: f32 = 60.0;
+/// `target.tolerance` when the file has none (mm).
+pub const DEFAULT_TOLERANCE: f32 = 0.1;
+
 impl ScenarioFile {
     /// Builds the core scenario, checking what the core checks (so errors name the file's keys).
     pub fn to_scenario(&self) -> Result<Scenario> {
@@ -72,17 +79,17 @@ impl ScenarioFile {
         let scenario = Scenario {
             needle: Needle {
                 curvature_radius: self.needle.curvature_radius,
-                max_arc_deg: self.needle.max_arc_deg,
+                max_arc_deg: self.needle.max_arc_deg.unwrap_or(DEFAULT_MAX_ARC_DEG),
                 max_line_length: self.needle.max_line_length.unwrap_or(0.0),
             },
             entry: Entry {
                 position: self.entry.position,
                 direction: self.entry.direction,
-                max_tilt_deg: self.entry.max_tilt_deg,
+                max_tilt_deg: self.entry.max_tilt_deg.unwrap_or(DEFAULT_MAX_TILT_DEG),
             },
             target: Target {
                 position: self.target.position,
-                tolerance: self.target.tolerance,
+                tolerance: self.target.tolerance.unwrap_or(DEFAULT_TOLERANCE),
             },
             obstacles,
             weights,

@@ -11,7 +11,6 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
     /// Free-form name.
-    #[serde(default)]
     pub name: Option<String>,
     /// Needle mechanics.
     pub needle: NeedleFile,
@@ -23,10 +22,8 @@ pub struct ScenarioFile {
     #[serde(default)]
     pub obstacles: Vec<ObstacleFile>,
     /// Weights (defaults 1, 1, 1000, 2).
-    #[serde(default)]
     pub weights: Option<WeightsFile>,
     /// Planner options.
-    #[serde(default)]
     pub planner: Option<PlannerFile>,
     /// Directory of the file, for `polygon_file` paths (set by [`ScenarioFile::load`]).
     #[serde(skip)]
@@ -40,15 +37,9 @@ pub struct NeedleFile {
     /// Arc radius (mm).
     pub curvature_radius: f32,
     /// Longest arc as a turning angle (degrees), default 180.
-    #[serde(default = "default_max_arc")]
-    pub max_arc_deg: f32,
+    pub max_arc_deg: Option<f32>,
     /// Longest line (mm); default: twice the entry-target distance plus a half turn.
-    #[serde(default)]
     pub max_line_length: Option<f32>,
-}
-
-fn default_max_arc() -> f32 {
-    180.0
 }
 
 /// `[entry]`
@@ -60,12 +51,7 @@ pub struct EntryFile {
     /// Nominal insertion axis.
     pub direction: [f32; 3],
     /// Tilt bound (degrees), default 60.
-    #[serde(default = "default_tilt")]
-    pub max_tilt_deg: f32,
-}
-
-fn default_tilt() -> f32 {
-    60.0
+    pub max_tilt_deg: Option<f32>,
 }
 
 /// `[target]`
@@ -75,12 +61,7 @@ pub struct TargetFile {
     /// Target point (mm).
     pub position: [f32; 3],
     /// Allowed end-point error (mm), default 0.1.
-    #[serde(default = "default_tolerance")]
-    pub tolerance: f32,
-}
-
-fn default_tolerance() -> f32 {
-    0.1
+    pub tolerance: Option<f32>,
 }
 
 /// `[[obstacles]]`: a circle (sphere in 3-D) by `center` and `radius`, or, in plane mode, a polygon
@@ -90,19 +71,14 @@ fn default_tolerance() -> f32 {
 #[serde(deny_unknown_fields)]
 pub struct ObstacleFile {
     /// Centre (mm).
-    #[serde(default)]
     pub center: Option<[f32; 3]>,
     /// Radius (mm).
-    #[serde(default)]
     pub radius: Option<f32>,
     /// Outline in the y-z plane (mm), vertices in order.
-    #[serde(default)]
     pub polygon: Option<Vec<[f64; 2]>>,
     /// A text file with one `y z` vertex per line, relative to the scenario file.
-    #[serde(default)]
     pub polygon_file: Option<PathBuf>,
     /// `"circumscribed"`, `"segmented"` (default) or `"bordered"`.
-    #[serde(default)]
     pub approx: Option<String>,
 }
 
@@ -111,16 +87,12 @@ pub struct ObstacleFile {
 #[serde(deny_unknown_fields)]
 pub struct WeightsFile {
     /// a1
-    #[serde(default)]
     pub length: Option<f32>,
     /// a2
-    #[serde(default)]
     pub risk: Option<f32>,
     /// a3
-    #[serde(default)]
     pub penalty: Option<f32>,
     /// a4
-    #[serde(default)]
     pub control: Option<f32>,
 }
 
@@ -129,19 +101,14 @@ pub struct WeightsFile {
 #[serde(deny_unknown_fields)]
 pub struct PlannerFile {
     /// Largest control degree, default 3.
-    #[serde(default)]
     pub max_control_degree: Option<u8>,
     /// `"yz"` for the paper's plane mode; absent for 3-D.
-    #[serde(default)]
     pub plane: Option<String>,
     /// Forms to try, e.g. `["RL", "LRL"]`.
-    #[serde(default)]
     pub forms: Option<Vec<String>>,
     /// `"mean"` (default) or `"sum"`.
-    #[serde(default)]
     pub risk: Option<String>,
     /// Smallest clearance a plan must keep (mm), default 0.
-    #[serde(default)]
     pub min_clearance: Option<f32>,
 }
 

@@ -30,6 +30,35 @@ pub struct RrtCmd {
     pub plot: Option<PathBuf>,
 }
 
+/// The RRT's path and its tree as lines to draw.
+pub(super) fn rrt_scene_paths(
+    scenario: &Scenario,
+    o: &rrt::Outcome,
+) -> (PlotPath, Vec<Vec<[f32; 3]>>) {
+    let radius = scenario.needle.curvature_radius;
+    let tree = o
+        .tree
+        .iter()
+        .skip(1)
+        .map(|n| {
+            let parent = o.tree[n.parent].frame;
+            path_points(&parent, &[n.piece], radius, 2.5)
+        })
+        .collect();
+    let s = &o.score;
+    let path = PlotPath {
+        label: format!(
+            "RRT: N = {}, F = {:.2}, L = {:.1} mm, {:.2} mm off",
+            s.control_degree, s.objective, s.length, s.target_error
+        ),
+        form: "RRT".into(),
+        colour: "#d62728".into(),
+        points: path_points(&o.first, &o.pieces, radius, 1.0),
+        best: true,
+    };
+    (path, tree)
+}
+
 /// The `needle rrt --json` object: the path's score, the run's effort, its segments and points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RrtJson {
@@ -88,35 +117,6 @@ impl fmt::Display for RrtJson {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write_sorted(self, f)
     }
-}
-
-/// The RRT's path and its tree as lines to draw.
-pub(super) fn rrt_scene_paths(
-    scenario: &Scenario,
-    o: &rrt::Outcome,
-) -> (PlotPath, Vec<Vec<[f32; 3]>>) {
-    let radius = scenario.needle.curvature_radius;
-    let tree = o
-        .tree
-        .iter()
-        .skip(1)
-        .map(|n| {
-            let parent = o.tree[n.parent].frame;
-            path_points(&parent, &[n.piece], radius, 2.5)
-        })
-        .collect();
-    let s = &o.score;
-    let path = PlotPath {
-        label: format!(
-            "RRT: N = {}, F = {:.2}, L = {:.1} mm, {:.2} mm off",
-            s.control_degree, s.objective, s.length, s.target_error
-        ),
-        form: "RRT".into(),
-        colour: "#d62728".into(),
-        points: path_points(&o.first, &o.pieces, radius, 1.0),
-        best: true,
-    };
-    (path, tree)
 }
 
 /// Runs `needle rrt`.
