@@ -1,6 +1,6 @@
-//! The TOML scenario format as written (see `examples/paper.toml`): the file's tables and keys,
-//! with the documented defaults for missing optional keys. Turning it into the core's scenario is
-//! in [`super::build`]; its polygon obstacles become circles in [`super::shapes`].
+//! The TOML scenario format as written (see `examples/paper.toml`): the file's tables and keys, a
+//! missing optional key left as `None`. Turning it into the core's scenario, with the documented
+//! defaults, is in `build.rs`; its polygon obstacles become circles in `shapes.rs`.
 
 use anyhow::{Context, Result};
 use serde::Deserialize;
@@ -66,7 +66,7 @@ pub struct TargetFile {
 
 /// `[[obstacles]]`: a circle (sphere in 3-D) by `center` and `radius`, or, in plane mode, a polygon
 /// in the y-z plane by `polygon = [[y, z], ...]` or `polygon_file`, turned into covering circles by
-/// `approx` (see [`super::approx`]).
+/// `approx` (see `approx.rs`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObstacleFile {

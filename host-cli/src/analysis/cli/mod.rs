@@ -1,6 +1,6 @@
 //! The analysis subcommands of `needle` (sweep, rrt, compare, approx, plot, `plan --plot`): argument
-//! parsing and output, one file per command; the work itself is in the sibling modules of
-//! [`crate::analysis`].
+//! parsing and output, one file per command; the work itself is in the other modules of
+//! `analysis`.
 
 mod approx;
 mod args;
