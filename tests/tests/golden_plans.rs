@@ -41,11 +41,13 @@ fn differences(path: &str, stored: &Value, now: &Value, out: &mut Vec<String>) {
             }
         }
         // Numbers compare as f64 bit patterns: f32 results print exactly, so any change shows.
-        (Value::Number(a), Value::Number(b)) => {
-            if a.as_f64().map(f64::to_bits) != b.as_f64().map(f64::to_bits) {
-                out.push(format!("{path}: {a} before, {b} now"));
-            }
+        (Value::Number(a), Value::Number(b))
+            if a.as_f64().map(f64::to_bits) != b.as_f64().map(f64::to_bits) =>
+        {
+            out.push(format!("{path}: {a} before, {b} now"));
         }
+        // Equal bit patterns are equal, whether written as an integer or not.
+        (Value::Number(_), Value::Number(_)) => {}
         (a, b) if a != b => out.push(format!("{path}: {a} before, {b} now")),
         _ => {}
     }

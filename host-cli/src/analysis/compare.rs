@@ -231,7 +231,7 @@ impl RunJson {
 pub fn to_json(c: &Comparison) -> ComparisonJson {
     let optimizer = match (&c.optimizer, c.optimizer_row()) {
         (Ok((report, _)), Some(row)) => OptimizerJson::Planned {
-            row: row,
+            row,
             form: report
                 .best()
                 .map(|b| b.form.to_string())

@@ -12,8 +12,10 @@ use std::path::PathBuf;
 /// `needle compare`
 #[derive(clap::Args, Clone, Debug)]
 pub struct CompareArgs {
+    /// The scenario and what to plan in it.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
+    /// The RRT's settings.
     #[command(flatten)]
     pub rrt: RrtArgs,
     /// Number of RRT runs (seeds first, first + 1, ...).

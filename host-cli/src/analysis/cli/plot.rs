@@ -64,6 +64,7 @@ pub fn write_plan_plot(
 /// `needle plot`
 #[derive(clap::Args, Clone, Debug)]
 pub struct PlotArgs {
+    /// The scenario and what to plan in it.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     /// A `needle plan --json` output to draw instead of planning again.

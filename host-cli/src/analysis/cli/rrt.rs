@@ -15,8 +15,10 @@ use std::path::PathBuf;
 /// `needle rrt`
 #[derive(clap::Args, Clone, Debug)]
 pub struct RrtCmd {
+    /// The scenario and what to plan in it.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
+    /// The RRT's settings.
     #[command(flatten)]
     pub rrt: RrtArgs,
     /// Seed of the random samples.

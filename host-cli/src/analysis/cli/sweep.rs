@@ -10,6 +10,7 @@ use std::path::PathBuf;
 /// `needle sweep`
 #[derive(clap::Args, Clone, Debug)]
 pub struct SweepArgs {
+    /// The scenario and what to plan in it.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     /// Weight to vary: length, risk, penalty or control.
