@@ -1,6 +1,8 @@
 //! A faulty serial line: flips and drops bytes at given rates (seeded, so runs repeat), and a
 //! pacer that makes bytes take the time they take at a baud rate (8N1: 10 bits a byte).
 
+use rand::{Rng, RngExt, SeedableRng};
+use rand_xoshiro::SplitMix64;
 use std::time::{Duration, Instant};
 
 /// Fault rates of one direction of the line.
@@ -29,7 +31,7 @@ pub struct LineStats {
 #[derive(Clone, Debug)]
 pub struct FaultyLine {
     config: LineConfig,
-    state: u64,
+    faults: SplitMix64,
     stats: LineStats,
 }
 
@@ -38,8 +40,9 @@ impl FaultyLine {
     pub fn new(config: LineConfig) -> Self {
         FaultyLine {
             config,
-            // splitmix64 of the seed, so seeds 0, 1, 2 give unrelated streams (and never 0).
-            state: splitmix(config.seed) | 1,
+            // The workspace's one seeded generator (as `needle_cli::random`): neighbouring seeds
+            // give unrelated fault patterns.
+            faults: SplitMix64::seed_from_u64(config.seed),
             stats: LineStats::default(),
         }
     }
@@ -54,18 +57,8 @@ impl FaultyLine {
         self.stats
     }
 
-    fn next(&mut self) -> u64 {
-        // xorshift64*: enough for fault patterns, and reproducible everywhere.
-        let mut x = self.state;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.state = x;
-        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
     fn chance(&mut self, p: f64) -> bool {
-        p > 0.0 && ((self.next() >> 11) as f64 / (1u64 << 53) as f64) < p
+        p > 0.0 && self.faults.random::<f64>() < p
     }
 
     /// Carries `bytes` across the line, appending what arrives to `out`.
@@ -79,19 +72,12 @@ impl FaultyLine {
             if self.chance(self.config.flip_rate) {
                 self.stats.flipped += 1;
                 // XOR with a non-zero mask: the byte always changes.
-                out.push(b ^ ((self.next() % 255) as u8 + 1));
+                out.push(b ^ ((self.faults.next_u64() % 255) as u8 + 1));
                 continue;
             }
             out.push(b);
         }
     }
-}
-
-fn splitmix(seed: u64) -> u64 {
-    let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 /// Makes bytes take their time on the line: `wait(n)` returns when `n` more bytes would have

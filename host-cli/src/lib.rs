@@ -3,5 +3,6 @@
 pub mod analysis;
 pub mod bench;
 pub mod device;
+pub mod random;
 pub mod report;
-pub mod scenario_file;
+pub mod scenario;

@@ -5,8 +5,7 @@ use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
 use needle_cli::report::{plan_json, plan_table, Stats};
-use needle_cli::scenario_file::{load_scenario, parse_form};
-use planner_core::model::form::FormSet;
+use needle_cli::scenario::{load_scenario, load_scenario_shapes, restrict};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -40,8 +39,8 @@ struct PlanArgs {
     #[arg(long)]
     plot: Option<PathBuf>,
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
-    #[arg(long)]
-    approx: Option<needle_cli::analysis::approx::Method>,
+    #[arg(long, ignore_case = true)]
+    approx: Option<needle_cli::scenario::approx::Method>,
 }
 
 #[derive(Subcommand)]
@@ -108,22 +107,9 @@ struct BenchArgs {
 fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
     let mut scenario = match args.approx {
         None => load_scenario(&args.file)?,
-        Some(m) => needle_cli::scenario_file::load_scenario_shapes(&args.file, Some(m))?.0,
+        Some(m) => load_scenario_shapes(&args.file, Some(m))?.0,
     };
-    if let Some(n) = args.max_degree {
-        scenario.options.max_control_degree = n;
-    }
-    if let Some(words) = &args.forms {
-        let mut set = FormSet::default();
-        for w in words {
-            set.insert(parse_form(w)?);
-        }
-        scenario.options.forms = set;
-        if args.max_degree.is_none() {
-            scenario.options.max_control_degree = planner_core::MAX_CONTROL_DEGREE as u8;
-        }
-    }
-    scenario.validate().context("invalid planning options")?;
+    restrict(&mut scenario, args.max_degree, args.forms.as_deref())?;
     Ok(scenario)
 }
 

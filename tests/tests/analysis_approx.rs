@@ -1,8 +1,10 @@
 //! Polygon obstacles become circles that cover them entirely, for every method, on convex and
 //! concave outlines; scenario files carry polygons inline or in a file.
 
-use needle_cli::analysis::approx::{approximate, Method, Polygon};
-use needle_cli::scenario_file::{load_scenario_shapes, ScenarioFile};
+use needle_cli::scenario::approx::{approximate, Method};
+use needle_cli::scenario::geometry::bounding_box;
+use needle_cli::scenario::polygon::Polygon;
+use needle_cli::scenario::{load_scenario_shapes, ScenarioFile};
 use needle_e2e::{needle, needle_json, workspace};
 
 fn shapes() -> Vec<(&'static str, Vec<[f64; 2]>)> {
@@ -76,13 +78,7 @@ fn shapes() -> Vec<(&'static str, Vec<[f64; 2]>)> {
 /// Grid points inside the polygon at `step` spacing, plus points along its outline.
 fn dense_samples(p: &Polygon, step: f64) -> Vec<[f64; 2]> {
     let v = p.vertices();
-    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-    for q in v {
-        for k in 0..2 {
-            lo[k] = lo[k].min(q[k]);
-            hi[k] = hi[k].max(q[k]);
-        }
-    }
+    let (lo, hi) = bounding_box(v);
     let mut out = Vec::new();
     let mut y = lo[0];
     while y <= hi[0] {

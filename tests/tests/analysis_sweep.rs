@@ -169,7 +169,7 @@ fn sweep_rejects_bad_ranges_clearly() {
         ),
         (
             vec!["--weight", "speed", "--from", "1", "--to", "2"],
-            "length, risk, penalty or control",
+            "possible values: length, risk, penalty, control",
         ),
     ] {
         let out = needle()

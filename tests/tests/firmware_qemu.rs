@@ -58,7 +58,7 @@ fn undecodable_frame() -> Vec<u8> {
 
 /// The paper's scenario as a plan request with 40 obstacles (the planner holds 32).
 fn over_capacity_request() -> Vec<u8> {
-    let s = needle_cli::scenario_file::load_scenario(&example("paper")).expect("paper.toml");
+    let s = needle_cli::scenario::load_scenario(&example("paper")).expect("paper.toml");
     let mut bytes = postcard::to_stdvec(&(s.needle, s.entry, s.target)).expect("encode");
     bytes.push(40); // obstacle count (a one-byte varint)
     for i in 0..40 {
@@ -120,7 +120,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
         })
     );
     // The same link still plans, and the plan is the host's, bit for bit.
-    let paper = needle_cli::scenario_file::load_scenario(&example("paper")).unwrap();
+    let paper = needle_cli::scenario::load_scenario(&example("paper")).unwrap();
     let on_device = client
         .plan(&paper, &mut |_| {})
         .expect("plan after bad input");

@@ -46,6 +46,7 @@ fn differences(path: &str, stored: &Value, now: &Value, out: &mut Vec<String>) {
         {
             out.push(format!("{path}: {a} before, {b} now"));
         }
+        // Equal bit patterns are equal, whether written as an integer or not.
         (Value::Number(_), Value::Number(_)) => {}
         (a, b) if a != b => out.push(format!("{path}: {a} before, {b} now")),
         _ => {}

@@ -2,13 +2,16 @@
 //! time of the optimiser's best path and of RRT paths over several seeds (median and spread).
 
 use super::parallel;
+use super::pieces::Segment;
 use super::rrt::{self, Outcome, RrtError};
+use crate::report::json::{write_sorted, SegmentJson};
 use planner_core::{PlanError, PlanReport, Scenario};
-use serde_json::{json, Value};
+use serde::Serialize;
+use std::fmt;
 use std::time::Instant;
 
-/// One row of the comparison.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One row of the comparison; in a report, a value that is not finite is written as `null`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Row {
     /// L (mm).
     pub length: f64,
@@ -25,18 +28,6 @@ pub struct Row {
 }
 
 impl Row {
-    fn to_json(self) -> Value {
-        let n = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-        json!({
-            "length": n(self.length),
-            "risk": n(self.risk),
-            "control_degree": n(self.control_degree),
-            "objective": n(self.objective),
-            "target_error": n(self.target_error),
-            "time_us": n(self.time_us),
-        })
-    }
-
     fn from_rrt(o: &Outcome) -> Row {
         Row {
             length: f64::from(o.score.length),
@@ -140,48 +131,140 @@ pub fn run(
     Comparison { optimizer, runs }
 }
 
-/// The `needle compare --json` object.
-pub fn to_json(c: &Comparison) -> Value {
-    let optimizer = match (&c.optimizer, c.optimizer_row()) {
-        (Ok((report, _)), Some(row)) => {
-            let mut v = row.to_json();
-            if let Some(b) = report.best() {
-                v["form"] = json!(b.form.to_string());
-            }
-            v
+/// The `needle compare --json` object (written only: nothing reads it back).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ComparisonJson {
+    /// The optimiser's best path, or why there is none.
+    pub optimizer: OptimizerJson,
+    /// The RRT runs and their statistics.
+    pub rrt: RrtRunsJson,
+}
+
+/// `optimizer`: the best path's row and form, or why there is none.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum OptimizerJson {
+    /// The optimiser planned.
+    Planned {
+        /// The best path's figures.
+        #[serde(flatten)]
+        row: Row,
+        /// The best form.
+        form: String,
+    },
+    /// It did not.
+    Failed {
+        /// Why.
+        error: String,
+    },
+}
+
+/// `rrt`: the runs, how many found a path, and column-wise median, minimum and maximum.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RrtRunsJson {
+    /// Median of the runs that found a path, `null` if none did.
+    pub median: Option<Row>,
+    /// `min` and `max`, present when a run found a path.
+    #[serde(flatten)]
+    pub spread: Option<SpreadJson>,
+    /// Runs that found a path.
+    pub found: usize,
+    /// Every run, by seed.
+    pub runs: Vec<RunJson>,
+}
+
+/// Column-wise extremes of the runs that found a path.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpreadJson {
+    /// Column-wise minimum.
+    pub min: Row,
+    /// Column-wise maximum.
+    pub max: Row,
+}
+
+/// One RRT run: its row, effort and segments, or why it found no path.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum RunJson {
+    /// The run found a path.
+    Found {
+        /// The run's seed.
+        seed: u64,
+        /// The path's figures.
+        #[serde(flatten)]
+        row: Row,
+        /// Nodes grown.
+        nodes: usize,
+        /// Samples drawn.
+        iterations: usize,
+        /// The merged segments.
+        segments: Vec<SegmentJson>,
+    },
+    /// It ran out of samples, or its options were wrong.
+    Failed {
+        /// The run's seed.
+        seed: u64,
+        /// Why.
+        error: String,
+    },
+}
+
+impl RunJson {
+    fn new(seed: u64, run: &Result<Outcome, RrtError>) -> RunJson {
+        match run {
+            Ok(o) => RunJson::Found {
+                seed,
+                row: Row::from_rrt(o),
+                nodes: o.tree.len(),
+                iterations: o.iterations,
+                segments: o.segments.iter().map(Segment::to_json).collect(),
+            },
+            Err(e) => RunJson::Failed {
+                seed,
+                error: e.to_string(),
+            },
         }
-        (Err(e), _) => json!({ "error": e.to_string() }),
-        (Ok(_), None) => json!({ "error": "no best form" }),
-    };
-    let runs: Vec<Value> = c
-        .runs
-        .iter()
-        .map(|(seed, r)| match r {
-            Ok(o) => {
-                let mut v = Row::from_rrt(o).to_json();
-                v["seed"] = json!(seed);
-                v["nodes"] = json!(o.tree.len());
-                v["iterations"] = json!(o.iterations);
-                v["segments"] = json!(o
-                    .segments
-                    .iter()
-                    .map(|s| json!({"kind": s.kind.letter().to_string(), "length": s.length, "bevel_deg": s.bevel_deg}))
-                    .collect::<Vec<_>>());
-                v
-            }
-            Err(e) => json!({ "seed": seed, "error": e.to_string() }),
-        })
-        .collect();
-    let mut rrt = json!({
-        "median": c.rrt_median().map_or(Value::Null, Row::to_json),
-        "runs": runs,
-        "found": c.rrt_rows().len(),
-    });
-    if let Some((lo, hi)) = c.rrt_spread() {
-        rrt["min"] = lo.to_json();
-        rrt["max"] = hi.to_json();
     }
-    json!({ "optimizer": optimizer, "rrt": rrt })
+}
+
+/// The `needle compare --json` report of `c`.
+pub fn to_json(c: &Comparison) -> ComparisonJson {
+    let optimizer = match (&c.optimizer, c.optimizer_row()) {
+        (Ok((report, _)), Some(row)) => OptimizerJson::Planned {
+            row,
+            form: report
+                .best()
+                .map(|b| b.form.to_string())
+                .unwrap_or_default(),
+        },
+        (Err(e), _) => OptimizerJson::Failed {
+            error: e.to_string(),
+        },
+        (Ok(_), None) => OptimizerJson::Failed {
+            error: "no best form".to_string(),
+        },
+    };
+    ComparisonJson {
+        optimizer,
+        rrt: RrtRunsJson {
+            median: c.rrt_median(),
+            spread: c
+                .rrt_spread()
+                .map(|(lo, hi)| SpreadJson { min: lo, max: hi }),
+            found: c.rrt_rows().len(),
+            runs: c
+                .runs
+                .iter()
+                .map(|(seed, r)| RunJson::new(*seed, r))
+                .collect(),
+        },
+    }
+}
+
+impl fmt::Display for ComparisonJson {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_sorted(self, f)
+    }
 }
 
 /// The side-by-side table printed by `needle compare`.

@@ -1,14 +1,13 @@
-//! Analysis around the planner: weight sweeps, the RRT baseline and the comparison with it,
-//! polygon obstacles turned into circles, and SVG plots of all of these.
+//! Analysis around the planner: weight sweeps, the RRT baseline and the comparison with it, and
+//! SVG plots of these and of polygon obstacles' circles (the polygons themselves are part of the
+//! scenario model, [`crate::scenario`]).
 
-pub mod approx;
 pub mod cli;
 pub mod compare;
-pub mod geometry;
 pub mod parallel;
+pub mod pieces;
 pub mod plan_file;
 pub mod plot;
-pub mod rng;
 pub mod rrt;
 pub mod svg;
 pub mod sweep;

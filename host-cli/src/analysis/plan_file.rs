@@ -1,46 +1,40 @@
-//! Reading a `needle plan --json` object back for plotting. The best path carries its points; a
-//! form entry is drawn from its `points`, or rebuilt from `insertion` and `segments` when present,
-//! and otherwise only listed in the legend.
+//! Drawing a saved `needle plan --json` report. The best path carries its points; a form entry is
+//! drawn from its `points`, or rebuilt from `insertion` and `segments` when present, and
+//! otherwise only listed in the legend.
 
 use super::plot::{colour_of, PlotPath};
+use crate::report::json::{FormEntry, PlanJson};
 use anyhow::{bail, Result};
 use planner_core::check::{rebuild, sample_points};
 use planner_core::report::{Insertion, SegmentPlan};
-use planner_core::{Form, Scenario, SegmentKind};
-use serde_json::Value;
+use planner_core::{Form, Scenario};
 
-fn points_of(v: &Value) -> Option<Vec<[f32; 3]>> {
-    let arr = v.get("points")?.as_array()?;
-    arr.iter()
-        .map(|p| {
-            let c = p.as_array()?;
-            Some([
-                c.first()?.as_f64()? as f32,
-                c.get(1)?.as_f64()? as f32,
-                c.get(2)?.as_f64()? as f32,
-            ])
-        })
-        .collect()
+/// The entry's own points, narrowed back to the planner's `f32` (they were widened from it).
+fn points_of(entry: &FormEntry) -> Option<Vec<[f32; 3]>> {
+    let points = entry.points.as_ref()?;
+    Some(points.iter().map(|p| p.map(|c| c as f32)).collect())
 }
 
-fn rebuilt(scenario: &Scenario, form: Form, v: &Value) -> Option<Vec<[f32; 3]>> {
-    let ins = v.get("insertion")?;
+/// The path rebuilt from the entry's insertion and segments, when they are complete.
+fn rebuilt(scenario: &Scenario, form: Form, entry: &FormEntry) -> Option<Vec<[f32; 3]>> {
+    let ins = entry.insertion.as_ref()?;
     let insertion = Insertion {
-        theta1_deg: ins.get("theta1_deg")?.as_f64()? as f32,
-        theta2_deg: ins.get("theta2_deg")?.as_f64()? as f32,
+        theta1_deg: ins.theta1_deg? as f32,
+        theta2_deg: ins.theta2_deg? as f32,
         ..Insertion::default()
     };
-    let mut segments = Vec::new();
-    for s in v.get("segments")?.as_array()? {
-        segments.push(SegmentPlan {
-            kind: match s.get("kind")?.as_str()? {
-                "R" => SegmentKind::Arc,
-                _ => SegmentKind::Line,
-            },
-            length: s.get("length")?.as_f64()? as f32,
-            bevel_deg: s.get("bevel_deg")?.as_f64()? as f32,
-        });
-    }
+    let segments = entry
+        .segments
+        .as_ref()?
+        .iter()
+        .map(|s| {
+            Some(SegmentPlan {
+                kind: s.segment_kind(),
+                length: s.length? as f32,
+                bevel_deg: s.bevel_deg? as f32,
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
     if segments.len() != form.len() {
         return None;
     }
@@ -50,45 +44,31 @@ fn rebuilt(scenario: &Scenario, form: Form, v: &Value) -> Option<Vec<[f32; 3]>> 
     Some(pts)
 }
 
-/// Paths and legend notes from a plan object.
-pub fn scene_paths(scenario: &Scenario, plan: &Value) -> Result<(Vec<PlotPath>, Vec<String>)> {
-    let Some(best) = plan.get("best").filter(|b| !b.is_null()) else {
+/// Paths and legend notes from a plan report.
+pub fn scene_paths(scenario: &Scenario, plan: &PlanJson) -> Result<(Vec<PlotPath>, Vec<String>)> {
+    let Some(best) = &plan.best else {
         bail!("the plan has no `best` path");
     };
-    let best_form = best
-        .get("form")
-        .and_then(Value::as_str)
-        .and_then(Form::parse);
+    let best = &best.path;
+    let best_form = Form::parse(&best.form);
     let mut paths = Vec::new();
     let mut notes = Vec::new();
-    let empty = Vec::new();
-    let forms = plan
-        .get("forms")
-        .and_then(Value::as_array)
-        .unwrap_or(&empty);
-    let mut entries: Vec<&Value> = forms.iter().collect();
+    let mut entries: Vec<&FormEntry> = plan.forms.iter().collect();
     if entries.is_empty() {
         entries.push(best);
     }
     for f in entries {
-        let Some(form) = f.get("form").and_then(Value::as_str).and_then(Form::parse) else {
+        let Some(form) = Form::parse(&f.form) else {
             continue;
         };
-        let feasible = f.get("feasible").and_then(Value::as_bool).unwrap_or(true);
-        if !feasible {
+        if !f.feasible {
             notes.push(format!("{form}: no feasible path"));
             continue;
         }
         let is_best = Some(form) == best_form;
         let source = if is_best { best } else { f };
-        let objective = source
-            .get("objective")
-            .and_then(Value::as_f64)
-            .unwrap_or(f64::NAN);
-        let length = source
-            .get("length")
-            .and_then(Value::as_f64)
-            .unwrap_or(f64::NAN);
+        let objective = source.objective.unwrap_or(f64::NAN);
+        let length = source.length.unwrap_or(f64::NAN);
         let label = format!(
             "{form}{}: F = {objective:.2}, L = {length:.1} mm",
             if is_best { " (best)" } else { "" }

@@ -6,7 +6,7 @@
 //! so tests and scripts can read the structure back.
 
 use super::svg::{esc, form_colour, ticks, Svg};
-use crate::scenario_file::ObstacleShape;
+use crate::scenario::ObstacleShape;
 use planner_core::model::scenario::Workspace;
 use planner_core::Scenario;
 
@@ -40,10 +40,6 @@ pub struct Scene<'a> {
     pub tree: Vec<Vec<[f32; 3]>>,
 }
 
-const VIEW_W: f64 = 560.0;
-const LEGEND_W: f64 = 340.0;
-const PAD: f64 = 50.0;
-
 struct View {
     h: usize,
     v: usize,
@@ -64,6 +60,10 @@ impl View {
 }
 
 const AXIS: [&str; 3] = ["x", "y", "z"];
+
+const VIEW_W: f64 = 560.0;
+const LEGEND_W: f64 = 340.0;
+const PAD: f64 = 50.0;
 
 fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];

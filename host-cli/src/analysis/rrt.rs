@@ -3,13 +3,15 @@
 //! drive (a line, or an arc of the needle's curvature bent to one of a few bevel directions: both
 //! sides of the plane in plane mode), until a node can reach the target within the tolerance.
 //!
-//! Its path is scored with the optimiser's objective (see [`score`]), with the control degree N
-//! counted as the number of pieces after merging consecutive steps that need no bevel change.
+//! Its path is scored with the optimiser's objective (see [`super::pieces::score`]), with the
+//! control degree N counted as the number of pieces after merging consecutive steps that need no
+//! bevel change.
 
-use super::rng::Pcg32;
+use super::pieces::{merge, score, v3, Piece, Score, Segment};
+use crate::random::{seeded, Draw};
 use planner_core::model::clearance::closest;
 use planner_core::model::kinematics::{entry_basis, insertion_frame, Frame, V3};
-use planner_core::model::scenario::{RiskMeasure, Workspace};
+use planner_core::model::scenario::Workspace;
 use planner_core::{PlanError, Scenario, SegmentKind};
 use std::time::Instant;
 
@@ -40,117 +42,6 @@ impl Default for Options {
             goal_bias: 0.2,
             rolls_3d: 6,
         }
-    }
-}
-
-/// One driven piece: roll the bevel by `roll` (radians), then drive `length` of `kind`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Piece {
-    /// Line or arc.
-    pub kind: SegmentKind,
-    /// Bevel rotation before the piece (radians; always 0 for lines, which spin anyway).
-    pub roll: f32,
-    /// Length (mm).
-    pub length: f32,
-}
-
-/// A merged segment: what the needle driver executes between two bevel changes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Segment {
-    /// Line or arc.
-    pub kind: SegmentKind,
-    /// Length (mm).
-    pub length: f32,
-    /// Bevel rotation before the segment (degrees).
-    pub bevel_deg: f32,
-}
-
-/// Consecutive pieces that need no bevel change (lines after lines, arcs rolled by 0 after
-/// arcs) merge into one segment; the number of segments is the control degree N.
-pub fn merge(pieces: &[Piece]) -> Vec<Segment> {
-    let mut out: Vec<Segment> = Vec::new();
-    for p in pieces {
-        if let Some(last) = out.last_mut() {
-            if last.kind == p.kind && (p.kind == SegmentKind::Line || p.roll == 0.0) {
-                last.length += p.length;
-                continue;
-            }
-        }
-        out.push(Segment {
-            kind: p.kind,
-            length: p.length,
-            bevel_deg: wrap_deg(p.roll.to_degrees()),
-        });
-    }
-    out
-}
-
-fn wrap_deg(d: f32) -> f32 {
-    let w = d.rem_euclid(360.0);
-    if w > 180.0 {
-        w - 360.0
-    } else {
-        w
-    }
-}
-
-/// A path measured with the optimiser's objective.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Score {
-    /// L (mm).
-    pub length: f32,
-    /// D: mean (or sum, per the scenario) over obstacles of 1 / clearance.
-    pub risk: f32,
-    /// H: 1e6 if the path enters an obstacle, else 0 (always 0 for an RRT path).
-    pub penalty: f32,
-    /// N: segments after merging.
-    pub control_degree: usize,
-    /// F = a1 L + a2 D + a3 H + a4 N.
-    pub objective: f32,
-    /// Smallest clearance to any obstacle surface (mm).
-    pub min_clearance: f32,
-    /// Distance from the path's end to the target (mm).
-    pub target_error: f32,
-}
-
-fn v3(a: [f32; 3]) -> V3 {
-    V3::new(a[0], a[1], a[2])
-}
-
-/// Scores the path that starts at `first` and drives `pieces`.
-pub fn score(scenario: &Scenario, first: &Frame, pieces: &[Piece]) -> Score {
-    let radius = scenario.needle.curvature_radius;
-    let mut clear = vec![f32::INFINITY; scenario.obstacles.len()];
-    let mut f = *first;
-    for p in pieces {
-        f = f.rolled(p.roll);
-        for (i, ob) in scenario.obstacles.iter().enumerate() {
-            let d = closest(&f, p.kind, p.length, radius, &v3(ob.center)).distance - ob.radius;
-            clear[i] = clear[i].min(d);
-        }
-        f = f.advanced(p.kind, p.length, radius);
-    }
-    // As the planner's objective: D is infinite and H = 1e6 once any obstacle is entered.
-    let blocked = clear.iter().any(|d| *d <= 0.0);
-    let inverse: f32 = clear.iter().map(|d| 1.0 / d).sum();
-    let risk = match (scenario.options.risk, clear.len()) {
-        (_, 0) => 0.0,
-        _ if blocked => f32::INFINITY,
-        (RiskMeasure::Mean, n) => inverse / n as f32,
-        (RiskMeasure::Sum, _) => inverse,
-    };
-    let length: f32 = pieces.iter().map(|p| p.length).sum();
-    let n = merge(pieces).len();
-    let w = &scenario.weights;
-    let penalty = if blocked { 1e6 } else { 0.0 };
-    Score {
-        length,
-        risk,
-        penalty,
-        control_degree: n,
-        objective: w.length * length + w.risk * risk + w.penalty * penalty + w.control * n as f32,
-        min_clearance: clear.iter().copied().fold(f32::INFINITY, f32::min),
-        target_error: (f.p - v3(scenario.target.position)).norm(),
     }
 }
 
@@ -338,7 +229,7 @@ pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> 
     let first = insertion_frame(v3(e.position), &entry_basis(e.direction), 0.0, 0.0);
     let target = v3(scenario.target.position);
     let (lo, hi) = bounds(scenario, 2.0 * options.step);
-    let mut rng = Pcg32::new(options.seed);
+    let mut rng = seeded(options.seed);
     let mut tree = vec![Node {
         frame: first,
         parent: 0,
@@ -439,51 +330,10 @@ pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> 
     })
 }
 
-/// Points along the path no more than `spacing` apart, entry first.
-pub fn path_points(first: &Frame, pieces: &[Piece], radius: f32, spacing: f32) -> Vec<[f32; 3]> {
-    let mut pts = vec![[first.p.x, first.p.y, first.p.z]];
-    let mut f = *first;
-    for p in pieces {
-        f = f.rolled(p.roll);
-        let n = (p.length / spacing).ceil().max(1.0) as usize;
-        for k in 1..=n {
-            let q = f.point_at(p.kind, p.length * k as f32 / n as f32, radius);
-            pts.push([q.x, q.y, q.z]);
-        }
-        f = f.advanced(p.kind, p.length, radius);
-    }
-    pts
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn piece(kind: SegmentKind, roll: f32, length: f32) -> Piece {
-        Piece { kind, roll, length }
-    }
-
-    #[test]
-    fn merging_counts_bevel_changes() {
-        use SegmentKind::{Arc, Line};
-        let pi = core::f32::consts::PI;
-        let pieces = [
-            piece(Arc, 0.0, 10.0),
-            piece(Arc, 0.0, 10.0),
-            piece(Line, 0.0, 10.0),
-            piece(Line, 0.0, 4.0),
-            piece(Arc, pi, 10.0),
-            piece(Arc, pi, 10.0), // flips back: a new segment
-            piece(Arc, 0.0, 3.0),
-        ];
-        let segs = merge(&pieces);
-        let kinds: Vec<_> = segs.iter().map(|s| (s.kind, s.length)).collect();
-        assert_eq!(
-            kinds,
-            vec![(Arc, 20.0), (Line, 14.0), (Arc, 10.0), (Arc, 13.0)]
-        );
-        assert_eq!(segs[2].bevel_deg, 180.0);
-    }
+    use crate::analysis::pieces::path_points;
 
     #[test]
     fn free_space_run_reaches_within_tolerance_and_is_deterministic() {

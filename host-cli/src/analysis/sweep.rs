@@ -2,23 +2,26 @@
 //! value of one weight, the others fixed, and report the best form, L, D, N and F per value.
 
 use super::parallel;
+use crate::report::sweep::{SweepJson, SweepPointJson};
 use anyhow::{bail, Result};
 use planner_core::model::form::FormSet;
 use planner_core::{Form, PlanError, PlanReport, Scenario};
-use serde_json::{json, Value};
 use std::fmt;
-use std::str::FromStr;
 
-/// Which weight of F = a1 L + a2 D + a3 H + a4 N is swept.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which weight of F = a1 L + a2 D + a3 H + a4 N is swept (by its name or by a1..a4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Weight {
     /// a1
+    #[value(alias = "a1")]
     Length,
     /// a2
+    #[value(alias = "a2")]
     Risk,
     /// a3
+    #[value(alias = "a3")]
     Penalty,
     /// a4
+    #[value(alias = "a4")]
     Control,
 }
 
@@ -51,19 +54,6 @@ impl Weight {
 impl fmt::Display for Weight {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
-    }
-}
-
-impl FromStr for Weight {
-    type Err = anyhow::Error;
-    fn from_str(s: &str) -> Result<Weight> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "length" | "a1" => Ok(Weight::Length),
-            "risk" | "a2" => Ok(Weight::Risk),
-            "penalty" | "a3" => Ok(Weight::Penalty),
-            "control" | "a4" => Ok(Weight::Control),
-            other => bail!("weight {other:?}: use length, risk, penalty or control"),
-        }
     }
 }
 
@@ -157,49 +147,15 @@ pub fn run(
     ))
 }
 
-fn num(v: f32) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
+/// The `needle sweep --json` report.
+pub fn to_json(weight: Weight, points: &[Point]) -> SweepJson {
+    SweepJson {
+        weight: weight.name().to_string(),
+        points: points
+            .iter()
+            .map(|p| SweepPointJson::new(p.value, &p.plan))
+            .collect(),
     }
-}
-
-/// The `needle sweep --json` object.
-pub fn to_json(weight: Weight, points: &[Point]) -> Value {
-    let points: Vec<Value> = points
-        .iter()
-        .map(|p| {
-            let forms: Vec<Value> = p
-                .plan
-                .iter()
-                .flat_map(|r| r.forms.iter())
-                .map(|o| {
-                    json!({
-                        "form": o.form.to_string(),
-                        "feasible": o.feasible,
-                        "objective": if o.feasible { num(o.objective) } else { Value::Null },
-                        "length": if o.feasible { num(o.length) } else { Value::Null },
-                    })
-                })
-                .collect();
-            let best = p.best().map_or(Value::Null, |b| {
-                json!({
-                    "form": b.form.to_string(),
-                    "control_degree": b.form.len(),
-                    "length": num(b.length),
-                    "risk": num(b.risk),
-                    "objective": num(b.objective),
-                })
-            });
-            let mut v = json!({ "value": p.value, "best": best, "forms": forms });
-            if let Err(e) = &p.plan {
-                v["error"] = json!(e.to_string());
-            }
-            v
-        })
-        .collect();
-    json!({ "weight": weight.name(), "points": points })
 }
 
 /// Every form that appears in any point, in catalogue order.
@@ -305,6 +261,7 @@ pub fn to_table(weight: Weight, points: &[Point]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::ValueEnum;
 
     #[test]
     fn ranges_include_both_ends() {
@@ -376,7 +333,7 @@ mod tests {
             Weight::Penalty,
             Weight::Control,
         ] {
-            assert_eq!(w.name().parse::<Weight>().unwrap(), w);
+            assert_eq!(Weight::from_str(w.name(), true), Ok(w));
             let t = w.apply(&s, 7.5);
             let changed = [
                 t.weights.length != s.weights.length,
@@ -386,6 +343,7 @@ mod tests {
             ];
             assert_eq!(changed.iter().filter(|c| **c).count(), 1, "{w}");
         }
-        assert!("alpha".parse::<Weight>().is_err());
+        assert_eq!(Weight::from_str("A3", true), Ok(Weight::Penalty));
+        assert!(Weight::from_str("alpha", true).is_err());
     }
 }

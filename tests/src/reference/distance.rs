@@ -39,11 +39,11 @@ pub fn to_arc(f: &Frame, len: f64, rho: f64, c: V3) -> f64 {
 mod tests {
     use super::*;
     use crate::reference::frame::{entry_basis, insertion};
-    use crate::reference::rng::Rng;
+    use needle_cli::random::{seeded, Draw};
 
     #[test]
     fn exact_distances_match_dense_sampling() {
-        let mut rng = Rng::new(7);
+        let mut rng = seeded(7);
         for _ in 0..400 {
             let b = entry_basis(V3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 1.0));
             let f = insertion(

@@ -12,7 +12,6 @@ pub mod distance;
 pub mod frame;
 pub mod problem;
 pub mod random;
-pub mod rng;
 pub mod search;
 pub mod variant;
 

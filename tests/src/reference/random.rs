@@ -1,7 +1,7 @@
 //! Seeded random scenarios for the optimality comparison: 3 to 8 obstacles between the entry and
 //! the target, none containing either (with a margin), in the y-z plane or in space.
 
-use super::rng::Rng;
+use needle_cli::random::{seeded, Draw};
 use planner_core::model::scenario::{Obstacle, Workspace};
 use planner_core::Scenario;
 
@@ -11,7 +11,7 @@ pub const MARGIN: f64 = 3.0;
 /// A random scenario: `plane` puts everything in the y-z plane (circles, the paper's setting),
 /// otherwise spheres off it. The needle, weights and bounds vary around the paper's.
 pub fn random_scenario(seed: u64, plane: bool) -> Scenario {
-    let mut rng = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ u64::from(plane));
+    let mut rng = seeded(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ u64::from(plane));
     let mut s = Scenario::paper();
     s.options.workspace = if plane {
         Workspace::PlaneYz

@@ -3,9 +3,9 @@
 //! target throughout because the last two segments are solved in closed form.
 
 use super::problem::{score, Cand, Problem, INFEASIBLE};
-use super::rng::Rng;
 use super::variant::{Var, Variant};
 use core::f64::consts::PI;
+use needle_cli::random::{seeded, Draw};
 
 /// How hard to search; 1.0 is the default suite's effort.
 #[derive(Clone, Copy, Debug)]
@@ -258,7 +258,7 @@ pub fn search(pb: &Problem, variant: &Variant, effort: Effort, seed: u64) -> (Op
                 4 => 40_000.0,
                 _ => 60_000.0,
             }) as usize;
-        let mut rng = Rng::new(seed);
+        let mut rng = seeded(seed);
         for _ in 0..count {
             let x: Vec<f64> = spans.iter().map(|&(lo, hi)| rng.range(lo, hi)).collect();
             let f = obj.value(&x);

@@ -4,8 +4,8 @@ use super::complete::{arc_arc, arc_line, line_arc};
 use super::frame::V3;
 use super::problem::{Cand, Problem};
 use super::random::random_scenario;
-use super::rng::Rng;
 use super::*;
+use needle_cli::random::{seeded, Draw};
 use planner_core::check::check;
 use planner_core::model::form::catalogue;
 use planner_core::model::scenario::Workspace;
@@ -21,7 +21,7 @@ fn solve(s: &Scenario, word: &str) -> Option<RefSolution> {
 
 #[test]
 fn single_arc_has_the_closed_form_length() {
-    let mut rng = Rng::new(11);
+    let mut rng = seeded(11);
     for plane in [true, false] {
         for _ in 0..6 {
             let mut s = Scenario::paper();
@@ -203,7 +203,7 @@ fn more_effort_finds_nothing_better() {
 /// Every closed-form completion ends exactly on the target, from random frames.
 #[test]
 fn completions_end_on_the_target() {
-    let mut rng = Rng::new(5);
+    let mut rng = seeded(5);
     let mut pb = Problem::new(&Scenario::paper());
     let mut out = Vec::new();
     let mut count = 0;

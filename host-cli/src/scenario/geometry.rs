@@ -21,6 +21,18 @@ impl Circle {
     }
 }
 
+/// The smallest axis-aligned box holding `points`: its lowest and highest corner.
+pub fn bounding_box(points: &[Pt]) -> (Pt, Pt) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
 /// Euclidean distance.
 pub fn dist(a: Pt, b: Pt) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])

@@ -12,25 +12,28 @@
 //! circles must never be able to pass through the obstacle.
 
 use super::geometry::{
-    clip_slab, dist, dist_to_boundary, enclosing_circle, inside, principal_axis, signed_area,
-    union_area, Circle, Pt,
+    bounding_box, clip_slab, dist, dist_to_boundary, enclosing_circle, principal_axis, union_area,
+    Circle,
 };
-use anyhow::{bail, Result};
+use super::polygon::Polygon;
+use anyhow::{anyhow, Result};
 use std::fmt;
 use std::str::FromStr;
 
 /// Most slabs the segmented method tries.
 pub const MAX_SEGMENTS: usize = 8;
 
-/// How a polygon becomes circles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How a polygon becomes circles; `circle` and `edged` are accepted as older names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {
     /// One smallest enclosing circle: regular, compact obstacles.
+    #[value(alias = "circle")]
     Circumscribed,
     /// A few circles over slabs of the polygon: irregular obstacles without deep notches.
     #[default]
     Segmented,
     /// Small circles along the outline: very irregular or thin obstacles.
+    #[value(alias = "edged")]
     Bordered,
 }
 
@@ -54,94 +57,17 @@ impl fmt::Display for Method {
     }
 }
 
+/// A scenario file's `approx` key: the command line's spellings, in any case, spaces around.
 impl FromStr for Method {
     type Err = anyhow::Error;
     fn from_str(s: &str) -> Result<Method> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "circumscribed" | "circle" => Ok(Method::Circumscribed),
-            "segmented" => Ok(Method::Segmented),
-            "bordered" | "edged" => Ok(Method::Bordered),
-            other => bail!("approximation {other:?}: use circumscribed, segmented or bordered"),
-        }
-    }
-}
-
-/// A checked simple polygon, counter-clockwise.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Polygon(Vec<Pt>);
-
-impl Polygon {
-    /// Checks the outline: at least three finite vertices, a non-zero area, no crossing edges.
-    /// A repeated closing vertex is dropped and clockwise outlines are reversed.
-    pub fn new(mut pts: Vec<Pt>) -> Result<Polygon> {
-        if pts.len() > 1 && pts.first() == pts.last() {
-            pts.pop();
-        }
-        if pts.len() < 3 {
-            bail!("a polygon needs at least 3 vertices, got {}", pts.len());
-        }
-        if let Some(i) = pts
-            .iter()
-            .position(|p| !p[0].is_finite() || !p[1].is_finite())
-        {
-            bail!("polygon vertex {i} is not a finite number");
-        }
-        for i in 0..pts.len() {
-            if pts[i] == pts[(i + 1) % pts.len()] {
-                bail!("polygon vertices {i} and {} coincide", (i + 1) % pts.len());
-            }
-        }
-        if super::geometry::self_intersects(&pts) {
-            bail!("the polygon's outline crosses itself");
-        }
-        let area = signed_area(&pts);
-        let span = pts
-            .iter()
-            .flat_map(|p| [p[0].abs(), p[1].abs()])
-            .fold(1.0f64, f64::max);
-        if area.abs() <= 1e-9 * span * span {
-            bail!("the polygon has no area (its vertices are collinear)");
-        }
-        if area < 0.0 {
-            pts.reverse();
-        }
-        Ok(Polygon(pts))
-    }
-
-    /// Vertices, counter-clockwise.
-    pub fn vertices(&self) -> &[Pt] {
-        &self.0
-    }
-
-    /// Area (mm²).
-    pub fn area(&self) -> f64 {
-        signed_area(&self.0)
-    }
-
-    /// Whether `p` is inside.
-    pub fn contains(&self, p: Pt) -> bool {
-        inside(&self.0, p)
-    }
-
-    /// Parses a polygon file: one vertex per line as `y z` or `y, z`; `#` starts a comment.
-    pub fn parse_text(text: &str) -> Result<Polygon> {
-        let mut pts = Vec::new();
-        for (n, line) in text.lines().enumerate() {
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
-            let nums: Vec<&str> = line
-                .split(|c: char| c == ',' || c.is_whitespace())
-                .filter(|s| !s.is_empty())
-                .collect();
-            let parsed: Vec<f64> = nums.iter().filter_map(|s| s.parse().ok()).collect();
-            if nums.len() != 2 || parsed.len() != 2 {
-                bail!("line {}: expected two numbers `y z`, got {line:?}", n + 1);
-            }
-            pts.push([parsed[0], parsed[1]]);
-        }
-        Polygon::new(pts)
+        let name = s.trim();
+        <Method as clap::ValueEnum>::from_str(name, true).map_err(|_| {
+            anyhow!(
+                "approximation {:?}: use circumscribed, segmented or bordered",
+                name.to_ascii_lowercase()
+            )
+        })
     }
 }
 
@@ -221,13 +147,7 @@ fn segmented(poly: &Polygon) -> Vec<Circle> {
 /// plus the grid's half-diagonal (the distance is 1-Lipschitz, so no interior point can be farther).
 fn inscribed_radius_bound(poly: &Polygon) -> f64 {
     let v = poly.vertices();
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in v {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = bounding_box(v);
     let n = 160;
     let step = (hi[0] - lo[0]).max(hi[1] - lo[1]) / n as f64;
     let mut best = 0.0f64;
@@ -269,31 +189,6 @@ fn bordered(poly: &Polygon) -> Vec<Circle> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn polygon_checks_reject_bad_outlines() {
-        assert!(Polygon::new(vec![[0.0, 0.0], [1.0, 0.0]]).is_err());
-        assert!(Polygon::new(vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]).is_err());
-        assert!(Polygon::new(vec![[0.0, 0.0], [2.0, 2.0], [2.0, 0.0], [0.0, 2.0]]).is_err());
-        assert!(Polygon::new(vec![[0.0, 0.0], [f64::NAN, 0.0], [0.0, 1.0]]).is_err());
-        let cw = Polygon::new(vec![
-            [0.0, 0.0],
-            [0.0, 1.0],
-            [1.0, 1.0],
-            [1.0, 0.0],
-            [0.0, 0.0],
-        ])
-        .expect("square");
-        assert_eq!(cw.vertices().len(), 4);
-        assert!(cw.area() > 0.0);
-    }
-
-    #[test]
-    fn polygon_text_format() {
-        let p = Polygon::parse_text("# a triangle\n0 0\n10, 0\n 5 8 # apex\n").expect("parse");
-        assert_eq!(p.vertices().len(), 3);
-        assert!(Polygon::parse_text("0 0\n1\n2 2\n").is_err());
-    }
 
     #[test]
     fn segmented_uses_more_circles_for_a_long_bar_and_adds_less_area() {

@@ -1,0 +1,107 @@
+//! `needle plot` and `needle plan --plot`.
+
+use super::args::ScenarioArgs;
+use super::output::{title_of, write};
+use crate::analysis::plan_file;
+use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene};
+use crate::report::{path_points, PlanJson};
+use crate::scenario::approx::Method;
+use crate::scenario::ScenarioFile;
+use anyhow::{Context, Result};
+use planner_core::{PlanReport, Scenario};
+use std::path::{Path, PathBuf};
+
+/// Paths and legend notes for every form of a plan.
+pub fn plan_scene_paths(scenario: &Scenario, report: &PlanReport) -> (Vec<PlotPath>, Vec<String>) {
+    let mut paths = Vec::new();
+    let mut notes = Vec::new();
+    let best = report.best().map(|b| b.form);
+    for o in &report.forms {
+        if o.feasible {
+            let is_best = Some(o.form) == best;
+            paths.push(PlotPath {
+                label: format!(
+                    "{}{}: F = {:.2}, L = {:.1} mm",
+                    o.form,
+                    if is_best { " (best)" } else { "" },
+                    o.objective,
+                    o.length
+                ),
+                form: o.form.to_string(),
+                colour: colour_of(o.form),
+                points: path_points(scenario, o),
+                best: is_best,
+            });
+        } else {
+            notes.push(format!("{}: no feasible path", o.form));
+        }
+    }
+    (paths, notes)
+}
+
+/// Draws every form's path of `report` to `out` (`needle plan --plot`).
+pub fn write_plan_plot(
+    file: &Path,
+    approx: Option<Method>,
+    scenario: &Scenario,
+    report: &PlanReport,
+    out: &Path,
+) -> Result<()> {
+    let shapes = ScenarioFile::load(file)?
+        .obstacle_shapes(approx)
+        .unwrap_or_default();
+    let (paths, notes) = plan_scene_paths(scenario, report);
+    let scene = Scene {
+        title: format!("{}: optimal path of each form", title_of(file)),
+        shapes: &shapes,
+        paths,
+        notes,
+        tree: vec![],
+    };
+    write(out, &scene_svg(scenario, &scene))
+}
+
+/// `needle plot`
+#[derive(clap::Args, Clone, Debug)]
+pub struct PlotArgs {
+    /// The scenario and what to plan in it.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// A `needle plan --json` output to draw instead of planning again.
+    #[arg(long)]
+    pub plan: Option<PathBuf>,
+    /// Output SVG file.
+    #[arg(short = 'o', long = "output")]
+    pub output: PathBuf,
+}
+
+/// Runs `needle plot`.
+pub fn run_plot(a: &PlotArgs) -> Result<()> {
+    let (scenario, shapes) = a.scenario.load()?;
+    let (paths, notes) = match &a.plan {
+        None => {
+            let report = planner_core::plan(&scenario).context("planning failed")?;
+            plan_scene_paths(&scenario, &report)
+        }
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read plan {}", p.display()))?;
+            let plan: PlanJson = serde_json::from_str(&text).with_context(|| {
+                format!(
+                    "{} is not a plan (expected `needle plan --json` output)",
+                    p.display()
+                )
+            })?;
+            plan_file::scene_paths(&scenario, &plan)
+                .with_context(|| format!("in plan {}", p.display()))?
+        }
+    };
+    let scene = Scene {
+        title: format!("{}: optimal path of each form", title_of(&a.scenario.file)),
+        shapes: &shapes,
+        paths,
+        notes,
+        tree: vec![],
+    };
+    write(&a.output, &scene_svg(&scenario, &scene))
+}

@@ -1,0 +1,13 @@
+//! What a plan is, as `needle` shows it: the typed JSON report of `needle plan --json` (which
+//! `needle send --json` prints too, and `needle plot --plan` reads back), the human-readable
+//! table, and the report of a weight sweep.
+//!
+//! `needle send` prints through the same functions, so a plan from a device reads exactly like a
+//! local one.
+
+pub mod json;
+pub mod sweep;
+pub mod table;
+
+pub use json::{finite, path_points, plan_json, PlanJson, Stats};
+pub use table::plan_table;

@@ -1,0 +1,130 @@
+//! The TOML scenario format as written (see `examples/paper.toml`): the file's tables and keys, a
+//! missing optional key left as `None`. Turning it into the core's scenario, with the documented
+//! defaults, is in `build.rs`; its polygon obstacles become circles in `shapes.rs`.
+
+use anyhow::{Context, Result};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A scenario file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// Free-form name.
+    pub name: Option<String>,
+    /// Needle mechanics.
+    pub needle: NeedleFile,
+    /// Entry.
+    pub entry: EntryFile,
+    /// Target.
+    pub target: TargetFile,
+    /// Obstacles.
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleFile>,
+    /// Weights (defaults 1, 1, 1000, 2).
+    pub weights: Option<WeightsFile>,
+    /// Planner options.
+    pub planner: Option<PlannerFile>,
+    /// Directory of the file, for `polygon_file` paths (set by [`ScenarioFile::load`]).
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
+}
+
+/// `[needle]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NeedleFile {
+    /// Arc radius (mm).
+    pub curvature_radius: f32,
+    /// Longest arc as a turning angle (degrees), default 180.
+    pub max_arc_deg: Option<f32>,
+    /// Longest line (mm); default: twice the entry-target distance plus a half turn.
+    pub max_line_length: Option<f32>,
+}
+
+/// `[entry]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EntryFile {
+    /// Entry point (mm).
+    pub position: [f32; 3],
+    /// Nominal insertion axis.
+    pub direction: [f32; 3],
+    /// Tilt bound (degrees), default 60.
+    pub max_tilt_deg: Option<f32>,
+}
+
+/// `[target]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TargetFile {
+    /// Target point (mm).
+    pub position: [f32; 3],
+    /// Allowed end-point error (mm), default 0.1.
+    pub tolerance: Option<f32>,
+}
+
+/// `[[obstacles]]`: a circle (sphere in 3-D) by `center` and `radius`, or, in plane mode, a polygon
+/// in the y-z plane by `polygon = [[y, z], ...]` or `polygon_file`, turned into covering circles by
+/// `approx` (see `approx.rs`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleFile {
+    /// Centre (mm).
+    pub center: Option<[f32; 3]>,
+    /// Radius (mm).
+    pub radius: Option<f32>,
+    /// Outline in the y-z plane (mm), vertices in order.
+    pub polygon: Option<Vec<[f64; 2]>>,
+    /// A text file with one `y z` vertex per line, relative to the scenario file.
+    pub polygon_file: Option<PathBuf>,
+    /// `"circumscribed"`, `"segmented"` (default) or `"bordered"`.
+    pub approx: Option<String>,
+}
+
+/// `[weights]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WeightsFile {
+    /// a1
+    pub length: Option<f32>,
+    /// a2
+    pub risk: Option<f32>,
+    /// a3
+    pub penalty: Option<f32>,
+    /// a4
+    pub control: Option<f32>,
+}
+
+/// `[planner]`
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PlannerFile {
+    /// Largest control degree, default 3.
+    pub max_control_degree: Option<u8>,
+    /// `"yz"` for the paper's plane mode; absent for 3-D.
+    pub plane: Option<String>,
+    /// Forms to try, e.g. `["RL", "LRL"]`.
+    pub forms: Option<Vec<String>>,
+    /// `"mean"` (default) or `"sum"`.
+    pub risk: Option<String>,
+    /// Smallest clearance a plan must keep (mm), default 0.
+    pub min_clearance: Option<f32>,
+}
+
+impl ScenarioFile {
+    /// Reads and parses a scenario file.
+    pub fn load(path: &Path) -> Result<ScenarioFile> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read scenario {}", path.display()))?;
+        let mut file =
+            Self::parse(&text).with_context(|| format!("in scenario {}", path.display()))?;
+        file.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(file)
+    }
+
+    /// Parses scenario text.
+    pub fn parse(text: &str) -> Result<ScenarioFile> {
+        Ok(toml::from_str(text)?)
+    }
+}

@@ -1,0 +1,16 @@
+//! The scenario model of the host: the TOML file format, polygon obstacles and the circles that
+//! cover them, and the translation into the core's [`planner_core::Scenario`].
+//!
+//! Everything that reads a scenario (`plan`, `send`, the analysis commands) depends on this
+//! module; it depends on none of them.
+
+pub mod approx;
+pub mod build;
+pub mod file;
+pub mod geometry;
+pub mod polygon;
+pub mod shapes;
+
+pub use build::{load_scenario, load_scenario_shapes, parse_form, restrict};
+pub use file::ScenarioFile;
+pub use shapes::ObstacleShape;
