@@ -78,6 +78,36 @@ pub struct FormOutcome {
     pub evaluations: u32,
 }
 
+impl FormOutcome {
+    /// The outcome of a form for which no feasible path was found: no numbers, no effort.
+    ///
+    /// ```
+    /// use planner_core::{Form, FormOutcome, SolveStatus};
+    ///
+    /// let none = FormOutcome::infeasible(Form::parse("RL").unwrap());
+    /// assert!(!none.feasible && none.status == SolveStatus::Infeasible);
+    /// assert!(none.objective.is_infinite() && none.length.is_nan());
+    /// ```
+    pub fn infeasible(form: Form) -> FormOutcome {
+        FormOutcome {
+            form,
+            status: SolveStatus::Infeasible,
+            feasible: false,
+            length: f32::NAN,
+            risk: f32::NAN,
+            penalty: f32::NAN,
+            objective: f32::INFINITY,
+            min_clearance: f32::NAN,
+            target_error: f32::NAN,
+            insertion: Insertion::default(),
+            segments: Segments::new(),
+            kkt_residual: f32::NAN,
+            iterations: 0,
+            evaluations: 0,
+        }
+    }
+}
+
 /// Fixed-capacity list of per-form outcomes.
 pub type FormOutcomes = heapless::Vec<FormOutcome, FORM_COUNT>;
 

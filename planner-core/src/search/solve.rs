@@ -332,20 +332,9 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
 
 fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
     FormOutcome {
-        form,
-        status: SolveStatus::Infeasible,
-        feasible: false,
-        length: f32::NAN,
-        risk: f32::NAN,
-        penalty: f32::NAN,
-        objective: f32::INFINITY,
-        min_clearance: f32::NAN,
-        target_error: f32::NAN,
-        insertion: Insertion::default(),
-        segments: Segments::new(),
-        kkt_residual: f32::NAN,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
+        ..FormOutcome::infeasible(form)
     }
 }
 

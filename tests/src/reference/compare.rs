@@ -195,31 +195,11 @@ pub fn compare_forms(
     let mut forms = Vec::new();
     for (&form, outcome) in selected.iter().zip(outcomes) {
         let reference = super::solve_form(scenario, form, effort);
-        let outcome = outcome.unwrap_or_else(|| infeasible_outcome(form));
+        let outcome = outcome.unwrap_or_else(|| FormOutcome::infeasible(form));
         let cmp = compare(scenario, &outcome, reference.as_ref());
         forms.push((outcome, reference, cmp));
     }
     ScenarioReport { forms, plan_error }
-}
-
-/// What "the planner found nothing" looks like when `plan` returns an error for a single form.
-fn infeasible_outcome(form: planner_core::Form) -> FormOutcome {
-    FormOutcome {
-        form,
-        status: planner_core::SolveStatus::Infeasible,
-        feasible: false,
-        length: f32::NAN,
-        risk: f32::NAN,
-        penalty: f32::NAN,
-        objective: f32::INFINITY,
-        min_clearance: f32::NAN,
-        target_error: f32::NAN,
-        insertion: planner_core::Insertion::default(),
-        segments: Default::default(),
-        iterations: 0,
-        evaluations: 0,
-        kkt_residual: f32::NAN,
-    }
 }
 
 /// The scenario's numbers on a few lines, enough to rebuild it in a report.
