@@ -32,6 +32,14 @@ pub enum Field {
     MinClearance,
     /// `planner.max_control_degree`
     ControlDegree,
+    /// `driver.insert_speed`
+    InsertSpeed,
+    /// `driver.rotate_speed`
+    RotateSpeed,
+    /// `driver.spin_rate`
+    SpinRate,
+    /// `driver.max_twist_deg` (at least 360)
+    MaxTwist,
 }
 
 impl core::fmt::Display for Field {
@@ -50,6 +58,10 @@ impl core::fmt::Display for Field {
             Field::Weights => f.write_str("weights"),
             Field::MinClearance => f.write_str("planner.min_clearance"),
             Field::ControlDegree => f.write_str("planner.max_control_degree"),
+            Field::InsertSpeed => f.write_str("driver.insert_speed"),
+            Field::RotateSpeed => f.write_str("driver.rotate_speed"),
+            Field::SpinRate => f.write_str("driver.spin_rate"),
+            Field::MaxTwist => f.write_str("driver.max_twist_deg (at least 360)"),
         }
     }
 }

@@ -27,6 +27,7 @@
 pub mod check;
 pub mod device;
 pub mod error;
+pub mod execute;
 pub(crate) mod fmath;
 pub mod model;
 pub(crate) mod optim;

@@ -7,7 +7,7 @@ use super::shapes::ObstacleShape;
 use anyhow::{bail, Context, Result};
 use planner_core::model::form::{Form, FormSet};
 use planner_core::model::scenario::{
-    Entry, Needle, Obstacle, PlannerOptions, RiskMeasure, Target, Weights, Workspace,
+    Driver, Entry, Needle, Obstacle, PlannerOptions, RiskMeasure, Target, Weights, Workspace,
 };
 use planner_core::{PlanError, Scenario, MAX_OBSTACLES};
 use std::path::Path;
@@ -99,6 +99,16 @@ impl ScenarioFile {
                 workspace,
                 risk,
                 min_clearance: p.min_clearance.unwrap_or(0.0),
+            },
+            driver: {
+                let d = self.driver.clone().unwrap_or_default();
+                let default = Driver::DEFAULT;
+                Driver {
+                    insert_speed: d.insert_speed.unwrap_or(default.insert_speed),
+                    rotate_speed: d.rotate_speed.unwrap_or(default.rotate_speed),
+                    spin_rate: d.spin_rate.unwrap_or(default.spin_rate),
+                    max_twist_deg: d.max_twist_deg.unwrap_or(default.max_twist_deg),
+                }
             },
         };
         scenario.validate()?;

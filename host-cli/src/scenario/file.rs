@@ -25,6 +25,8 @@ pub struct ScenarioFile {
     pub weights: Option<WeightsFile>,
     /// Planner options.
     pub planner: Option<PlannerFile>,
+    /// The needle driver (defaults 2.5 mm/s, 360 deg/s, 4 rev/s, 360 degrees).
+    pub driver: Option<DriverFile>,
     /// Directory of the file, for `polygon_file` paths (set by [`ScenarioFile::load`]).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -94,6 +96,20 @@ pub struct WeightsFile {
     pub penalty: Option<f32>,
     /// a4
     pub control: Option<f32>,
+}
+
+/// `[driver]`
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct DriverFile {
+    /// Insertion speed (mm/s).
+    pub insert_speed: Option<f32>,
+    /// Bevel rotation speed (deg/s).
+    pub rotate_speed: Option<f32>,
+    /// Spin rate while inserting a line (rev/s).
+    pub spin_rate: Option<f32>,
+    /// Largest accumulated shaft twist (degrees, at least 360).
+    pub max_twist_deg: Option<f32>,
 }
 
 /// `[planner]`

@@ -143,6 +143,51 @@ impl PlannerOptions {
     }
 }
 
+/// The needle driver's two stages (insertion u1, rotation u2), as the motor schedule uses them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Driver {
+    /// Insertion speed (mm/s).
+    pub insert_speed: f32,
+    /// Rotation speed of a bevel turn (deg/s).
+    pub rotate_speed: f32,
+    /// Spin rate while inserting a line (rev/s).
+    pub spin_rate: f32,
+    /// Largest accumulated shaft twist the schedule may reach (degrees, at least one turn).
+    pub max_twist_deg: f32,
+}
+
+impl Driver {
+    /// The defaults of the `[driver]` table: 2.5 mm/s, 360 deg/s, 4 rev/s, 360 degrees.
+    pub const DEFAULT: Driver = Driver {
+        insert_speed: 2.5,
+        rotate_speed: 360.0,
+        spin_rate: 4.0,
+        max_twist_deg: 360.0,
+    };
+}
+
+impl Driver {
+    /// Positive, finite speeds and a twist limit of at least one turn.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        positive(Field::InsertSpeed, self.insert_speed)?;
+        positive(Field::RotateSpeed, self.rotate_speed)?;
+        positive(Field::SpinRate, self.spin_rate)?;
+        finite(Field::MaxTwist, &[self.max_twist_deg])?;
+        // A line's spin turns the shaft by whole revolutions, so one turn of room is the least.
+        if self.max_twist_deg < 360.0 {
+            return Err(PlanError::OutOfRange(Field::MaxTwist));
+        }
+        Ok(())
+    }
+}
+
+impl Default for Driver {
+    fn default() -> Self {
+        Driver::DEFAULT
+    }
+}
+
 /// A whole planning problem.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Scenario {
@@ -158,6 +203,8 @@ pub struct Scenario {
     pub weights: Weights,
     /// Planner options.
     pub options: PlannerOptions,
+    /// The driver that executes the plan.
+    pub driver: Driver,
 }
 
 fn finite(field: Field, values: &[f32]) -> Result<(), PlanError> {
@@ -251,6 +298,7 @@ impl Scenario {
                 return Err(PlanError::NotInPlane(Field::TargetPosition));
             }
         }
+        self.driver.validate()?;
         for (i, ob) in self.obstacles.iter().enumerate() {
             let i = i as u16;
             finite(Field::ObstacleCenter(i), &ob.center)?;
@@ -301,6 +349,7 @@ impl Scenario {
                 workspace: Workspace::PlaneYz,
                 ..PlannerOptions::default()
             },
+            driver: Driver::DEFAULT,
         }
     }
 }

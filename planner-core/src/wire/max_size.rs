@@ -7,7 +7,7 @@
 
 use crate::error::{Field, PlanError};
 use crate::model::form::{Form, FormSet, SegmentKind};
-use crate::model::scenario::{Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
+use crate::model::scenario::{Driver, Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
 use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
 
 /// A type whose postcard encoding never exceeds `MAX_SIZE` bytes.
@@ -88,6 +88,9 @@ impl MaxSize for Obstacle {
     const MAX_SIZE: usize = <[f32; 3]>::MAX_SIZE + f32::MAX_SIZE;
 }
 impl MaxSize for Weights {
+    const MAX_SIZE: usize = 4 * f32::MAX_SIZE;
+}
+impl MaxSize for Driver {
     const MAX_SIZE: usize = 4 * f32::MAX_SIZE;
 }
 impl MaxSize for PlannerOptions {

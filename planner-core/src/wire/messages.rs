@@ -8,13 +8,15 @@ use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
 use crate::model::form::Form;
-use crate::model::scenario::{Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights};
+use crate::model::scenario::{
+    Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,
+};
 use crate::report::PlanReport;
 use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 1;
+pub const PROTOCOL_VERSION: u8 = 2;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -241,6 +243,8 @@ pub struct PlanRequest {
     pub weights: Weights,
     /// Planner options.
     pub options: PlannerOptions,
+    /// The driver that will execute the plan.
+    pub driver: Driver,
 }
 
 impl PlanRequest {
@@ -253,6 +257,7 @@ impl PlanRequest {
             obstacles: WireObstacles::from_obstacles(&s.obstacles),
             weights: s.weights,
             options: s.options,
+            driver: s.driver,
         }
     }
 
@@ -265,6 +270,7 @@ impl PlanRequest {
             obstacles: self.obstacles.into_obstacles()?,
             weights: self.weights,
             options: self.options,
+            driver: self.driver,
         })
     }
 }
@@ -327,5 +333,6 @@ impl MaxSize for PlanRequest {
         + Target::MAX_SIZE
         + heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::MAX_SIZE
         + Weights::MAX_SIZE
-        + PlannerOptions::MAX_SIZE;
+        + PlannerOptions::MAX_SIZE
+        + Driver::MAX_SIZE;
 }

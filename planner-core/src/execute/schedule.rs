@@ -1,0 +1,210 @@
+//! The motor schedule: a plan becomes the driver's commands.
+//!
+//! The posture (entry point, insertion direction and the first segment's bevel roll) is set
+//! before the needle enters tissue, where turning it costs nothing; then per segment a `rotate`
+//! (turn the shaft by a signed angle, no insertion) where the bevel must turn, and an `insert`
+//! (an arc: push, no rotation) or an `insert_spin` (a line: push while spinning at least
+//! [`MIN_SPIN_RAD_PER_MM`], the paper's u2 >= 5 u1). A spin is a whole, even number of turns whose
+//! direction alternates turn by turn (as duty-cycled steering does), so it leaves the bevel and
+//! the shaft's twist where they were. Rotations take the short way unless that would push the
+//! accumulated twist past the driver's `max_twist_deg`; then they take the long way round.
+
+use crate::model::form::{SegmentKind, MAX_CONTROL_DEGREE};
+use crate::model::scenario::{Driver, Scenario};
+use crate::report::FormOutcome;
+use crate::PlanError;
+use core::f32::consts::PI;
+use serde::{Deserialize, Serialize};
+
+/// Least spin per millimetre of a line (rad/mm): the paper's u2 >= 5 u1.
+pub const MIN_SPIN_RAD_PER_MM: f32 = 5.0;
+
+/// Most steps of any schedule: a rotation and an insertion per segment.
+pub const MAX_STEPS: usize = 2 * MAX_CONTROL_DEGREE;
+
+/// One command of the driver.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Op {
+    /// Turn the shaft by `angle_deg` (signed, degrees), no insertion.
+    Rotate {
+        /// Signed angle (degrees).
+        angle_deg: f32,
+    },
+    /// Push the needle `length_mm` without rotating: an arc.
+    Insert {
+        /// Insertion (mm).
+        length_mm: f32,
+    },
+    /// Push `length_mm` while spinning `turns` whole turns, alternating direction: a line.
+    InsertSpin {
+        /// Insertion (mm).
+        length_mm: f32,
+        /// Whole turns (even, so the spin ends where it began).
+        turns: u32,
+    },
+}
+
+/// A command and how long the driver takes for it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Step {
+    /// What the driver does.
+    pub op: Op,
+    /// How long it takes (s).
+    pub duration_s: f32,
+}
+
+/// Where and how the needle is set before it enters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Posture {
+    /// Entry point (mm).
+    pub entry: [f32; 3],
+    /// The plan's insertion angles (degrees): see [`crate::Insertion`].
+    pub theta1_deg: f32,
+    /// Second insertion angle (degrees).
+    pub theta2_deg: f32,
+    /// Unit insertion direction.
+    pub direction: [f32; 3],
+    /// Bevel roll about the insertion direction from the insertion frame (degrees).
+    pub roll_deg: f32,
+}
+
+/// Fixed-capacity step list.
+pub type Steps = heapless::Vec<Step, MAX_STEPS>;
+
+/// What the driver executes for one plan.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Schedule {
+    /// The posture set before insertion.
+    pub posture: Posture,
+    /// The commands, in order.
+    pub steps: Steps,
+    /// Total time (s).
+    pub duration_s: f32,
+    /// Largest accumulated shaft twist reached (degrees, absolute).
+    pub max_twist_deg: f32,
+}
+
+/// Why no schedule can be made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ScheduleError {
+    /// The outcome has no feasible path to execute.
+    NoPath,
+    /// A driver setting is unusable (a zero speed, a twist limit under one turn, ...).
+    Driver(PlanError),
+    /// More steps than [`MAX_STEPS`] (cannot happen: at most two per segment).
+    Capacity,
+}
+
+/// Tracks the shaft's accumulated twist as commands are added.
+struct Twist {
+    now: f32,
+    peak: f32,
+    limit: f32,
+}
+
+impl Twist {
+    /// The rotation by `angle` (degrees, in [-180, 180]) the short way, or the long way when the
+    /// short one would pass the limit.
+    fn rotation(&mut self, angle: f32) -> f32 {
+        let long = if angle > 0.0 {
+            angle - 360.0
+        } else {
+            angle + 360.0
+        };
+        let a = if libm::fabsf(self.now + angle) > self.limit {
+            long
+        } else {
+            angle
+        };
+        self.now += a;
+        self.peak = self.peak.max(libm::fabsf(self.now));
+        a
+    }
+
+    /// A spin's whole turns alternate from the side of zero twist, so it reaches one turn away.
+    fn spin(&mut self) {
+        let away = if self.now > 0.0 { -360.0 } else { 360.0 };
+        self.peak = self.peak.max(libm::fabsf(self.now + away));
+    }
+}
+
+/// The smallest even whole number not below `x`.
+fn even_turns(x: f32) -> u32 {
+    let n = libm::ceilf(x).max(2.0) as u32;
+    n + n % 2
+}
+
+/// The schedule of `outcome`'s path with the scenario's driver.
+///
+/// ```
+/// use planner_core::execute::schedule::{schedule, Op};
+/// use planner_core::{plan, Scenario};
+///
+/// let scenario = Scenario::paper();
+/// let report = plan(&scenario).unwrap();
+/// let s = schedule(&scenario, report.best().unwrap()).unwrap();
+/// // RL: the arc is pushed, then the line is spun in.
+/// assert!(matches!(s.steps[0].op, Op::Insert { .. }));
+/// assert!(matches!(s.steps[1].op, Op::InsertSpin { .. }));
+/// assert!(s.max_twist_deg <= scenario.driver.max_twist_deg);
+/// ```
+pub fn schedule(scenario: &Scenario, outcome: &FormOutcome) -> Result<Schedule, ScheduleError> {
+    let d: &Driver = &scenario.driver;
+    d.validate().map_err(ScheduleError::Driver)?;
+    if !outcome.feasible || outcome.segments.is_empty() {
+        return Err(ScheduleError::NoPath);
+    }
+    let ins = &outcome.insertion;
+    let posture = Posture {
+        entry: scenario.entry.position,
+        theta1_deg: ins.theta1_deg,
+        theta2_deg: ins.theta2_deg,
+        direction: ins.direction,
+        roll_deg: outcome.segments[0].bevel_deg,
+    };
+    let mut twist = Twist {
+        now: 0.0,
+        peak: 0.0,
+        limit: d.max_twist_deg,
+    };
+    let mut steps = Steps::new();
+    for (i, seg) in outcome.segments.iter().enumerate() {
+        if i > 0 && seg.bevel_deg != 0.0 {
+            let angle_deg = twist.rotation(seg.bevel_deg);
+            let duration_s = libm::fabsf(angle_deg) / d.rotate_speed;
+            push(&mut steps, Op::Rotate { angle_deg }, duration_s)?;
+        }
+        if !(seg.length > 0.0) {
+            continue;
+        }
+        let length_mm = seg.length;
+        let push_s = length_mm / d.insert_speed;
+        match seg.kind {
+            SegmentKind::Arc => push(&mut steps, Op::Insert { length_mm }, push_s)?,
+            SegmentKind::Line => {
+                let least = MIN_SPIN_RAD_PER_MM * length_mm / (2.0 * PI);
+                let turns = even_turns((d.spin_rate * push_s).max(least));
+                twist.spin();
+                let duration_s = push_s.max(turns as f32 / d.spin_rate);
+                push(&mut steps, Op::InsertSpin { length_mm, turns }, duration_s)?;
+            }
+        }
+    }
+    let duration_s = steps.iter().map(|s| s.duration_s).sum();
+    Ok(Schedule {
+        posture,
+        steps,
+        duration_s,
+        max_twist_deg: twist.peak,
+    })
+}
+
+fn push(steps: &mut Steps, op: Op, duration_s: f32) -> Result<(), ScheduleError> {
+    steps
+        .push(Step { op, duration_s })
+        .map_err(|_| ScheduleError::Capacity)
+}
