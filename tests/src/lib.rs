@@ -74,3 +74,27 @@ pub fn needle_json(args: &[&str]) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).expect("needle prints JSON")
 }
+
+/// The paper's scenario as an encoded plan request carrying `n` obstacles (any count the wire
+/// carries, also over the planner's capacity), in the layout of `planner_core::wire::PlanRequest`.
+pub fn request_with_obstacles(n: usize) -> Vec<u8> {
+    use planner_core::model::scenario::Obstacle;
+    let base = planner_core::wire::PlanRequest::new(&planner_core::Scenario::paper());
+    let obstacles: Vec<Obstacle> = (0..n)
+        .map(|i| Obstacle {
+            center: [0.0, 200.0 + 30.0 * i as f32, 0.0],
+            radius: 1.0,
+        })
+        .collect();
+    // The wire list is a plain sequence, so any sequence of obstacles encodes a request.
+    postcard::to_stdvec(&(
+        base.needle,
+        base.entry,
+        base.target,
+        obstacles,
+        base.weights,
+        base.options,
+        base.driver,
+    ))
+    .expect("a request encodes")
+}
