@@ -50,3 +50,11 @@ fn form_selections_that_select_nothing_say_why() {
     let text = paper().replace("[planner]", "[planner]\nforms = []");
     needle_fails_with(&text, &["plan", "{}"], "planner.forms is empty");
 }
+
+#[test]
+fn the_rrt_takes_no_form_flags_it_would_ignore() {
+    for flag in [["--max-degree", "2"], ["--forms", "RL"]] {
+        let args = [&["rrt", "{}"][..], &flag[..]].concat();
+        needle_fails_with(&paper(), &args, "unexpected argument");
+    }
+}
