@@ -4,6 +4,7 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
+use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::FormSet;
 use crate::model::scenario::Scenario;
 use crate::report::{FormOutcome, FormOutcomes, PlanReport};
@@ -48,7 +49,19 @@ impl PlanSession {
     }
 
     /// Plans what is left and picks the best feasible form.
-    pub fn finish(mut self) -> Result<PlanReport, PlanError> {
+    pub fn finish(self) -> Result<PlanReport, PlanError> {
+        self.conclude().1
+    }
+
+    /// Plans what is left, picks the best feasible form and builds its motor schedule (what a
+    /// device answers).
+    pub fn finish_scheduled(self) -> Result<ScheduledPlan, PlanError> {
+        let (scenario, report) = self.conclude();
+        report.map(|r| ScheduledPlan::new(&scenario, r))
+    }
+
+    /// Plans what is left; the scenario back (moved, not copied) and the report.
+    fn conclude(mut self) -> (Scenario, Result<PlanReport, PlanError>) {
         while self.step().is_some() {}
         let mut best: Option<usize> = None;
         for (i, o) in self.outcomes.iter().enumerate() {
@@ -60,17 +73,23 @@ impl PlanSession {
                 best = Some(i);
             }
         }
-        match best {
+        let report = match best {
             Some(b) => Ok(PlanReport {
                 forms: self.outcomes,
                 best: b as u8,
             }),
             None => Err(PlanError::Unreachable),
-        }
+        };
+        (self.scenario, report)
     }
 }
 
 /// Plans every selected form of `scenario` and returns the per-form table and the best plan.
 pub fn plan(scenario: &Scenario) -> Result<PlanReport, PlanError> {
     PlanSession::new(scenario.clone())?.finish()
+}
+
+/// Plans `scenario` and builds the best form's motor schedule: exactly what a device answers.
+pub fn plan_scheduled(scenario: &Scenario) -> Result<ScheduledPlan, PlanError> {
+    PlanSession::new(scenario.clone())?.finish_scheduled()
 }

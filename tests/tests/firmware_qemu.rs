@@ -68,7 +68,7 @@ fn over_capacity_request() -> Vec<u8> {
         };
         bytes.extend(postcard::to_stdvec(&o).expect("encode"));
     }
-    bytes.extend(postcard::to_stdvec(&(s.weights, s.options)).expect("encode"));
+    bytes.extend(postcard::to_stdvec(&(s.weights, s.options, s.driver)).expect("encode"));
     bytes
 }
 
@@ -124,7 +124,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     let on_device = client
         .plan(&paper, &mut |_| {})
         .expect("plan after bad input");
-    let host = planner_core::plan(&paper);
+    let host = planner_core::plan_scheduled(&paper);
     assert_eq!(
         postcard::to_stdvec(&on_device).unwrap(),
         postcard::to_stdvec(&host).unwrap()

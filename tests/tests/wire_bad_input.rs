@@ -7,9 +7,9 @@ use needle_link::{Client, ClientConfig, LinkError};
 use planner_core::model::scenario::Obstacle;
 use planner_core::wire::{
     encode_frame, encode_payload, Fault, Header, PlanRequest, Reply, ReplyBody, Request,
-    RequestBody, ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, WIRE_MAX_OBSTACLES,
+    RequestBody, ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, PROTOCOL_VERSION, WIRE_MAX_OBSTACLES,
 };
-use planner_core::{plan, Field, PlanError, Scenario, MAX_OBSTACLES};
+use planner_core::{plan_scheduled, Field, PlanError, Scenario, MAX_OBSTACLES};
 use std::time::Duration;
 use wire_support::Sim;
 
@@ -63,7 +63,7 @@ fn assert_still_serves(c: &mut Client<Sim>) {
     let mut s = Scenario::paper();
     s.options.forms = planner_core::model::form::FormSet::default();
     s.options.max_control_degree = 2;
-    let local = plan(&s);
+    let local = plan_scheduled(&s);
     let remote = c.plan(&s, &mut |_| {}).expect("the device serves again");
     assert_eq!(
         postcard::to_stdvec(&remote).unwrap(),
@@ -88,6 +88,7 @@ fn encoded_with_obstacles(n: usize) -> Vec<u8> {
         obstacles,
         base.weights,
         base.options,
+        base.driver,
     ))
     .unwrap()
 }
@@ -155,7 +156,8 @@ fn truncated_frames() {
 #[test]
 fn a_frame_with_a_good_crc_that_is_no_message() {
     let mut c = client();
-    c.send_raw(&frame_payload(&[1, 7, 0xEE, 0xEE])).unwrap();
+    c.send_raw(&frame_payload(&[PROTOCOL_VERSION, 7, 0xEE, 0xEE]))
+        .unwrap();
     assert_eq!(faults(&mut c), vec![(7, Fault::Undecodable)]);
     c.send_raw(&frame_payload(&[0xFF])).unwrap();
     assert_eq!(faults(&mut c), vec![(0, Fault::Undecodable)]);
@@ -166,7 +168,10 @@ fn a_frame_with_a_good_crc_that_is_no_message() {
 fn wrong_protocol_version() {
     let mut c = client();
     let req = Request {
-        header: Header { version: 2, id: 77 },
+        header: Header {
+            version: PROTOCOL_VERSION + 1,
+            id: 77,
+        },
         body: RequestBody::Hello,
     };
     c.send_raw(&frame(&req)).unwrap();
@@ -175,8 +180,8 @@ fn wrong_protocol_version() {
         vec![(
             77,
             Fault::UnsupportedVersion {
-                supported: 1,
-                got: 2
+                supported: PROTOCOL_VERSION,
+                got: PROTOCOL_VERSION + 1
             }
         )]
     );
@@ -238,7 +243,7 @@ fn progress_arrives_once_per_form() {
     let s = Scenario::paper();
     let mut seen = Vec::new();
     let result = c.plan(&s, &mut |p| seen.push(p)).unwrap();
-    let forms = result.unwrap().forms.len();
+    let forms = result.unwrap().report.forms.len();
     let done: Vec<u8> = seen.iter().map(|p| p.done).filter(|&d| d > 0).collect();
     assert_eq!(done, (1..=forms as u8).collect::<Vec<_>>());
     assert!(seen.iter().all(|p| usize::from(p.total) == forms));

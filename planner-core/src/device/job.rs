@@ -96,7 +96,7 @@ impl Core {
             None => {
                 if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle)
                 {
-                    let result = session.finish();
+                    let result = session.finish_scheduled();
                     self.stats.plans += 1;
                     self.store_result(id, up, &result, tx);
                 }
