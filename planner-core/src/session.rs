@@ -49,19 +49,19 @@ impl PlanSession {
     }
 
     /// Plans what is left and picks the best feasible form.
-    pub fn finish(self) -> Result<PlanReport, PlanError> {
-        self.conclude().1
+    pub fn finish(mut self) -> Result<PlanReport, PlanError> {
+        self.conclude()
     }
 
     /// Plans what is left, picks the best feasible form and builds its motor schedule (what a
     /// device answers).
-    pub fn finish_scheduled(self) -> Result<ScheduledPlan, PlanError> {
-        let (scenario, report) = self.conclude();
-        report.map(|r| ScheduledPlan::new(&scenario, r))
+    pub fn finish_scheduled(mut self) -> Result<ScheduledPlan, PlanError> {
+        let report = self.conclude()?;
+        Ok(ScheduledPlan::new(&self.scenario, report))
     }
 
-    /// Plans what is left; the scenario back (moved, not copied) and the report.
-    fn conclude(mut self) -> (Scenario, Result<PlanReport, PlanError>) {
+    /// Plans what is left and moves the outcomes into the report of the best feasible form.
+    fn conclude(&mut self) -> Result<PlanReport, PlanError> {
         while self.step().is_some() {}
         let mut best: Option<usize> = None;
         for (i, o) in self.outcomes.iter().enumerate() {
@@ -73,14 +73,13 @@ impl PlanSession {
                 best = Some(i);
             }
         }
-        let report = match best {
+        match best {
             Some(b) => Ok(PlanReport {
-                forms: self.outcomes,
+                forms: core::mem::take(&mut self.outcomes),
                 best: b as u8,
             }),
             None => Err(PlanError::Unreachable),
-        };
-        (self.scenario, report)
+        }
     }
 }
 
