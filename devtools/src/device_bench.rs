@@ -199,7 +199,7 @@ pub fn measure(
     let mut instructions = Vec::new();
     let mut matches_host = Vec::new();
     for s in scenarios {
-        let host = encoded(&planner_core::plan(&s.scenario))?;
+        let host = encoded(&planner_core::plan_scheduled(&s.scenario))?;
         let before = qemu.counts()?.len();
         let on_device = device
             .plan(&s.scenario, &mut |_| {})

@@ -1,11 +1,13 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
-use needle_cli::report::{plan_json, plan_table, Stats};
+use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
 use needle_cli::scenario::{load_scenario, load_scenario_shapes, restrict};
+use planner_core::execute::schedule::Schedule;
+use planner_core::{PlanReport, Scenario};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -26,9 +28,12 @@ struct Cli {
 struct PlanArgs {
     /// Scenario file (TOML, see examples/paper.toml).
     file: PathBuf,
-    /// Print one JSON object instead of the table.
+    /// Print one JSON object instead of the table (it always carries `best.schedule`).
     #[arg(long)]
     json: bool,
+    /// Also print the best path's motor schedule as a table after the plan.
+    #[arg(long)]
+    schedule: bool,
     /// Largest control degree N to try (overrides the file).
     #[arg(long)]
     max_degree: Option<u8>,
@@ -104,7 +109,7 @@ struct BenchArgs {
     json: bool,
 }
 
-fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
+fn load(args: &PlanArgs) -> Result<Scenario> {
     let mut scenario = match args.approx {
         None => load_scenario(&args.file)?,
         Some(m) => load_scenario_shapes(&args.file, Some(m))?.0,
@@ -113,20 +118,39 @@ fn load(args: &PlanArgs) -> Result<planner_core::Scenario> {
     Ok(scenario)
 }
 
+/// Prints a plan as `plan` and `send` do: the table (and with `--schedule` the schedule's), or
+/// the JSON report with `best.schedule`.
+fn print_plan(
+    args: &PlanArgs,
+    scenario: &Scenario,
+    report: &PlanReport,
+    schedule: &Schedule,
+    stats: Stats,
+) {
+    if args.json {
+        println!("{}", plan_json(scenario, report, Some(schedule), stats));
+    } else {
+        print!("{}", plan_table(report, stats));
+        if args.schedule {
+            print!("{}", schedule_table(schedule, &scenario.driver));
+        }
+    }
+}
+
 fn plan(args: &PlanArgs) -> Result<()> {
     let scenario = load(args)?;
     let start = Instant::now();
-    let report = planner_core::plan(&scenario).context("planning failed")?;
+    let planned = planner_core::plan_scheduled(&scenario).context("planning failed")?;
     let stats = Stats {
         time_us: start.elapsed().as_micros() as u64,
     };
-    if args.json {
-        println!("{}", plan_json(&scenario, &report, stats));
-    } else {
-        print!("{}", plan_table(&report, stats));
-    }
+    let schedule = planned
+        .schedule
+        .as_ref()
+        .map_err(|e| anyhow!("no motor schedule for the best path: {e}"))?;
+    print_plan(args, &scenario, &planned.report, schedule, stats);
     if let Some(out) = &args.plot {
-        analysis::write_plan_plot(&args.file, args.approx, &scenario, &report, out)?;
+        analysis::write_plan_plot(&args.file, args.approx, &scenario, &planned.report, out)?;
     }
     Ok(())
 }
@@ -134,15 +158,12 @@ fn plan(args: &PlanArgs) -> Result<()> {
 fn send(args: &SendArgs) -> Result<()> {
     let scenario = load(&args.plan)?;
     let (result, device) = device::commands::plan_on_device(&scenario, &args.link)?;
-    let report = result.context("planning failed")?;
+    let planned = result.context("planning failed")?;
+    let schedule = device::verify::verified_schedule(&scenario, &planned)?;
     let stats = Stats {
         time_us: device.time_us,
     };
-    if args.plan.json {
-        println!("{}", plan_json(&scenario, &report, stats));
-    } else {
-        print!("{}", plan_table(&report, stats));
-    }
+    print_plan(&args.plan, &scenario, &planned.report, schedule, stats);
     Ok(())
 }
 

@@ -4,6 +4,7 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
+use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::FormSet;
 use crate::model::scenario::Scenario;
 use crate::report::{FormOutcome, FormOutcomes, PlanReport};
@@ -49,6 +50,18 @@ impl PlanSession {
 
     /// Plans what is left and picks the best feasible form.
     pub fn finish(mut self) -> Result<PlanReport, PlanError> {
+        self.conclude()
+    }
+
+    /// Plans what is left, picks the best feasible form and builds its motor schedule (what a
+    /// device answers).
+    pub fn finish_scheduled(mut self) -> Result<ScheduledPlan, PlanError> {
+        let report = self.conclude()?;
+        Ok(ScheduledPlan::new(&self.scenario, report))
+    }
+
+    /// Plans what is left and moves the outcomes into the report of the best feasible form.
+    fn conclude(&mut self) -> Result<PlanReport, PlanError> {
         while self.step().is_some() {}
         let mut best: Option<usize> = None;
         for (i, o) in self.outcomes.iter().enumerate() {
@@ -62,7 +75,7 @@ impl PlanSession {
         }
         match best {
             Some(b) => Ok(PlanReport {
-                forms: self.outcomes,
+                forms: core::mem::take(&mut self.outcomes),
                 best: b as u8,
             }),
             None => Err(PlanError::Unreachable),
@@ -73,4 +86,9 @@ impl PlanSession {
 /// Plans every selected form of `scenario` and returns the per-form table and the best plan.
 pub fn plan(scenario: &Scenario) -> Result<PlanReport, PlanError> {
     PlanSession::new(scenario.clone())?.finish()
+}
+
+/// Plans `scenario` and builds the best form's motor schedule: exactly what a device answers.
+pub fn plan_scheduled(scenario: &Scenario) -> Result<ScheduledPlan, PlanError> {
+    PlanSession::new(scenario.clone())?.finish_scheduled()
 }

@@ -3,14 +3,20 @@
 //! framing code (COBS, CRC-32, postcard layout) still understands one built after it.
 //!
 //! `GOLDEN_BLESS=1 cargo test --test golden_frames` rewrites the file; do that only for a change
-//! that also raises `PROTOCOL_VERSION`.
+//! that also raises `PROTOCOL_VERSION` (or, as for the schedule in the result, one made to a
+//! version not yet released).
 
+use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
+use planner_core::report::{FormOutcomes, Segments};
 use planner_core::wire::crc::crc32;
 use planner_core::wire::{
     encode_frame, Chunk, Directed, Fault, Header, PlanRequest, PlanResult, Reply, ReplyBody,
     Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK,
 };
-use planner_core::{Form, PlanError, Scenario};
+use planner_core::{
+    Form, FormOutcome, Insertion, PlanError, PlanReport, Scenario, ScheduledPlan, SegmentKind,
+    SegmentPlan, SolveStatus,
+};
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -27,8 +33,82 @@ fn frame<T: Serialize + Directed>(msg: &T) -> String {
     })
 }
 
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
 fn chunk(bytes: &[u8]) -> Chunk {
     Chunk::from_slice(&bytes[..bytes.len().min(MAX_CHUNK)]).unwrap()
+}
+
+/// A finished plan with numbers written out here (not planned, so the line shows the layout only):
+/// one RL form and a schedule with each kind of step.
+fn fixed_plan() -> ScheduledPlan {
+    let seg = |kind, length, bevel_deg| SegmentPlan {
+        kind,
+        length,
+        bevel_deg,
+    };
+    let mut segments = Segments::new();
+    segments.push(seg(SegmentKind::Arc, 40.5, 180.0)).unwrap();
+    segments.push(seg(SegmentKind::Line, 51.25, 90.0)).unwrap();
+    let mut forms = FormOutcomes::new();
+    forms
+        .push(FormOutcome {
+            form: Form::parse("RL").unwrap(),
+            status: SolveStatus::Converged,
+            feasible: true,
+            length: 91.75,
+            risk: 0.375,
+            penalty: 0.0,
+            objective: 96.125,
+            min_clearance: 1.0,
+            target_error: 0.0001,
+            insertion: Insertion {
+                theta1_deg: 28.5,
+                theta2_deg: 0.0,
+                tilt_deg: 28.5,
+                direction: [0.0, -0.5, 0.875],
+            },
+            segments,
+            kkt_residual: 0.001,
+            iterations: 13,
+            evaluations: 140,
+        })
+        .unwrap();
+    let step = |op, duration_s| Step { op, duration_s };
+    let mut steps = Steps::new();
+    steps
+        .push(step(Op::Insert { length_mm: 40.5 }, 16.2))
+        .unwrap();
+    steps
+        .push(step(Op::Rotate { angle_deg: 90.0 }, 0.25))
+        .unwrap();
+    steps
+        .push(step(
+            Op::InsertSpin {
+                length_mm: 51.25,
+                turns: 82,
+            },
+            20.5,
+        ))
+        .unwrap();
+    let schedule = Schedule {
+        posture: Posture {
+            entry: [0.0; 3],
+            theta1_deg: 28.5,
+            theta2_deg: 0.0,
+            direction: [0.0, -0.5, 0.875],
+            roll_deg: 180.0,
+        },
+        steps,
+        duration_s: 36.95,
+        max_twist_deg: 360.0,
+    };
+    ScheduledPlan {
+        report: PlanReport { forms, best: 0 },
+        schedule: Ok(schedule),
+    }
 }
 
 /// The frames of a whole exchange for the paper's scenario, one `name hex` line each.
@@ -41,6 +121,7 @@ fn exchange() -> String {
         capacity: 32,
     });
     let result = postcard::to_stdvec(&result).unwrap();
+    let plan_ok: PlanResult = Ok(fixed_plan());
     let req = |id, body| Request {
         header: Header::new(id),
         body,
@@ -126,11 +207,9 @@ fn exchange() -> String {
                 },
             )),
         ),
-        (
-            "result",
-            result.iter().map(|b| format!("{b:02x}")).collect(),
-        ),
+        ("result", hex(&result)),
         ("fault", frame(&rep(9, ReplyBody::Fault(Fault::BadCrc)))),
+        ("result_plan", hex(&postcard::to_stdvec(&plan_ok).unwrap())),
     ];
     lines.iter().fold(String::new(), |mut s, (name, hex)| {
         writeln!(s, "{name} {hex}").unwrap();

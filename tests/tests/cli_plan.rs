@@ -215,3 +215,150 @@ fn bad_scenarios_exit_non_zero_with_the_reason() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("is not a path form"));
 }
+
+#[test]
+fn schedule_flag_prints_the_schedule_table_after_the_plan() {
+    let p = example("paper");
+    let run = |extra: &[&str]| {
+        let out = needle().arg("plan").arg(&p).args(extra).output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let plain = run(&[]);
+    assert!(!plain.contains("schedule"), "{plain}");
+    let text = run(&["--schedule", "--forms", "LRR"]);
+    let at = |w: &str| {
+        text.find(w)
+            .unwrap_or_else(|| panic!("{w} missing from\n{text}"))
+    };
+    assert!(at("best: LRR") < at("schedule (driver: insert 2.5 mm/s"));
+    assert!(at("schedule (driver:") < at("posture: entry (0.00, 0.00, 0.00) mm"));
+    assert!(at("posture:") < at("step  op"));
+    for w in [
+        "angle (deg)",
+        "length (mm)",
+        "turns",
+        "duration (s)",
+        "roll 0.0 deg",
+    ] {
+        at(w);
+    }
+    // LRR: spin the line in, then per arc a half turn of the bevel and a push.
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("step  op"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("total"))
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    let ops: Vec<&str> = rows.iter().map(|r| r[1]).collect();
+    assert_eq!(ops, ["insert_spin", "rotate", "insert", "rotate", "insert"]);
+    assert_eq!(rows[1][2], "180.0");
+    assert_eq!(
+        rows[0][4].parse::<u32>().unwrap() % 2,
+        0,
+        "whole, even turns"
+    );
+    assert!(at("total ") > at("step  op") && text.contains("s, peak twist 360.0 deg"));
+}
+
+/// Every `best.schedule` step has exactly the keys its `op` promises.
+fn assert_schedule_keys(v: &Value) -> Vec<String> {
+    let s = &v["best"]["schedule"];
+    for key in ["duration_s", "max_twist_deg"] {
+        assert!(s[key].is_number(), "schedule.{key}: {s}");
+    }
+    let posture = s["posture"].as_object().expect("schedule.posture");
+    let mut keys: Vec<&str> = posture.keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    assert_eq!(
+        keys,
+        ["direction", "entry", "roll_deg", "theta1_deg", "theta2_deg"]
+    );
+    assert_eq!(posture["theta1_deg"], v["best"]["insertion"]["theta1_deg"]);
+    let mut total = 0.0;
+    let mut ops = Vec::new();
+    for step in s["steps"].as_array().expect("schedule.steps") {
+        let op = step["op"].as_str().unwrap().to_string();
+        let mut keys: Vec<&str> = step
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        keys.sort_unstable();
+        let want: &[&str] = match op.as_str() {
+            "rotate" => &["angle_deg", "duration_s", "op"],
+            "insert" => &["duration_s", "length_mm", "op"],
+            "insert_spin" => &["duration_s", "length_mm", "op", "turns"],
+            other => panic!("unknown op {other}"),
+        };
+        assert_eq!(keys, want, "{step}");
+        total += step["duration_s"].as_f64().unwrap();
+        ops.push(op);
+    }
+    let duration = s["duration_s"].as_f64().unwrap();
+    assert!(
+        (total - duration).abs() < 1e-3 * duration,
+        "{total} vs {duration}"
+    );
+    assert!(s["max_twist_deg"].as_f64().unwrap() <= 360.0);
+    ops
+}
+
+#[test]
+fn json_best_schedule_has_the_contracted_keys() {
+    let paper = example("paper");
+    let v = plan_json(&[paper.to_str().unwrap()]);
+    assert_eq!(assert_schedule_keys(&v), ["insert", "insert_spin"]);
+    // The pushes are the segments' lengths, at the driver's insertion speed (2.5 mm/s).
+    let steps = v["best"]["schedule"]["steps"].as_array().unwrap();
+    for (step, seg) in steps.iter().zip(v["best"]["segments"].as_array().unwrap()) {
+        assert_eq!(step["length_mm"], seg["length"]);
+    }
+    let push = steps[0]["length_mm"].as_f64().unwrap() as f32 / 2.5;
+    assert_eq!(steps[0]["duration_s"].as_f64().unwrap(), f64::from(push));
+    let v = plan_json(&[paper.to_str().unwrap(), "--forms", "LRR"]);
+    assert_eq!(
+        assert_schedule_keys(&v),
+        ["insert_spin", "rotate", "insert", "rotate", "insert"]
+    );
+    let v = plan_json(&[example("space").to_str().unwrap()]);
+    assert_schedule_keys(&v);
+    // Out of the plane the first arc's roll is set with the posture, before the needle enters.
+    assert_eq!(
+        v["best"]["schedule"]["posture"]["roll_deg"],
+        v["best"]["segments"][0]["bevel_deg"]
+    );
+}
+
+#[test]
+fn a_bad_driver_setting_names_the_key() {
+    let with_driver = |table: &str| paper_with(&format!("[driver]\n{table}"));
+    fails_with(
+        &with_driver("insert_speed = 0"),
+        "driver.insert_speed must be positive",
+    );
+    fails_with(
+        &with_driver("rotate_speed = -90"),
+        "driver.rotate_speed must be positive",
+    );
+    fails_with(
+        &with_driver("spin_rate = 0.0"),
+        "driver.spin_rate must be positive",
+    );
+    fails_with(
+        &with_driver("max_twist_deg = 100"),
+        "driver.max_twist_deg (at least 360) is out of range",
+    );
+    fails_with(&with_driver("speed = 3"), "unknown field `speed`");
+    // The defaults, written out, plan as the absent table does.
+    let defaults =
+        "insert_speed = 2.5\nrotate_speed = 360.0\nspin_rate = 4.0\nmax_twist_deg = 360.0";
+    let f = scenario_file(&with_driver(defaults));
+    let mut a = plan_json(&[f.0.to_str().unwrap()]);
+    let mut b = plan_json(&[example("paper").to_str().unwrap()]);
+    a.as_object_mut().unwrap().remove("stats");
+    b.as_object_mut().unwrap().remove("stats");
+    assert_eq!(a, b);
+}

@@ -1,6 +1,7 @@
 //! The firmware, built for QEMU's mps2-an386 (Cortex-M4F), answering `needle send` over its
-//! emulated UART: its plans equal the host's bit for bit, malformed frames and a scenario over
-//! capacity get their typed error replies, and it keeps serving after them.
+//! emulated UART: its plans and the motor schedules it computes for them equal the host's bit
+//! for bit, malformed frames and a scenario over capacity get their typed error replies, and it
+//! keeps serving after them.
 
 mod firmware_support;
 
@@ -29,7 +30,8 @@ fn run(args: &[&str]) -> String {
 }
 
 /// `needle send` through QEMU prints the plan `needle plan` prints, number for number (the JSON
-/// numbers are the shortest decimal forms of the f32 values, so equal text is equal bits).
+/// numbers are the shortest decimal forms of the f32 values, so equal text is equal bits),
+/// `best.schedule` included: the device's schedule (which `send` re-checks) is the host's.
 fn assert_device_plan_equals_host(addr: &str, scenario: &str) {
     let file = example(scenario);
     let file = file.to_str().expect("UTF-8 path");
@@ -37,6 +39,11 @@ fn assert_device_plan_equals_host(addr: &str, scenario: &str) {
     let device = run(&["send", file, "--tcp", addr, "--json", "--timeout", "120"]);
     let (h, d) = (without_stats(&host), without_stats(&device));
     assert!(h["best"].is_object(), "{scenario}: the host found no plan");
+    let steps = d["best"]["schedule"]["steps"].as_array();
+    assert!(
+        steps.is_some_and(|s| !s.is_empty()),
+        "{scenario}: the device sent no schedule"
+    );
     assert_eq!(
         h, d,
         "{scenario}: the device's plan differs from the host's"
@@ -109,10 +116,16 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     let on_device = client
         .plan(&paper, &mut |_| {})
         .expect("plan after bad input");
-    let host = planner_core::plan(&paper);
+    let host = planner_core::plan_scheduled(&paper);
     assert_eq!(
         postcard::to_stdvec(&on_device).unwrap(),
         postcard::to_stdvec(&host).unwrap()
+    );
+    let schedule = on_device.unwrap().schedule.expect("the device's schedule");
+    assert_eq!(
+        postcard::to_stdvec(&schedule).unwrap(),
+        postcard::to_stdvec(&host.unwrap().schedule.unwrap()).unwrap(),
+        "the device's schedule is the host's"
     );
     drop(client);
 

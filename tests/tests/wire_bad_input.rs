@@ -9,7 +9,7 @@ use planner_core::wire::{
     encode_frame, encode_payload, Fault, Header, Reply, ReplyBody, Request, RequestBody,
     ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, PROTOCOL_VERSION, WIRE_MAX_OBSTACLES,
 };
-use planner_core::{plan, Field, PlanError, Scenario, MAX_OBSTACLES};
+use planner_core::{plan_scheduled, Field, PlanError, Scenario, MAX_OBSTACLES};
 use std::time::Duration;
 use wire_support::Sim;
 
@@ -63,7 +63,7 @@ fn assert_still_serves(c: &mut Client<Sim>) {
     let mut s = Scenario::paper();
     s.options.forms = planner_core::model::form::FormSet::default();
     s.options.max_control_degree = 2;
-    let local = plan(&s);
+    let local = plan_scheduled(&s);
     let remote = c.plan(&s, &mut |_| {}).expect("the device serves again");
     assert_eq!(
         postcard::to_stdvec(&remote).unwrap(),
@@ -222,7 +222,7 @@ fn progress_arrives_once_per_form() {
     let s = Scenario::paper();
     let mut seen = Vec::new();
     let result = c.plan(&s, &mut |p| seen.push(p)).unwrap();
-    let forms = result.unwrap().forms.len();
+    let forms = result.unwrap().report.forms.len();
     let done: Vec<u8> = seen.iter().map(|p| p.done).filter(|&d| d > 0).collect();
     assert_eq!(done, (1..=forms as u8).collect::<Vec<_>>());
     assert!(seen.iter().all(|p| usize::from(p.total) == forms));

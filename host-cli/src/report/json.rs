@@ -5,7 +5,9 @@
 //! `91.85139465332031`), and `null` where the value is not finite or the form is infeasible. The
 //! reading side takes every key as optional, so a trimmed or hand-written plan still plots.
 
+use super::schedule::ScheduleJson;
 use planner_core::check::{rebuild, sample_points};
+use planner_core::execute::schedule::Schedule;
 use planner_core::model::kinematics::V3;
 use planner_core::{FormOutcome, PlanReport, Scenario, SegmentKind};
 use serde::{Deserialize, Serialize};
@@ -50,6 +52,9 @@ pub struct BestPath {
     /// N: the number of segments.
     #[serde(default)]
     pub control_degree: usize,
+    /// The driver's motor schedule for this path (absent from reports written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub schedule: Option<ScheduleJson>,
 }
 
 /// One form's outcome.
@@ -180,15 +185,17 @@ fn entry(o: &FormOutcome, shown: bool) -> FormEntry {
 }
 
 impl BestPath {
-    /// The chosen path with its points. Its numbers are written whatever `feasible` says (the
-    /// planner only chooses feasible forms, and a reader wants the figures of the path drawn).
-    pub fn of(scenario: &Scenario, o: &FormOutcome) -> BestPath {
+    /// The chosen path with its points and, when given, its motor schedule. Its numbers are
+    /// written whatever `feasible` says (the planner only chooses feasible forms, and a reader
+    /// wants the figures of the path drawn).
+    pub fn of(scenario: &Scenario, o: &FormOutcome, schedule: Option<&Schedule>) -> BestPath {
         let mut path = entry(o, true);
         path.points = Some(path_points(scenario, o).into_iter().map(widened).collect());
         BestPath {
             path,
             penalty: finite(o.penalty),
             control_degree: o.form.len(),
+            schedule: schedule.map(ScheduleJson::of),
         }
     }
 }
@@ -206,10 +213,16 @@ fn feasible_unless_told() -> bool {
     true
 }
 
-/// The `needle plan --json` report of `report`.
-pub fn plan_json(scenario: &Scenario, report: &PlanReport, stats: Stats) -> PlanJson {
+/// The `needle plan --json` report of `report`, with `schedule` (the best form's) as
+/// `best.schedule`.
+pub fn plan_json(
+    scenario: &Scenario,
+    report: &PlanReport,
+    schedule: Option<&Schedule>,
+    stats: Stats,
+) -> PlanJson {
     PlanJson {
-        best: report.best().map(|b| BestPath::of(scenario, b)),
+        best: report.best().map(|b| BestPath::of(scenario, b, schedule)),
         forms: report.forms.iter().map(FormEntry::of).collect(),
         stats: StatsJson {
             time_us: stats.time_us,

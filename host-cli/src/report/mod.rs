@@ -6,8 +6,10 @@
 //! local one.
 
 pub mod json;
+pub mod schedule;
 pub mod sweep;
 pub mod table;
 
 pub use json::{finite, path_points, plan_json, PlanJson, Stats};
+pub use schedule::{schedule_table, ScheduleJson};
 pub use table::plan_table;

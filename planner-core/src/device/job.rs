@@ -93,16 +93,21 @@ impl Core {
                 *done = done.saturating_add(1);
                 self.status(id, tx);
             }
-            None => {
-                if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle)
-                {
-                    let result = session.finish();
-                    self.stats.plans += 1;
-                    self.store_result(id, up, &result, tx);
-                }
-            }
+            None => self.finish(id, up, tx),
         }
         true
+    }
+
+    /// Picks the best form, builds its schedule and stores the encoded result. Never inlined, so
+    /// its locals (the session moved out of the job, the result) are not on the stack while
+    /// [`Core::step`] plans a form.
+    #[inline(never)]
+    fn finish(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
+        if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle) {
+            let result = session.finish_scheduled();
+            self.stats.plans += 1;
+            self.store_result(id, up, &result, tx);
+        }
     }
 
     fn store_result(

@@ -99,6 +99,16 @@ pub enum ScheduleError {
     Capacity,
 }
 
+impl core::fmt::Display for ScheduleError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ScheduleError::NoPath => f.write_str("the plan has no feasible path to execute"),
+            ScheduleError::Driver(e) => write!(f, "unusable driver setting: {e}"),
+            ScheduleError::Capacity => write!(f, "more than {MAX_STEPS} steps"),
+        }
+    }
+}
+
 /// Tracks the shaft's accumulated twist as commands are added.
 struct Twist {
     now: f32,

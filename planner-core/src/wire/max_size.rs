@@ -6,6 +6,8 @@
 //! field added to a type breaks them until its bound is updated too.
 
 use crate::error::{Field, PlanError};
+use crate::execute::schedule::{Op, Posture, Schedule, ScheduleError, Step, Steps};
+use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::{Form, FormSet, SegmentKind};
 use crate::model::scenario::{Driver, Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
 use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
@@ -121,4 +123,25 @@ impl MaxSize for FormOutcome {
 }
 impl MaxSize for PlanReport {
     const MAX_SIZE: usize = crate::report::FormOutcomes::MAX_SIZE + u8::MAX_SIZE;
+}
+impl MaxSize for Op {
+    // Variant tag, then the widest variant: `InsertSpin { length_mm: f32, turns: u32 }`.
+    const MAX_SIZE: usize = 1 + f32::MAX_SIZE + u32::MAX_SIZE;
+}
+impl MaxSize for Step {
+    const MAX_SIZE: usize = Op::MAX_SIZE + f32::MAX_SIZE;
+}
+impl MaxSize for Posture {
+    const MAX_SIZE: usize = 2 * <[f32; 3]>::MAX_SIZE + 3 * f32::MAX_SIZE;
+}
+impl MaxSize for Schedule {
+    const MAX_SIZE: usize = Posture::MAX_SIZE + Steps::MAX_SIZE + 2 * f32::MAX_SIZE;
+}
+impl MaxSize for ScheduleError {
+    // Variant tag, then at most a `PlanError` (`Driver`).
+    const MAX_SIZE: usize = 1 + PlanError::MAX_SIZE;
+}
+impl MaxSize for ScheduledPlan {
+    const MAX_SIZE: usize =
+        PlanReport::MAX_SIZE + <Result<Schedule, ScheduleError> as MaxSize>::MAX_SIZE;
 }

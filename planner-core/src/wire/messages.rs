@@ -7,11 +7,11 @@
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
+use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::Form;
 use crate::model::scenario::{
     Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,
 };
-use crate::report::PlanReport;
 use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
@@ -275,8 +275,9 @@ impl PlanRequest {
     }
 }
 
-/// What a plan ends with: the report, or the planner's typed error.
-pub type PlanResult = Result<PlanReport, PlanError>;
+/// What a plan ends with: the report with its best form's motor schedule, or the planner's typed
+/// error.
+pub type PlanResult = Result<ScheduledPlan, PlanError>;
 
 impl MaxSize for Header {
     const MAX_SIZE: usize = u8::MAX_SIZE + u16::MAX_SIZE;

@@ -1,6 +1,8 @@
 //! Size bounds, framing round trips and the decoder's faults.
 
 use super::*;
+use crate::execute::schedule::{Op, Posture, Schedule, ScheduleError, Step, Steps, MAX_STEPS};
+use crate::execute::ScheduledPlan;
 use crate::model::form::{Form, FormSet, SegmentKind};
 use crate::model::scenario::{Obstacle, Scenario};
 use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
@@ -52,11 +54,55 @@ fn worst_report() -> PlanReport {
     PlanReport { forms, best: 255 }
 }
 
+/// Every step the widest (a spin with the most turns), every number present.
+fn worst_schedule() -> Schedule {
+    let mut steps = Steps::new();
+    while steps
+        .push(Step {
+            op: Op::InsertSpin {
+                length_mm: 1.0,
+                turns: u32::MAX,
+            },
+            duration_s: 2.0,
+        })
+        .is_ok()
+    {}
+    assert_eq!(steps.len(), MAX_STEPS);
+    Schedule {
+        posture: Posture {
+            entry: [1.0; 3],
+            theta1_deg: 2.0,
+            theta2_deg: 3.0,
+            direction: [0.0, 0.6, 0.8],
+            roll_deg: 4.0,
+        },
+        steps,
+        duration_s: 5.0,
+        max_twist_deg: 6.0,
+    }
+}
+
 #[test]
 fn bounds_are_exact_for_worst_case_values() {
     assert_eq!(encoded_len(&worst_outcome()), FormOutcome::MAX_SIZE);
     assert_eq!(encoded_len(&worst_report()), PlanReport::MAX_SIZE);
-    let result: PlanResult = Ok(worst_report());
+    let op = Op::InsertSpin {
+        length_mm: 1.0,
+        turns: u32::MAX,
+    };
+    assert_eq!(encoded_len(&op), Op::MAX_SIZE);
+    assert_eq!(encoded_len(&worst_schedule()), Schedule::MAX_SIZE);
+    let driver = ScheduleError::Driver(PlanError::TooManyObstacles {
+        given: u16::MAX,
+        capacity: u16::MAX,
+    });
+    assert_eq!(encoded_len(&driver), ScheduleError::MAX_SIZE);
+    let planned = ScheduledPlan {
+        report: worst_report(),
+        schedule: Ok(worst_schedule()),
+    };
+    assert_eq!(encoded_len(&planned), ScheduledPlan::MAX_SIZE);
+    let result: PlanResult = Ok(planned);
     assert_eq!(encoded_len(&result), MAX_PLAN_RESULT);
     let err = PlanError::TooManyObstacles {
         given: u16::MAX,
