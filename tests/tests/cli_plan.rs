@@ -349,7 +349,7 @@ fn a_bad_driver_setting_names_the_key() {
     );
     fails_with(
         &with_driver("max_twist_deg = 100"),
-        "driver.max_twist_deg (at least 360) is out of range",
+        "driver.max_twist_deg is out of range: allowed is at least 360 degrees",
     );
     fails_with(&with_driver("speed = 3"), "unknown field `speed`");
     // The defaults, written out, plan as the absent table does.
