@@ -38,6 +38,8 @@ pub struct Scene<'a> {
     pub notes: Vec<String>,
     /// RRT tree edges as point lists, drawn thin and grey.
     pub tree: Vec<Vec<[f32; 3]>>,
+    /// Simulated executed paths, drawn thin and translucent: together a tube around the plan.
+    pub executed: Vec<Vec<[f32; 3]>>,
 }
 
 struct View {
@@ -82,7 +84,7 @@ fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], 
     for p in s.paths.iter().flat_map(|p| &p.points) {
         grow(*p, 0.0);
     }
-    for p in s.tree.iter().flatten() {
+    for p in s.tree.iter().chain(&s.executed).flatten() {
         grow(*p, 0.0);
     }
     for (lo_k, hi_k) in lo.iter_mut().zip(hi.iter_mut()) {
@@ -186,6 +188,18 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
                 .map(|l| l.iter().map(|p| view.px(*p)).collect())
                 .collect();
             svg.multi_path(&lines, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
+        }
+        if !scene.executed.is_empty() {
+            let lines: Vec<Vec<[f64; 2]>> = scene
+                .executed
+                .iter()
+                .map(|l| l.iter().map(|p| view.px(*p)).collect())
+                .collect();
+            svg.multi_path(
+                &lines,
+                "executed",
+                "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
+            );
         }
         svg.group("obstacles");
         let mut approximated = vec![false; scenario.obstacles.len()];

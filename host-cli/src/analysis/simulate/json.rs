@@ -1,0 +1,162 @@
+//! The typed JSON of `needle simulate --json`.
+
+use super::{Spread, Summary};
+use hil_sim::insertion::{Drawn, Perturbation, Run};
+use planner_core::execute::schedule::{Op, Step};
+use serde::Serialize;
+
+/// The whole output.
+#[derive(Serialize)]
+pub struct SimulateJson {
+    /// Number of runs.
+    pub runs: usize,
+    /// Always false: the schedule is executed open loop.
+    pub closed_loop: bool,
+    /// The perturbation every run drew from.
+    pub perturbation: Perturbation,
+    /// Figures over the runs.
+    pub summary: SummaryJson,
+    /// Per run, with `--detail`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs_detail: Option<Vec<RunJson>>,
+}
+
+/// Mean, RMS, 95th percentile and maximum (mm).
+#[derive(Serialize)]
+pub struct ErrorJson {
+    /// Mean.
+    pub mean: f64,
+    /// Root mean square.
+    pub rms: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// Deviation from the planned path (mm).
+#[derive(Serialize)]
+pub struct DeviationJson {
+    /// RMS over the runs of each run's RMS over its points (runs have nearly equal point counts).
+    pub rms: f64,
+    /// Largest over all runs' points.
+    pub max: f64,
+}
+
+/// The summary.
+#[derive(Serialize)]
+pub struct SummaryJson {
+    /// Distance of the true end to the true target.
+    pub target_error: ErrorJson,
+    /// Distance of the true path to the planned one.
+    pub path_deviation: DeviationJson,
+    /// Runs whose true path entered an obstacle.
+    pub collisions: usize,
+    /// Smallest clearance over all runs (mm; null without obstacles).
+    pub min_clearance: f32,
+}
+
+/// One run.
+#[derive(Serialize)]
+pub struct RunJson {
+    /// The run's seed.
+    pub seed: u64,
+    /// What the run drew.
+    pub drawn: Drawn,
+    /// Distance of the true end to the true target (mm).
+    pub target_error: f32,
+    /// RMS deviation from the planned path (mm).
+    pub path_rms: f32,
+    /// Largest deviation from the planned path (mm).
+    pub path_max: f32,
+    /// The true path entered an obstacle.
+    pub collided: bool,
+    /// Smallest clearance (mm).
+    pub min_clearance: f32,
+    /// True tip path, [x, y, z] at most 1 mm apart.
+    pub points: Vec<[f32; 3]>,
+    /// What the driver executed.
+    pub steps: Vec<StepJson>,
+}
+
+/// One executed driver step.
+#[derive(Serialize)]
+pub struct StepJson {
+    /// `rotate`, `insert` or `insert_spin`.
+    pub op: &'static str,
+    /// Rotation (degrees, signed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angle_deg: Option<f32>,
+    /// Insertion (mm).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length_mm: Option<f32>,
+    /// Whole spin turns.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turns: Option<u32>,
+    /// Duration (s).
+    pub duration_s: f32,
+}
+
+impl StepJson {
+    fn of(s: &Step) -> StepJson {
+        let (op, angle_deg, length_mm, turns) = match s.op {
+            Op::Rotate { angle_deg } => ("rotate", Some(angle_deg), None, None),
+            Op::Insert { length_mm } => ("insert", None, Some(length_mm), None),
+            Op::InsertSpin { length_mm, turns } => {
+                ("insert_spin", None, Some(length_mm), Some(turns))
+            }
+        };
+        StepJson {
+            op,
+            angle_deg,
+            length_mm,
+            turns,
+            duration_s: s.duration_s,
+        }
+    }
+}
+
+impl RunJson {
+    /// One run's record.
+    pub fn of(r: &Run) -> RunJson {
+        RunJson {
+            seed: r.seed,
+            drawn: r.drawn.clone(),
+            target_error: r.target_error,
+            path_rms: r.path_rms,
+            path_max: r.path_max,
+            collided: r.collided,
+            min_clearance: r.min_clearance,
+            points: r.points.clone(),
+            steps: r.steps.iter().map(StepJson::of).collect(),
+        }
+    }
+}
+
+fn error(s: &Spread) -> ErrorJson {
+    ErrorJson {
+        mean: s.mean,
+        rms: s.rms,
+        p95: s.p95,
+        max: s.max,
+    }
+}
+
+/// The JSON of a simulation.
+pub fn to_json(p: &Perturbation, runs: &[Run], summary: &Summary, detail: bool) -> SimulateJson {
+    SimulateJson {
+        runs: runs.len(),
+        closed_loop: false,
+        perturbation: *p,
+        summary: SummaryJson {
+            target_error: error(&summary.target_error),
+            path_deviation: DeviationJson {
+                rms: summary.path_rms.rms,
+                max: summary.path_max.max,
+            },
+            collisions: summary.collisions,
+            min_clearance: summary.min_clearance,
+        },
+        runs_detail: detail.then(|| runs.iter().map(RunJson::of).collect()),
+    }
+}
