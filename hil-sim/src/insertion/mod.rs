@@ -34,4 +34,6 @@ mod world;
 
 pub use perturbation::{PerturbError, Perturbation, KEYS};
 pub use run::{finish, open_loop, Planned, Run};
-pub use world::{Drawn, Executed, Measurement, StepDraw, World, MAX_PIECE_MM, MIN_FACTOR};
+pub use world::{
+    Drawn, Executed, Measurement, StepDraw, World, DRIFT_REFERENCE_MM, MAX_PIECE_MM, MIN_FACTOR,
+};

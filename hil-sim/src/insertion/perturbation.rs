@@ -14,14 +14,17 @@ use std::fmt;
 pub struct Perturbation {
     /// Per-run relative spread of the tissue's curvature 1/r (the factor is 1 + N(0, this)).
     ///
-    /// Default 0.05. Webster et al. 2006 (IJRR 25(5), "Nonholonomic modeling of needle
-    /// steering") fit one curvature per phantom and needle and report that it changes with the
-    /// tissue and the insertion; Majewicz et al. 2012 (IEEE TBME 59(2)) measure radii that differ
-    /// by tens of percent between tissues. Run to run in one phantom, a few percent: 5 %.
+    /// Default 0.03, issue 9's floor. Webster et al. 2006 (IJRR 25(5), "Nonholonomic modeling of
+    /// needle steering") fit one curvature per phantom and needle and report that it changes with
+    /// the tissue and the insertion; Majewicz et al. 2012 (IEEE TBME 59(2)) measure radii that
+    /// differ by tens of percent between tissues. Run to run in one phantom (where the radius was
+    /// identified, as the seed paper's 63.7 mm was) a few percent; the calibration against the
+    /// paper's experiment keeps the floor (5 % alone puts R at 1.6 mm RMS, above the paper's).
     pub curvature_spread: f32,
     /// Per-segment relative spread of 1/r on top of the run's (tissue layers, needle wear).
     ///
-    /// Default 0.02 (Webster et al. 2006: the fit's residuals along one insertion).
+    /// Default 0.01, the floor (Webster et al. 2006: the fit's residuals along one insertion; the
+    /// calibration keeps the floor for the reason of `curvature_spread`).
     pub segment_curvature_spread: f32,
     /// Torsional lag of the tip behind the base rotation, per millimetre of inserted depth
     /// (degrees per mm): a backlash (play) of this × depth on each side.
@@ -31,12 +34,14 @@ pub struct Perturbation {
     /// enhances robotic control of tip-steerable needles") measure a tip lagging the base by
     /// tens of degrees at about 10 cm in phantom and ex vivo tissue.
     pub torsion_lag_deg_per_mm: f32,
-    /// Residual lateral drift of a spun line (mm sideways per mm of line; a per-line tilt drawn
-    /// N(0, this) on both axes across the heading).
+    /// Residual lateral drift of a spun line (mm sideways per mm of line, on average over a
+    /// 50 mm line): the line keeps a residual curvature 2 · drift / 50 mm in a direction drawn per
+    /// line (N(0, this) on both axes across the heading), so its drift grows along it.
     ///
-    /// Default 0.01 (0.6 degrees). Engh et al. 2006 and Minhas et al. 2007 (duty-cycled
-    /// spinning) and Majewicz et al. 2014 show spun needles near straight but with a residual
-    /// curvature and drift of this order over a few centimetres.
+    /// Default 0.02 (a residual radius of 1.25 m). Engh et al. 2006 and Minhas et al. 2007
+    /// (duty-cycled spinning) and Majewicz et al. 2014 show spun needles near straight but with a
+    /// residual curvature of metres; raised from 0.01 by the calibration, so that the errors grow
+    /// with the control degree as in the paper's experiment (docs/execution.md).
     pub line_drift_mm_per_mm: f32,
     /// Error of the tip's advance: standard deviation over a 100 mm insertion, growing with the
     /// square root of the length (a random walk, so splitting a push draws the same statistics).
@@ -46,7 +51,8 @@ pub struct Perturbation {
     pub insertion_error_mm: f32,
     /// Entry point error, per axis (mm).
     ///
-    /// Default 0.3: registration of the driver to the phantom with an optical or EM tracker.
+    /// Default 0.2, the floor: registration of the driver to the phantom (sub-millimetre with an
+    /// optical or EM tracker).
     pub entry_position_mm: f32,
     /// Entry direction error, about both axes across the heading (degrees).
     ///
@@ -75,12 +81,12 @@ pub struct Perturbation {
 impl Default for Perturbation {
     fn default() -> Self {
         Perturbation {
-            curvature_spread: 0.05,
-            segment_curvature_spread: 0.02,
+            curvature_spread: 0.03,
+            segment_curvature_spread: 0.01,
             torsion_lag_deg_per_mm: 0.2,
-            line_drift_mm_per_mm: 0.01,
+            line_drift_mm_per_mm: 0.02,
             insertion_error_mm: 0.3,
-            entry_position_mm: 0.3,
+            entry_position_mm: 0.2,
             entry_direction_deg: 0.5,
             target_shift_mm: 0.5,
             tracker_position_mm: 0.5,

@@ -6,8 +6,9 @@
 //!   curvature factors (1 + N(0, spread), at least [`MIN_FACTOR`]); a new segment factor is drawn
 //!   at the first `insert` after a rotation or a line;
 //! - the tip advances the commanded length plus N(0, σ·√(L / 100 mm)) (never negative);
-//! - a spun line (`insert_spin`) is straight but tilted by a drift drawn per line, N(0, σ) mm/mm
-//!   across the heading on both axes;
+//! - a spun line (`insert_spin`) keeps a residual curvature (imperfect duty cycling): drift rates
+//!   d1, d2 ~ N(0, σ) mm/mm across the heading, drawn per line, bend it towards d1 e1 + d2 e2
+//!   with curvature 2·|d| / [`DRIFT_REFERENCE_MM`] (a 50 mm line ends |d|·50 mm sideways);
 //! - the shaft is a torsional spring with play: the tip roll stays within ± lag·depth of the base
 //!   roll and moves only when the base drags it (a backlash), so a rotation by Δ turns the tip by
 //!   Δ − lag·depth, and a spin's alternating turns leave the tip lag·depth past the base, on the
@@ -33,6 +34,10 @@ pub const MIN_FACTOR: f32 = 0.2;
 
 /// Longest piece between two recorded points (mm).
 pub const MAX_PIECE_MM: f32 = 1.0;
+
+/// The line length over which a spun line's residual curvature drifts sideways by
+/// `line_drift_mm_per_mm` per mm on average: curvature = 2 · drift / this (mm).
+pub const DRIFT_REFERENCE_MM: f32 = 50.0;
 
 /// Offsets the tracker stream from the physics stream of the same seed.
 const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
@@ -105,6 +110,7 @@ pub struct World {
     tracker: SplitMix64,
     tip: Frame,
     segment_factor: f32,
+    line_drift: [f32; 2],
     last: Last,
     base_deg: f32,
     tip_deg: f32,
@@ -171,6 +177,7 @@ impl World {
             tracker: seeded(seed ^ TRACKER_STREAM),
             tip,
             segment_factor: 1.0,
+            line_drift: [0.0; 2],
             last: Last::Nothing,
             base_deg: 0.0,
             tip_deg: 0.0,
@@ -289,19 +296,38 @@ impl World {
             }
             Op::InsertSpin { length_mm, .. } => {
                 if self.last != Last::Spin {
-                    draw.drift =
-                        [0; 2].map(|_| normal(&mut self.physics, self.p.line_drift_mm_per_mm));
-                    self.tilt_for_drift(draw.drift);
+                    let sd = self.p.line_drift_mm_per_mm;
+                    self.line_drift = [0; 2].map(|_| normal(&mut self.physics, sd));
                 }
                 self.last = Last::Spin;
-                let radius = self.scenario.needle.curvature_radius;
-                let done = self.push(
-                    SegmentKind::Line,
-                    length_mm,
-                    radius,
-                    &mut draw,
-                    &mut on_measure,
-                );
+                draw.drift = self.line_drift;
+                let [d1, d2] = self.line_drift;
+                let size = libm::sqrtf(d1 * d1 + d2 * d2);
+                let done = if size == 0.0 {
+                    let radius = self.scenario.needle.curvature_radius;
+                    self.push(
+                        SegmentKind::Line,
+                        length_mm,
+                        radius,
+                        &mut draw,
+                        &mut on_measure,
+                    )
+                } else {
+                    // The residual curvature bends the line towards d1 e1 + d2 e2: roll e2 there,
+                    // push an arc, roll back (the bevel itself is spinning, not turned).
+                    let roll = libm::atan2f(-d1, d2);
+                    self.tip = self.tip.rolled(roll);
+                    let radius = DRIFT_REFERENCE_MM / (2.0 * size);
+                    let done = self.push(
+                        SegmentKind::Arc,
+                        length_mm,
+                        radius,
+                        &mut draw,
+                        &mut on_measure,
+                    );
+                    self.tip = self.tip.rolled(-roll);
+                    done
+                };
                 draw.tip_rotation_deg = self.spin_settles();
                 done
             }
@@ -348,16 +374,6 @@ impl World {
         self.tip_deg = settled;
         self.tip = self.tip.rolled(turn.to_radians());
         turn
-    }
-
-    /// Tilts the heading for a spun line's drift (`d` along e1 and e2, mm per mm).
-    fn tilt_for_drift(&mut self, d: [f32; 2]) {
-        let side = self.tip.e1() * d[0] + self.tip.e2() * d[1];
-        let size = side.norm();
-        if size > 0.0 {
-            let axis = self.tip.e3().cross(&(side / size));
-            self.tip = turned(&self.tip, axis, libm::atanf(size));
-        }
     }
 
     /// Pushes the needle `length` (commanded) along a segment of `kind`, in pieces.
