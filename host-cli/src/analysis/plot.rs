@@ -189,18 +189,6 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
                 .collect();
             svg.multi_path(&lines, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
         }
-        if !scene.executed.is_empty() {
-            let lines: Vec<Vec<[f64; 2]>> = scene
-                .executed
-                .iter()
-                .map(|l| l.iter().map(|p| view.px(*p)).collect())
-                .collect();
-            svg.multi_path(
-                &lines,
-                "executed",
-                "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
-            );
-        }
         svg.group("obstacles");
         let mut approximated = vec![false; scenario.obstacles.len()];
         let mut k = 0;
@@ -237,6 +225,19 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             }
         }
         svg.end_group();
+        // Executed paths above the obstacles, so a run that enters one shows.
+        if !scene.executed.is_empty() {
+            let lines: Vec<Vec<[f64; 2]>> = scene
+                .executed
+                .iter()
+                .map(|l| l.iter().map(|p| view.px(*p)).collect())
+                .collect();
+            svg.multi_path(
+                &lines,
+                "executed",
+                "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
+            );
+        }
         // The best path last, on top of the others.
         let order = scene
             .paths
