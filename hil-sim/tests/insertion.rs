@@ -274,8 +274,10 @@ fn a_seed_repeats_bit_for_bit() {
 fn bad_perturbations_are_typed_errors() {
     let scenario = Scenario::paper();
     let (_, s) = form(&scenario, "R");
-    let mut p = Perturbation::default();
-    p.curvature_spread = -0.1;
+    let mut p = Perturbation {
+        curvature_spread: -0.1,
+        ..Perturbation::default()
+    };
     let e = World::new(&scenario, &s.posture, &p, 0).err().unwrap();
     assert!(
         matches!(

@@ -366,8 +366,10 @@ mod tests {
         );
         p.apply(" measure_every_mm = 0.5 ").unwrap();
         assert_eq!(p.measure_every_mm, 0.5);
-        let mut q = Perturbation::default();
-        q.curvature_spread = f32::NAN;
+        let q = Perturbation {
+            curvature_spread: f32::NAN,
+            ..Perturbation::default()
+        };
         assert!(q.validate().is_err());
     }
 }
