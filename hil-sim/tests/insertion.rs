@@ -4,28 +4,15 @@
 use hil_sim::insertion::{open_loop, PerturbError, Perturbation, Planned, Run, World};
 use planner_core::execute::nominal;
 use planner_core::execute::schedule::{schedule, Op, Schedule};
-use planner_core::model::scenario::{Obstacle, Workspace};
+use planner_core::model::scenario::Workspace;
 use planner_core::{plan, Form, FormOutcome, Scenario};
 use std::ops::ControlFlow;
 
+/// The paper's obstacles as spheres and a target off the plane: a 3-D plan that rolls its bevel.
 fn space() -> Scenario {
     let mut s = Scenario::paper();
     s.options.workspace = Workspace::Space;
-    s.target.position = [12.0, 8.0, 85.0];
-    s.obstacles.clear();
-    for (c, r) in [
-        ([6.0, 4.0, 42.0], 9.0),
-        ([-10.0, 14.0, 58.0], 8.0),
-        ([22.0, -6.0, 62.0], 7.0),
-        ([0.0, -16.0, 28.0], 10.0),
-        ([14.0, 18.0, 70.0], 6.0),
-    ] {
-        let o = Obstacle {
-            center: c,
-            radius: r,
-        };
-        s.obstacles.push(o).unwrap();
-    }
+    s.target.position = [9.0, 6.0, 86.0];
     s
 }
 
@@ -66,6 +53,11 @@ fn end(r: &Run) -> [f32; 3] {
 
 #[test]
 fn no_perturbation_follows_every_plan() {
+    let rolls = |o: &FormOutcome| o.segments.iter().any(|g| g.bevel_deg.abs() % 180.0 > 1.0);
+    assert!(
+        feasible(&space()).iter().any(rolls),
+        "the 3-D plans roll the bevel"
+    );
     for scenario in [Scenario::paper(), space()] {
         for o in feasible(&scenario) {
             let s = schedule(&scenario, &o).unwrap();

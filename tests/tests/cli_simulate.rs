@@ -1,6 +1,7 @@
 //! `needle simulate` end to end: the JSON contract, repeatability over thread counts, the plot,
 //! the table, and bad input.
 
+use hil_sim::insertion::KEYS;
 use needle_e2e::{example, needle, needle_json};
 use serde_json::Value;
 
@@ -102,18 +103,7 @@ fn zero_perturbation_gives_zero_deviation() {
     let mut args: Vec<String> = ["simulate", &paper(), "--runs", "3", "--json"]
         .map(String::from)
         .to_vec();
-    for k in [
-        "curvature_spread",
-        "segment_curvature_spread",
-        "torsion_lag_deg_per_mm",
-        "line_drift_mm_per_mm",
-        "insertion_error_mm",
-        "entry_position_mm",
-        "entry_direction_deg",
-        "target_shift_mm",
-        "tracker_position_mm",
-        "tracker_heading_deg",
-    ] {
+    for k in KEYS.iter().filter(|k| **k != "measure_every_mm") {
         args.push("--perturb".into());
         args.push(format!("{k}=0"));
     }

@@ -10,8 +10,9 @@ use planner_core::model::kinematics::{PathGeometry, V3};
 use planner_core::{FormOutcome, Scenario};
 use std::ops::ControlFlow;
 
-/// What one simulated insertion gave.
-#[derive(Clone, Debug, PartialEq)]
+/// What one simulated insertion gave (serialised without `steps`, whose JSON form is the
+/// reader's choice).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Run {
     /// The run's seed.
     pub seed: u64,
@@ -30,6 +31,7 @@ pub struct Run {
     /// The true tip path, at most 1 mm apart.
     pub points: Vec<[f32; 3]>,
     /// What the driver executed.
+    #[serde(skip)]
     pub steps: Vec<Step>,
 }
 

@@ -59,6 +59,18 @@ impl View {
             self.origin[1] + self.size[1] - (v - self.lo[1]) * self.scale,
         ]
     }
+
+    /// Many thin polylines as one path element (nothing when there are none).
+    fn lines(&self, svg: &mut Svg, lines: &[Vec<[f32; 3]>], class: &str, style: &str) {
+        if lines.is_empty() {
+            return;
+        }
+        let px: Vec<Vec<[f64; 2]>> = lines
+            .iter()
+            .map(|l| l.iter().map(|p| self.px(*p)).collect())
+            .collect();
+        svg.multi_path(&px, class, style);
+    }
 }
 
 const AXIS: [&str; 3] = ["x", "y", "z"];
@@ -181,14 +193,12 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             view.origin[0], view.origin[1], view.size[0], view.size[1]
         ));
         let scale = view.scale;
-        if !scene.tree.is_empty() {
-            let lines: Vec<Vec<[f64; 2]>> = scene
-                .tree
-                .iter()
-                .map(|l| l.iter().map(|p| view.px(*p)).collect())
-                .collect();
-            svg.multi_path(&lines, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
-        }
+        view.lines(
+            &mut svg,
+            &scene.tree,
+            "rrt-tree",
+            "stroke:#bbb;stroke-width:0.6",
+        );
         svg.group("obstacles");
         let mut approximated = vec![false; scenario.obstacles.len()];
         let mut k = 0;
@@ -226,18 +236,12 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         }
         svg.end_group();
         // Executed paths above the obstacles, so a run that enters one shows.
-        if !scene.executed.is_empty() {
-            let lines: Vec<Vec<[f64; 2]>> = scene
-                .executed
-                .iter()
-                .map(|l| l.iter().map(|p| view.px(*p)).collect())
-                .collect();
-            svg.multi_path(
-                &lines,
-                "executed",
-                "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
-            );
-        }
+        view.lines(
+            &mut svg,
+            &scene.executed,
+            "executed",
+            "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
+        );
         // The best path last, on top of the others.
         let order = scene
             .paths

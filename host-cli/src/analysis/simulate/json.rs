@@ -1,13 +1,13 @@
 //! The typed JSON of `needle simulate --json`.
 
 use super::{Spread, Summary};
-use hil_sim::insertion::{Drawn, Perturbation, Run};
+use hil_sim::insertion::{Perturbation, Run};
 use planner_core::execute::schedule::{Op, Step};
 use serde::Serialize;
 
 /// The whole output.
 #[derive(Serialize)]
-pub struct SimulateJson {
+pub struct SimulateJson<'a> {
     /// Number of runs.
     pub runs: usize,
     /// Always false: the schedule is executed open loop.
@@ -18,7 +18,7 @@ pub struct SimulateJson {
     pub summary: SummaryJson,
     /// Per run, with `--detail`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub runs_detail: Option<Vec<RunJson>>,
+    pub runs_detail: Option<Vec<RunJson<'a>>>,
 }
 
 /// Mean, RMS, 95th percentile and maximum (mm).
@@ -56,25 +56,13 @@ pub struct SummaryJson {
     pub min_clearance: f32,
 }
 
-/// One run.
+/// One run: its figures, draws and points, and the steps as executed.
 #[derive(Serialize)]
-pub struct RunJson {
-    /// The run's seed.
-    pub seed: u64,
-    /// What the run drew.
-    pub drawn: Drawn,
-    /// Distance of the true end to the true target (mm).
-    pub target_error: f32,
-    /// RMS deviation from the planned path (mm).
-    pub path_rms: f32,
-    /// Largest deviation from the planned path (mm).
-    pub path_max: f32,
-    /// The true path entered an obstacle.
-    pub collided: bool,
-    /// Smallest clearance (mm).
-    pub min_clearance: f32,
-    /// True tip path, [x, y, z] at most 1 mm apart.
-    pub points: Vec<[f32; 3]>,
+pub struct RunJson<'a> {
+    /// `seed`, `drawn`, `target_error`, `path_rms`, `path_max`, `collided`, `min_clearance`,
+    /// `points`.
+    #[serde(flatten)]
+    pub run: &'a Run,
     /// What the driver executed.
     pub steps: Vec<StepJson>,
 }
@@ -116,19 +104,12 @@ impl StepJson {
     }
 }
 
-impl RunJson {
+impl<'a> RunJson<'a> {
     /// One run's record.
-    pub fn of(r: &Run) -> RunJson {
+    pub fn of(run: &'a Run) -> RunJson<'a> {
         RunJson {
-            seed: r.seed,
-            drawn: r.drawn.clone(),
-            target_error: r.target_error,
-            path_rms: r.path_rms,
-            path_max: r.path_max,
-            collided: r.collided,
-            min_clearance: r.min_clearance,
-            points: r.points.clone(),
-            steps: r.steps.iter().map(StepJson::of).collect(),
+            run,
+            steps: run.steps.iter().map(StepJson::of).collect(),
         }
     }
 }
@@ -143,7 +124,12 @@ fn error(s: &Spread) -> ErrorJson {
 }
 
 /// The JSON of a simulation.
-pub fn to_json(p: &Perturbation, runs: &[Run], summary: &Summary, detail: bool) -> SimulateJson {
+pub fn to_json<'a>(
+    p: &Perturbation,
+    runs: &'a [Run],
+    summary: &Summary,
+    detail: bool,
+) -> SimulateJson<'a> {
     SimulateJson {
         runs: runs.len(),
         closed_loop: false,
