@@ -26,8 +26,14 @@ pub enum Field {
     ObstacleCenter(u16),
     /// `obstacles[i].radius`
     ObstacleRadius(u16),
-    /// One of the `weights`.
-    Weights,
+    /// `weights.length` (a1)
+    WeightLength,
+    /// `weights.risk` (a2)
+    WeightRisk,
+    /// `weights.penalty` (a3)
+    WeightPenalty,
+    /// `weights.control` (a4)
+    WeightControl,
     /// `planner.min_clearance`
     MinClearance,
     /// `planner.max_control_degree`
@@ -40,6 +46,34 @@ pub enum Field {
     SpinRate,
     /// `driver.max_twist_deg` (at least 360)
     MaxTwist,
+}
+
+impl Field {
+    /// What the planner accepts for this input, for error messages.
+    pub fn allowed(&self) -> &'static str {
+        match self {
+            Field::CurvatureRadius => "more than 0 and at most 1000 mm",
+            Field::MaxArc => "more than 0 and at most 360 degrees",
+            Field::MaxLineLength => "0 (automatic) or more, in mm",
+            Field::EntryPosition | Field::TargetPosition | Field::ObstacleCenter(_) => {
+                "coordinates within 1000 mm of the origin"
+            }
+            Field::EntryDirection => "a non-zero vector",
+            Field::MaxTilt => "0 to 89 degrees",
+            Field::TargetTolerance => "more than 0 mm, and less than the entry-target distance",
+            Field::ObstacleRadius(_) => "more than 0 and at most 1000 mm",
+            Field::WeightLength
+            | Field::WeightRisk
+            | Field::WeightPenalty
+            | Field::WeightControl
+            | Field::MinClearance => "0 or more",
+            Field::ControlDegree => "1 to the planner's largest degree",
+            Field::InsertSpeed => "more than 0 mm/s",
+            Field::RotateSpeed => "more than 0 deg/s",
+            Field::SpinRate => "more than 0 rev/s",
+            Field::MaxTwist => "at least 360 degrees (a spun line turns the shaft whole turns)",
+        }
+    }
 }
 
 impl core::fmt::Display for Field {
@@ -55,13 +89,16 @@ impl core::fmt::Display for Field {
             Field::TargetTolerance => f.write_str("target.tolerance"),
             Field::ObstacleCenter(i) => write!(f, "obstacles[{i}].center"),
             Field::ObstacleRadius(i) => write!(f, "obstacles[{i}].radius"),
-            Field::Weights => f.write_str("weights"),
+            Field::WeightLength => f.write_str("weights.length"),
+            Field::WeightRisk => f.write_str("weights.risk"),
+            Field::WeightPenalty => f.write_str("weights.penalty"),
+            Field::WeightControl => f.write_str("weights.control"),
             Field::MinClearance => f.write_str("planner.min_clearance"),
             Field::ControlDegree => f.write_str("planner.max_control_degree"),
             Field::InsertSpeed => f.write_str("driver.insert_speed"),
             Field::RotateSpeed => f.write_str("driver.rotate_speed"),
             Field::SpinRate => f.write_str("driver.spin_rate"),
-            Field::MaxTwist => f.write_str("driver.max_twist_deg (at least 360)"),
+            Field::MaxTwist => f.write_str("driver.max_twist_deg"),
         }
     }
 }
@@ -98,8 +135,13 @@ pub enum PlanError {
     EntryInsideObstacle(u16),
     /// The target lies inside (or on) this obstacle.
     TargetInsideObstacle(u16),
-    /// The target coincides with the entry point.
+    /// The target lies within its tolerance of the entry point.
     TargetAtEntry,
+    /// `target.tolerance` is finer than f32 arithmetic resolves at the scenario's coordinates.
+    ToleranceTooFine {
+        /// The finest tolerance that can be honoured here (nanometres).
+        least_nm: u32,
+    },
     /// Plane mode was asked for but the entry, its direction or the target leave the y-z plane.
     NotInPlane(Field),
     /// No selected form gives a collision-free path that reaches the target.
@@ -111,7 +153,9 @@ impl core::fmt::Display for PlanError {
         match self {
             PlanError::NotFinite(field) => write!(f, "{field} is not a finite number"),
             PlanError::NotPositive(field) => write!(f, "{field} must be positive"),
-            PlanError::OutOfRange(field) => write!(f, "{field} is out of range"),
+            PlanError::OutOfRange(field) => {
+                write!(f, "{field} is out of range: allowed is {}", field.allowed())
+            }
             PlanError::ZeroDirection => f.write_str("entry.direction is the zero vector"),
             PlanError::TooManyObstacles { given, capacity } => write!(
                 f,
@@ -127,7 +171,15 @@ impl core::fmt::Display for PlanError {
                 write!(f, "the entry point lies inside obstacle {i}")
             }
             PlanError::TargetInsideObstacle(i) => write!(f, "the target lies inside obstacle {i}"),
-            PlanError::TargetAtEntry => f.write_str("the target coincides with the entry point"),
+            PlanError::TargetAtEntry => f.write_str(
+                "the target lies within target.tolerance of the entry point: nothing to plan",
+            ),
+            PlanError::ToleranceTooFine { least_nm } => write!(
+                f,
+                "target.tolerance is finer than the planner's f32 arithmetic resolves at these \
+                 coordinates: use at least {:.6} mm",
+                *least_nm as f32 * 1e-6
+            ),
             PlanError::NotInPlane(field) => write!(
                 f,
                 "plane = \"yz\" needs x = entry x for {field} (and no x component in the direction)"

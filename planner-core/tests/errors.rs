@@ -20,7 +20,7 @@ fn non_finite_numbers() {
     assert_eq!(err(&s), PlanError::NotFinite(Field::ObstacleCenter(1)));
     let mut s = Scenario::paper();
     s.weights.risk = f32::NEG_INFINITY;
-    assert_eq!(err(&s), PlanError::NotFinite(Field::Weights));
+    assert_eq!(err(&s), PlanError::NotFinite(Field::WeightRisk));
     let mut s = Scenario::paper();
     s.entry.direction[1] = f32::NAN;
     assert_eq!(err(&s), PlanError::NotFinite(Field::EntryDirection));
@@ -46,7 +46,7 @@ fn out_of_range_settings() {
     assert_eq!(err(&s), PlanError::OutOfRange(Field::MaxTilt));
     let mut s = Scenario::paper();
     s.weights.control = -1.0;
-    assert_eq!(err(&s), PlanError::OutOfRange(Field::Weights));
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::WeightControl));
     let mut s = Scenario::paper();
     s.options.min_clearance = -0.5;
     assert_eq!(err(&s), PlanError::OutOfRange(Field::MinClearance));
@@ -116,4 +116,59 @@ fn an_enclosed_target_is_unreachable() {
             .unwrap();
     }
     assert_eq!(err(&s), PlanError::Unreachable);
+}
+
+#[test]
+fn messages_name_the_input_and_what_is_allowed() {
+    let mut s = Scenario::paper();
+    s.weights.penalty = -1.0;
+    assert_eq!(
+        err(&s).to_string(),
+        "weights.penalty is out of range: allowed is 0 or more"
+    );
+    let mut s = Scenario::paper();
+    s.entry.max_tilt_deg = 90.0;
+    assert!(
+        err(&s).to_string().contains("0 to 89 degrees"),
+        "{}",
+        err(&s)
+    );
+    let mut s = Scenario::paper();
+    s.target.tolerance = 90.0;
+    assert_eq!(err(&s), PlanError::TargetAtEntry);
+    assert!(err(&s).to_string().contains("within target.tolerance"));
+}
+
+#[test]
+fn scenarios_beyond_a_needle_workspace_are_refused() {
+    let mut s = Scenario::paper();
+    s.obstacles.clear();
+    s.target.position = [0.0, 0.0, 1e12];
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::TargetPosition));
+    s.target.position = [0.0, 0.0, 999.0];
+    assert_eq!(s.validate(), Ok(()));
+    let mut s = Scenario::paper();
+    s.obstacles[2].center[1] = -1001.0;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::ObstacleCenter(2)));
+    let mut s = Scenario::paper();
+    s.needle.curvature_radius = 1e6;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::CurvatureRadius));
+}
+
+#[test]
+fn a_tolerance_below_f32_resolution_is_refused_and_a_fine_one_still_plans_the_optimum() {
+    let mut s = Scenario::paper();
+    s.target.tolerance = 1e-9;
+    match err(&s) {
+        PlanError::ToleranceTooFine { least_nm } => assert!((100..1000).contains(&least_nm)),
+        other => panic!("{other:?}"),
+    }
+    // The finest accepted tolerance still finds the paper's optimum (RL, F = 96.22).
+    let least = 4.0 * s.resolution();
+    s.target.tolerance = least * 1.01;
+    let report = plan(&s).unwrap();
+    let best = report.best().unwrap();
+    assert_eq!(best.form.word().as_str(), "RL");
+    assert!((best.objective - 96.222).abs() < 0.01, "{}", best.objective);
+    assert!(best.target_error <= s.target.tolerance);
 }

@@ -74,3 +74,67 @@ pub fn needle_json(args: &[&str]) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).expect("needle prints JSON")
 }
+
+/// The paper's scenario as an encoded plan request carrying `n` obstacles (any count the wire
+/// carries, also over the planner's capacity), in the layout of `planner_core::wire::PlanRequest`.
+pub fn request_with_obstacles(n: usize) -> Vec<u8> {
+    use planner_core::model::scenario::Obstacle;
+    let base = planner_core::wire::PlanRequest::new(&planner_core::Scenario::paper());
+    let obstacles: Vec<Obstacle> = (0..n)
+        .map(|i| Obstacle {
+            center: [0.0, 200.0 + 30.0 * i as f32, 0.0],
+            radius: 1.0,
+        })
+        .collect();
+    // The wire list is a plain sequence, so any sequence of obstacles encodes a request.
+    postcard::to_stdvec(&(
+        base.needle,
+        base.entry,
+        base.target,
+        obstacles,
+        base.weights,
+        base.options,
+        base.driver,
+    ))
+    .expect("a request encodes")
+}
+
+/// A scenario file written to the temporary folder for one test, removed when dropped.
+pub struct TempScenario(pub PathBuf);
+
+impl TempScenario {
+    /// Writes `text` to a fresh file.
+    pub fn new(text: &str) -> Self {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let p = std::env::temp_dir().join(format!(
+            "needle-e2e-scenario-{}-{}.toml",
+            std::process::id(),
+            N.fetch_add(1, Ordering::SeqCst)
+        ));
+        std::fs::write(&p, text).expect("write a temporary scenario");
+        TempScenario(p)
+    }
+}
+
+impl Drop for TempScenario {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Runs `needle` with `args` (the scenario file `text` replaces `{}`) and asserts it fails with
+/// `expected` on stderr and without a panic.
+pub fn needle_fails_with(text: &str, args: &[&str], expected: &str) {
+    let f = TempScenario::new(text);
+    let file = f.0.to_string_lossy().into_owned();
+    let args: Vec<&str> = args
+        .iter()
+        .map(|a| if *a == "{}" { file.as_str() } else { a })
+        .collect();
+    let out = needle().args(&args).output().expect("run needle");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "needle {args:?} succeeded");
+    assert!(err.contains(expected), "needle {args:?}: stderr: {err}");
+    assert!(!err.contains("panicked"), "needle {args:?}: stderr: {err}");
+}

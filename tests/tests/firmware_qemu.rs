@@ -5,7 +5,7 @@
 mod firmware_support;
 
 use firmware_support::{build_firmware, emulator_ready, Qemu};
-use needle_e2e::{example, needle};
+use needle_e2e::{example, needle, request_with_obstacles};
 use needle_link::{open, Client, ClientConfig, LinkTarget};
 use planner_core::wire::{encode_payload, Directed, Fault, ReplyBody, Request, ENCODE_SCRATCH};
 use planner_core::PlanError;
@@ -57,21 +57,6 @@ fn undecodable_frame() -> Vec<u8> {
 }
 
 /// The paper's scenario as a plan request with 40 obstacles (the planner holds 32).
-fn over_capacity_request() -> Vec<u8> {
-    let s = needle_cli::scenario::load_scenario(&example("paper")).expect("paper.toml");
-    let mut bytes = postcard::to_stdvec(&(s.needle, s.entry, s.target)).expect("encode");
-    bytes.push(40); // obstacle count (a one-byte varint)
-    for i in 0..40 {
-        let o = planner_core::model::scenario::Obstacle {
-            center: [0.0, 100.0 + i as f32, 50.0],
-            radius: 1.0,
-        };
-        bytes.extend(postcard::to_stdvec(&o).expect("encode"));
-    }
-    bytes.extend(postcard::to_stdvec(&(s.weights, s.options)).expect("encode"));
-    bytes
-}
-
 fn expect_fault(client: &mut Client<Box<dyn needle_link::Transport>>, want: Fault) {
     match client.next_reply().expect("link") {
         Some(r) => assert_eq!(r.body, ReplyBody::Fault(want)),
@@ -110,7 +95,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     expect_fault(&mut client, Fault::FrameTooLong);
     // A scenario over the planner's capacity: the typed planner error comes back.
     let result = client
-        .plan_encoded(&over_capacity_request(), &mut |_| {})
+        .plan_encoded(&request_with_obstacles(40), &mut |_| {})
         .expect("the device answers an over-capacity scenario");
     assert_eq!(
         result.err(),

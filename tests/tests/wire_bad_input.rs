@@ -3,11 +3,11 @@
 mod wire_support;
 
 use hil_sim::InProcess;
+use needle_e2e::request_with_obstacles;
 use needle_link::{Client, ClientConfig, LinkError};
-use planner_core::model::scenario::Obstacle;
 use planner_core::wire::{
-    encode_frame, encode_payload, Fault, Header, PlanRequest, Reply, ReplyBody, Request,
-    RequestBody, ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, WIRE_MAX_OBSTACLES,
+    encode_frame, encode_payload, Fault, Header, Reply, ReplyBody, Request, RequestBody,
+    ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, PROTOCOL_VERSION, WIRE_MAX_OBSTACLES,
 };
 use planner_core::{plan, Field, PlanError, Scenario, MAX_OBSTACLES};
 use std::time::Duration;
@@ -70,26 +70,6 @@ fn assert_still_serves(c: &mut Client<Sim>) {
         postcard::to_stdvec(&local).unwrap()
     );
     assert!(c.ping().is_ok());
-}
-
-fn encoded_with_obstacles(n: usize) -> Vec<u8> {
-    let base = PlanRequest::new(&Scenario::paper());
-    let obstacles: Vec<Obstacle> = (0..n)
-        .map(|i| Obstacle {
-            center: [0.0, 200.0 + 30.0 * i as f32, 0.0],
-            radius: 1.0,
-        })
-        .collect();
-    // The wire list is a plain sequence, so any sequence of obstacles encodes a request.
-    postcard::to_stdvec(&(
-        base.needle,
-        base.entry,
-        base.target,
-        obstacles,
-        base.weights,
-        base.options,
-    ))
-    .unwrap()
 }
 
 #[test]
@@ -155,7 +135,8 @@ fn truncated_frames() {
 #[test]
 fn a_frame_with_a_good_crc_that_is_no_message() {
     let mut c = client();
-    c.send_raw(&frame_payload(&[1, 7, 0xEE, 0xEE])).unwrap();
+    c.send_raw(&frame_payload(&[PROTOCOL_VERSION, 7, 0xEE, 0xEE]))
+        .unwrap();
     assert_eq!(faults(&mut c), vec![(7, Fault::Undecodable)]);
     c.send_raw(&frame_payload(&[0xFF])).unwrap();
     assert_eq!(faults(&mut c), vec![(0, Fault::Undecodable)]);
@@ -166,7 +147,10 @@ fn a_frame_with_a_good_crc_that_is_no_message() {
 fn wrong_protocol_version() {
     let mut c = client();
     let req = Request {
-        header: Header { version: 2, id: 77 },
+        header: Header {
+            version: PROTOCOL_VERSION + 1,
+            id: 77,
+        },
         body: RequestBody::Hello,
     };
     c.send_raw(&frame(&req)).unwrap();
@@ -175,8 +159,8 @@ fn wrong_protocol_version() {
         vec![(
             77,
             Fault::UnsupportedVersion {
-                supported: 1,
-                got: 2
+                supported: PROTOCOL_VERSION,
+                got: PROTOCOL_VERSION + 1
             }
         )]
     );
@@ -189,7 +173,7 @@ fn a_scenario_over_the_devices_capacity() {
     // Over the planner's capacity but within the wire's: the planner's typed error.
     let n = MAX_OBSTACLES + 8;
     let result = c
-        .plan_encoded(&encoded_with_obstacles(n), &mut |_| {})
+        .plan_encoded(&request_with_obstacles(n), &mut |_| {})
         .unwrap();
     assert_eq!(
         result,
@@ -200,7 +184,7 @@ fn a_scenario_over_the_devices_capacity() {
     );
     assert_still_serves(&mut c);
     // Over what the device can even receive: refused before the upload.
-    let big = encoded_with_obstacles(WIRE_MAX_OBSTACLES + 10);
+    let big = request_with_obstacles(WIRE_MAX_OBSTACLES + 10);
     assert!(big.len() > MAX_PLAN_REQUEST);
     match c.plan_encoded(&big, &mut |_| {}) {
         Err(LinkError::Device(Fault::TooLarge { len, capacity })) => {

@@ -57,6 +57,12 @@ impl ScenarioFile {
             Some("sum") => RiskMeasure::Sum,
             Some(other) => bail!("planner.risk = {other:?}: use \"mean\" or \"sum\""),
         };
+        if p.forms.as_ref().is_some_and(|f| f.is_empty()) {
+            bail!(
+                "planner.forms is empty: list forms such as [\"RL\"], or leave the key out to \
+                 try every form up to planner.max_control_degree"
+            );
+        }
         let mut forms = FormSet::default();
         for word in p.forms.iter().flatten() {
             let f = parse_form(word)?;
@@ -145,6 +151,13 @@ pub fn restrict(
         scenario.options.forms = set;
         if max_degree.is_none() {
             scenario.options.max_control_degree = planner_core::MAX_CONTROL_DEGREE as u8;
+        }
+        let degree = scenario.options.max_control_degree;
+        if !set.is_empty() && scenario.options.selected_forms().is_empty() && degree > 0 {
+            bail!(
+                "no form of --forms {} has a degree within --max-degree {degree}",
+                words.join(",")
+            );
         }
     }
     scenario.validate().context("invalid planning options")?;

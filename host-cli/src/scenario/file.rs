@@ -49,8 +49,10 @@ pub struct NeedleFile {
 #[serde(deny_unknown_fields)]
 pub struct EntryFile {
     /// Entry point (mm).
+    #[serde(deserialize_with = "super::exact::array")]
     pub position: [f32; 3],
     /// Nominal insertion axis.
+    #[serde(deserialize_with = "super::exact::array")]
     pub direction: [f32; 3],
     /// Tilt bound (degrees), default 60.
     pub max_tilt_deg: Option<f32>,
@@ -61,6 +63,7 @@ pub struct EntryFile {
 #[serde(deny_unknown_fields)]
 pub struct TargetFile {
     /// Target point (mm).
+    #[serde(deserialize_with = "super::exact::array")]
     pub position: [f32; 3],
     /// Allowed end-point error (mm), default 0.1.
     pub tolerance: Option<f32>,
@@ -73,10 +76,12 @@ pub struct TargetFile {
 #[serde(deny_unknown_fields)]
 pub struct ObstacleFile {
     /// Centre (mm).
+    #[serde(default, deserialize_with = "super::exact::optional_array")]
     pub center: Option<[f32; 3]>,
     /// Radius (mm).
     pub radius: Option<f32>,
     /// Outline in the y-z plane (mm), vertices in order.
+    #[serde(default, deserialize_with = "super::exact::optional_vertices")]
     pub polygon: Option<Vec<[f64; 2]>>,
     /// A text file with one `y z` vertex per line, relative to the scenario file.
     pub polygon_file: Option<PathBuf>,

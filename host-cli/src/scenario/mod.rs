@@ -6,6 +6,7 @@
 
 pub mod approx;
 pub mod build;
+mod exact;
 pub mod file;
 pub mod geometry;
 pub mod polygon;

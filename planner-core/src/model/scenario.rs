@@ -6,6 +6,10 @@ use crate::model::form::{FormSet, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::V3;
 use serde::{Deserialize, Serialize};
 
+/// Largest coordinate, arc radius or obstacle radius a scenario may use (mm): a needle's workspace
+/// is tens of centimetres, and beyond this the path's sampled outputs would grow without bound.
+pub const MAX_EXTENT_MM: f32 = 1000.0;
+
 /// Obstacles a scenario can hold.
 pub const MAX_OBSTACLES: usize = 32;
 
@@ -224,6 +228,16 @@ fn positive(field: Field, v: f32) -> Result<(), PlanError> {
     }
 }
 
+/// Finite coordinates within [`MAX_EXTENT_MM`] of the origin.
+fn within_extent(field: Field, p: &[f32; 3]) -> Result<(), PlanError> {
+    finite(field, p)?;
+    if p.iter().all(|c| libm::fabsf(*c) <= MAX_EXTENT_MM) {
+        Ok(())
+    } else {
+        Err(PlanError::OutOfRange(field))
+    }
+}
+
 fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
     let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     crate::fmath::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
@@ -242,10 +256,25 @@ impl Scenario {
         2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
     }
 
+    /// How finely f32 arithmetic resolves positions at this scenario's coordinates (mm): four
+    /// units in the last place of its largest entry or target coordinate (at least 1 mm).
+    pub fn resolution(&self) -> f32 {
+        let scale = self
+            .entry
+            .position
+            .iter()
+            .chain(self.target.position.iter())
+            .fold(1.0f32, |m, c| m.max(libm::fabsf(*c)));
+        4.0 * f32::EPSILON * scale
+    }
+
     /// Checks every number and relation the planner relies on; the first problem found is returned.
     pub fn validate(&self) -> Result<(), PlanError> {
         let n = &self.needle;
         positive(Field::CurvatureRadius, n.curvature_radius)?;
+        if n.curvature_radius > MAX_EXTENT_MM {
+            return Err(PlanError::OutOfRange(Field::CurvatureRadius));
+        }
         positive(Field::MaxArc, n.max_arc_deg)?;
         if n.max_arc_deg > 360.0 {
             return Err(PlanError::OutOfRange(Field::MaxArc));
@@ -255,7 +284,7 @@ impl Scenario {
             return Err(PlanError::OutOfRange(Field::MaxLineLength));
         }
         let e = &self.entry;
-        finite(Field::EntryPosition, &e.position)?;
+        within_extent(Field::EntryPosition, &e.position)?;
         finite(Field::EntryDirection, &e.direction)?;
         let dir_len = dist(e.direction, [0.0; 3]);
         if !(dir_len > 0.0) || !dir_len.is_finite() {
@@ -266,15 +295,27 @@ impl Scenario {
             return Err(PlanError::OutOfRange(Field::MaxTilt));
         }
         let t = &self.target;
-        finite(Field::TargetPosition, &t.position)?;
+        within_extent(Field::TargetPosition, &t.position)?;
         positive(Field::TargetTolerance, t.tolerance)?;
+        let least = 4.0 * self.resolution();
+        if t.tolerance < least {
+            let least_nm = libm::ceilf(least * 1e6) as u32;
+            return Err(PlanError::ToleranceTooFine { least_nm });
+        }
         if dist(e.position, t.position) <= t.tolerance {
             return Err(PlanError::TargetAtEntry);
         }
         let w = &self.weights;
-        finite(Field::Weights, &[w.length, w.risk, w.penalty, w.control])?;
-        if w.length < 0.0 || w.risk < 0.0 || w.penalty < 0.0 || w.control < 0.0 {
-            return Err(PlanError::OutOfRange(Field::Weights));
+        for (field, v) in [
+            (Field::WeightLength, w.length),
+            (Field::WeightRisk, w.risk),
+            (Field::WeightPenalty, w.penalty),
+            (Field::WeightControl, w.control),
+        ] {
+            finite(field, &[v])?;
+            if v < 0.0 {
+                return Err(PlanError::OutOfRange(field));
+            }
         }
         let o = &self.options;
         finite(Field::MinClearance, &[o.min_clearance])?;
@@ -301,8 +342,11 @@ impl Scenario {
         self.driver.validate()?;
         for (i, ob) in self.obstacles.iter().enumerate() {
             let i = i as u16;
-            finite(Field::ObstacleCenter(i), &ob.center)?;
+            within_extent(Field::ObstacleCenter(i), &ob.center)?;
             positive(Field::ObstacleRadius(i), ob.radius)?;
+            if ob.radius > MAX_EXTENT_MM {
+                return Err(PlanError::OutOfRange(Field::ObstacleRadius(i)));
+            }
             if dist(ob.center, e.position) <= ob.radius {
                 return Err(PlanError::EntryInsideObstacle(i));
             }

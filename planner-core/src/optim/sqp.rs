@@ -41,9 +41,13 @@ pub struct LocalSolution {
     pub step_norm: f32,
 }
 
-/// End-point tolerance the optimiser solves to (mm).
+/// End-point tolerance the optimiser solves to (mm): a hundredth of the scenario's, at most 1 um,
+/// but never finer than f32 resolves at these coordinates (a finer one cannot be met and would
+/// fail restorations that in fact reached the target).
 pub fn equality_tolerance(p: &Problem) -> f32 {
-    (p.scenario.target.tolerance * 0.01).min(1e-3)
+    (p.scenario.target.tolerance * 0.01)
+        .min(1e-3)
+        .max(p.scenario.resolution())
 }
 
 /// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that

@@ -87,6 +87,7 @@ fn bounds_are_exact_for_worst_case_values() {
         &big,
         &req.weights,
         &req.options,
+        &req.driver,
     );
     assert_eq!(encoded_len(&full), MAX_PLAN_REQUEST);
     req.obstacles = WireObstacles::default();
@@ -242,6 +243,7 @@ fn too_many_obstacles_decode_into_a_typed_error() {
         &many,
         &base.weights,
         &base.options,
+        &base.driver,
     );
     let mut buf = [0u8; MAX_PLAN_REQUEST];
     let bytes = postcard::to_slice(&shaped, &mut buf).unwrap();

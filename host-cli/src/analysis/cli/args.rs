@@ -8,26 +8,41 @@ use anyhow::Result;
 use planner_core::Scenario;
 use std::path::PathBuf;
 
+/// The scenario file alone: what a command that plans no path forms (the RRT) takes.
+#[derive(clap::Args, Clone, Debug)]
+pub struct ScenarioFileArgs {
+    /// Scenario file (TOML, see examples/paper.toml).
+    pub file: PathBuf,
+    /// Turn every polygon obstacle into circles this way: circumscribed, segmented or bordered.
+    #[arg(long, ignore_case = true)]
+    pub approx: Option<Method>,
+}
+
+impl ScenarioFileArgs {
+    /// Loads the file.
+    pub fn load(&self) -> Result<(Scenario, Vec<ObstacleShape>)> {
+        load_scenario_shapes(&self.file, self.approx)
+    }
+}
+
 /// The scenario and what to plan in it.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ScenarioArgs {
-    /// Scenario file (TOML, see examples/paper.toml).
-    pub file: PathBuf,
+    /// The file.
+    #[command(flatten)]
+    pub source: ScenarioFileArgs,
     /// Largest control degree N to try (overrides the file).
     #[arg(long)]
     pub max_degree: Option<u8>,
     /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
     #[arg(long, value_delimiter = ',')]
     pub forms: Option<Vec<String>>,
-    /// Turn every polygon obstacle into circles this way: circumscribed, segmented or bordered.
-    #[arg(long, ignore_case = true)]
-    pub approx: Option<Method>,
 }
 
 impl ScenarioArgs {
     /// Loads the file and applies the overrides.
     pub fn load(&self) -> Result<(Scenario, Vec<ObstacleShape>)> {
-        let (mut scenario, shapes) = load_scenario_shapes(&self.file, self.approx)?;
+        let (mut scenario, shapes) = self.source.load()?;
         restrict(&mut scenario, self.max_degree, self.forms.as_deref())?;
         Ok((scenario, shapes))
     }

@@ -82,7 +82,7 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
             tree = t;
         }
         let scene = Scene {
-            title: format!("{}: optimiser vs RRT", title_of(&a.scenario.file)),
+            title: format!("{}: optimiser vs RRT", title_of(&a.scenario.source.file)),
             shapes: &shapes,
             paths,
             notes: vec![],

@@ -12,7 +12,7 @@ mod simulate;
 mod sweep;
 
 pub use approx::{run_approx, ApproxArgs, ApproxJson};
-pub use args::{RrtArgs, ScenarioArgs};
+pub use args::{RrtArgs, ScenarioArgs, ScenarioFileArgs};
 pub use compare::{run_compare, CompareArgs};
 pub use plot::{plan_scene_paths, run_plot, write_plan_plot, PlotArgs};
 pub use rrt::{run_rrt, RrtCmd, RrtJson};

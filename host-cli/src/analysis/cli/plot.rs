@@ -98,7 +98,10 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         }
     };
     let scene = Scene {
-        title: format!("{}: optimal path of each form", title_of(&a.scenario.file)),
+        title: format!(
+            "{}: optimal path of each form",
+            title_of(&a.scenario.source.file)
+        ),
         shapes: &shapes,
         paths,
         notes,

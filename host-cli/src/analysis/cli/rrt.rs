@@ -1,6 +1,6 @@
 //! `needle rrt`, and the RRT's picture that `needle compare` shares.
 
-use super::args::{RrtArgs, ScenarioArgs};
+use super::args::{RrtArgs, ScenarioFileArgs};
 use super::output::{title_of, write};
 use crate::analysis::pieces::{path_points, Segment};
 use crate::analysis::plot::{scene_svg, PlotPath, Scene};
@@ -15,9 +15,9 @@ use std::path::PathBuf;
 /// `needle rrt`
 #[derive(clap::Args, Clone, Debug)]
 pub struct RrtCmd {
-    /// The scenario and what to plan in it.
+    /// The scenario (the RRT plans no path forms, so it takes no --forms or --max-degree).
     #[command(flatten)]
-    pub scenario: ScenarioArgs,
+    pub scenario: ScenarioFileArgs,
     /// The RRT's settings.
     #[command(flatten)]
     pub rrt: RrtArgs,

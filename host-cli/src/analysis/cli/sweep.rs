@@ -66,7 +66,7 @@ pub fn run_sweep(a: &SweepArgs) -> Result<()> {
     if let Some(p) = &a.plot {
         let title = format!(
             "{}: sweep of weight {} ({} values)",
-            title_of(&a.scenario.file),
+            title_of(&a.scenario.source.file),
             a.weight,
             points.len()
         );

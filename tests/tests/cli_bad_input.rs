@@ -1,0 +1,60 @@
+//! Bad scenarios and flags get a message that says what is wrong and what is allowed, and never
+//! a plan of something other than what was written.
+
+use needle_e2e::{example, needle_fails_with};
+
+fn paper() -> String {
+    std::fs::read_to_string(example("paper")).unwrap()
+}
+
+#[test]
+fn lists_of_the_wrong_length_are_refused() {
+    let text = paper().replace(
+        "center = [0.0, 30.0, 50.0]",
+        "center = [0.0, 30.0, 50.0, 1.0]",
+    );
+    needle_fails_with(&text, &["plan", "{}"], "expected exactly 3 numbers");
+    let text = paper().replace("position = [0.0, 0.0, 90.0]", "position = [0.0, 90.0]");
+    needle_fails_with(&text, &["plan", "{}"], "expected exactly 3 numbers");
+}
+
+#[test]
+fn messages_say_which_input_and_what_is_allowed() {
+    let text = paper().replace("penalty = 1000.0", "penalty = -1");
+    needle_fails_with(
+        &text,
+        &["plan", "{}"],
+        "weights.penalty is out of range: allowed is 0 or more",
+    );
+    let text = paper().replace("max_tilt_deg = 60.0", "max_tilt_deg = 90.0");
+    needle_fails_with(&text, &["plan", "{}"], "0 to 89 degrees");
+    let text = paper().replace("tolerance = 0.1", "tolerance = 90");
+    needle_fails_with(
+        &text,
+        &["plan", "{}"],
+        "within target.tolerance of the entry point",
+    );
+    let text = paper().replace("tolerance = 0.1", "tolerance = 1e-9");
+    needle_fails_with(&text, &["plan", "{}"], "use at least 0.000172 mm");
+    let text = paper().replace("position = [0.0, 0.0, 90.0]", "position = [0.0, 0.0, 1e12]");
+    needle_fails_with(&text, &["plan", "{}"], "within 1000 mm of the origin");
+}
+
+#[test]
+fn form_selections_that_select_nothing_say_why() {
+    needle_fails_with(
+        &paper(),
+        &["plan", "{}", "--forms", "RLRL", "--max-degree", "2"],
+        "no form of --forms RLRL has a degree within --max-degree 2",
+    );
+    let text = paper().replace("[planner]", "[planner]\nforms = []");
+    needle_fails_with(&text, &["plan", "{}"], "planner.forms is empty");
+}
+
+#[test]
+fn the_rrt_takes_no_form_flags_it_would_ignore() {
+    for flag in [["--max-degree", "2"], ["--forms", "RL"]] {
+        let args = [&["rrt", "{}"][..], &flag[..]].concat();
+        needle_fails_with(&paper(), &args, "unexpected argument");
+    }
+}
