@@ -38,6 +38,8 @@ pub struct Scene<'a> {
     pub notes: Vec<String>,
     /// RRT tree edges as point lists, drawn thin and grey.
     pub tree: Vec<Vec<[f32; 3]>>,
+    /// Simulated executed paths, drawn thin and translucent: together a tube around the plan.
+    pub executed: Vec<Vec<[f32; 3]>>,
 }
 
 struct View {
@@ -56,6 +58,18 @@ impl View {
             self.origin[0] + (h - self.lo[0]) * self.scale,
             self.origin[1] + self.size[1] - (v - self.lo[1]) * self.scale,
         ]
+    }
+
+    /// Many thin polylines as one path element (nothing when there are none).
+    fn lines(&self, svg: &mut Svg, lines: &[Vec<[f32; 3]>], class: &str, style: &str) {
+        if lines.is_empty() {
+            return;
+        }
+        let px: Vec<Vec<[f64; 2]>> = lines
+            .iter()
+            .map(|l| l.iter().map(|p| self.px(*p)).collect())
+            .collect();
+        svg.multi_path(&px, class, style);
     }
 }
 
@@ -82,7 +96,7 @@ fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], 
     for p in s.paths.iter().flat_map(|p| &p.points) {
         grow(*p, 0.0);
     }
-    for p in s.tree.iter().flatten() {
+    for p in s.tree.iter().chain(&s.executed).flatten() {
         grow(*p, 0.0);
     }
     for (lo_k, hi_k) in lo.iter_mut().zip(hi.iter_mut()) {
@@ -179,14 +193,12 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             view.origin[0], view.origin[1], view.size[0], view.size[1]
         ));
         let scale = view.scale;
-        if !scene.tree.is_empty() {
-            let lines: Vec<Vec<[f64; 2]>> = scene
-                .tree
-                .iter()
-                .map(|l| l.iter().map(|p| view.px(*p)).collect())
-                .collect();
-            svg.multi_path(&lines, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
-        }
+        view.lines(
+            &mut svg,
+            &scene.tree,
+            "rrt-tree",
+            "stroke:#bbb;stroke-width:0.6",
+        );
         svg.group("obstacles");
         let mut approximated = vec![false; scenario.obstacles.len()];
         let mut k = 0;
@@ -223,6 +235,13 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
             }
         }
         svg.end_group();
+        // Executed paths above the obstacles, so a run that enters one shows.
+        view.lines(
+            &mut svg,
+            &scene.executed,
+            "executed",
+            "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
+        );
         // The best path last, on top of the others.
         let order = scene
             .paths

@@ -87,6 +87,7 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
             paths,
             notes: vec![],
             tree,
+            executed: vec![],
         };
         write(p, &scene_svg(&scenario, &scene))?;
     }

@@ -57,6 +57,7 @@ pub fn write_plan_plot(
         paths,
         notes,
         tree: vec![],
+        executed: vec![],
     };
     write(out, &scene_svg(scenario, &scene))
 }
@@ -105,6 +106,7 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         paths,
         notes,
         tree: vec![],
+        executed: vec![],
     };
     write(&a.output, &scene_svg(&scenario, &scene))
 }

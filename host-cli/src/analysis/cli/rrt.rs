@@ -162,6 +162,7 @@ pub fn run_rrt(a: &RrtCmd) -> Result<()> {
             paths: vec![path],
             notes: vec![format!("tree: {} nodes (grey)", o.tree.len())],
             tree,
+            executed: vec![],
         };
         write(p, &scene_svg(&scenario, &scene))?;
     }

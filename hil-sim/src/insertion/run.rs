@@ -1,0 +1,103 @@
+//! One open-loop run: every step of the schedule executed in a perturbed [`World`], and how far
+//! the true path lands from the target and strays from the plan.
+
+use super::perturbation::{PerturbError, Perturbation};
+use super::world::{Drawn, World};
+use planner_core::check::rebuild;
+use planner_core::execute::schedule::{Schedule, Step};
+use planner_core::model::clearance::closest;
+use planner_core::model::kinematics::{PathGeometry, V3};
+use planner_core::{FormOutcome, Scenario};
+use std::ops::ControlFlow;
+
+/// What one simulated insertion gave (serialised without `steps`, whose JSON form is the
+/// reader's choice).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Run {
+    /// The run's seed.
+    pub seed: u64,
+    /// The values drawn.
+    pub drawn: Drawn,
+    /// Distance from the true end to the true (displaced) target (mm).
+    pub target_error: f32,
+    /// RMS over the run's points of their distance to the planned path (mm).
+    pub path_rms: f32,
+    /// Largest distance of a point to the planned path (mm).
+    pub path_max: f32,
+    /// The true path entered an obstacle.
+    pub collided: bool,
+    /// Smallest clearance of the true path (mm).
+    pub min_clearance: f32,
+    /// The true tip path, at most 1 mm apart.
+    pub points: Vec<[f32; 3]>,
+    /// What the driver executed.
+    #[serde(skip)]
+    pub steps: Vec<Step>,
+}
+
+/// The planned path of `outcome`, to measure deviations from.
+pub struct Planned {
+    geo: PathGeometry,
+}
+
+impl Planned {
+    /// The path `outcome` describes in `scenario`.
+    pub fn of(scenario: &Scenario, outcome: &FormOutcome) -> Planned {
+        Planned {
+            geo: rebuild(
+                scenario,
+                outcome.form,
+                &outcome.insertion,
+                &outcome.segments,
+            ),
+        }
+    }
+
+    /// Exact distance from `p` to the planned path (nearest point over its segments).
+    pub fn distance(&self, p: [f32; 3]) -> f32 {
+        let q = V3::new(p[0], p[1], p[2]);
+        let g = &self.geo;
+        (0..g.form.len())
+            .map(|i| closest(&g.starts[i], g.form.kind(i), g.lengths[i], g.radius, &q).distance)
+            .fold(f32::INFINITY, f32::min)
+    }
+}
+
+/// Executes all of `schedule` open loop in the world of `seed`.
+pub fn open_loop(
+    scenario: &Scenario,
+    planned: &Planned,
+    schedule: &Schedule,
+    p: &Perturbation,
+    seed: u64,
+) -> Result<Run, PerturbError> {
+    let mut world = World::new(scenario, &schedule.posture, p, seed)?;
+    for step in &schedule.steps {
+        world.execute(step, |_| ControlFlow::Continue(()));
+    }
+    Ok(finish(&world, planned, seed))
+}
+
+/// The figures of a finished world (open or closed loop).
+pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
+    let points = world.points().to_vec();
+    let (mut sum, mut max) = (0.0f64, 0.0f32);
+    for p in &points {
+        let d = planned.distance(*p);
+        sum += f64::from(d) * f64::from(d);
+        max = max.max(d);
+    }
+    let path_rms = (sum / points.len().max(1) as f64).sqrt() as f32;
+    let miss = world.tip().p - world.true_target();
+    Run {
+        seed,
+        drawn: world.drawn().clone(),
+        target_error: miss.norm(),
+        path_rms,
+        path_max: max,
+        collided: world.min_clearance() < 0.0,
+        min_clearance: world.min_clearance(),
+        points,
+        steps: world.executed().to_vec(),
+    }
+}

@@ -1,0 +1,447 @@
+//! The world of one simulated insertion: the robot (the driver's insertion and rotation stages),
+//! the tissue (the needle's perturbed mechanics) and the tracker, driven one [`Step`] at a time.
+//!
+//! Mechanics, each piece of it a documented [`Perturbation`] parameter:
+//! - an arc (`insert`) is an arc of radius r / (f_run · f_seg), the run's and the segment's
+//!   curvature factors (1 + N(0, spread), at least [`MIN_FACTOR`]); a new segment factor is drawn
+//!   at the first `insert` after a rotation or a line;
+//! - the tip advances the commanded length plus N(0, σ·√(L / 100 mm)) (never negative);
+//! - a spun line (`insert_spin`) keeps a residual curvature (imperfect duty cycling): drift rates
+//!   d1, d2 ~ N(0, σ) mm/mm across the heading, drawn per line, bend it towards d1 e1 + d2 e2
+//!   with curvature 2·|d| / [`DRIFT_REFERENCE_MM`] (a 50 mm line ends |d|·50 mm sideways);
+//! - the shaft is a torsional spring with play: the tip roll stays within ± lag·depth of the base
+//!   roll and moves only when the base drags it (a backlash), so a rotation by Δ turns the tip by
+//!   Δ − lag·depth, and a spin's alternating turns leave the tip lag·depth past the base, on the
+//!   side of its first turn;
+//! - the entry point and direction are off by their draws, and the true target is displaced.
+//!
+//! The tracker measures the tip after every piece of insertion (pieces at most
+//! `measure_every_mm` and 1 mm long) and after every rotation.
+
+use super::perturbation::{PerturbError, Perturbation};
+use crate::random::{seeded, Draw, SplitMix64};
+use planner_core::execute::nominal::posture_frame;
+use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
+use planner_core::model::clearance::closest;
+use planner_core::model::kinematics::{rotate, Frame, V3};
+use planner_core::model::scenario::Workspace;
+use planner_core::{Scenario, SegmentKind};
+use serde::Serialize;
+use std::ops::ControlFlow;
+
+/// The smallest curvature factor a draw may give (a wild spread cannot flip the bevel).
+pub const MIN_FACTOR: f32 = 0.2;
+
+/// Longest piece between two recorded points (mm).
+pub const MAX_PIECE_MM: f32 = 1.0;
+
+/// The line length over which a spun line's residual curvature drifts sideways by
+/// `line_drift_mm_per_mm` per mm on average: curvature = 2 · drift / this (mm).
+pub const DRIFT_REFERENCE_MM: f32 = 50.0;
+
+/// Offsets the tracker stream from the physics stream of the same seed.
+const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
+
+/// What the tracker reports: the tip and the target as imaging sees them, with noise.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Measurement {
+    /// Commanded insertion so far (mm): what the robot knows without the tracker.
+    pub depth_mm: f32,
+    /// Measured tip position (mm).
+    pub position: [f32; 3],
+    /// Measured unit heading.
+    pub heading: [f32; 3],
+    /// Measured unit bevel direction (arcs curve towards it).
+    pub bevel: [f32; 3],
+    /// The target as imaging sees it: its displaced position, with the tracker's noise.
+    pub target: [f32; 3],
+}
+
+/// What one step drew and did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StepDraw {
+    /// Curvature factor of the segment (arcs; 0 for other steps).
+    pub segment_factor: f32,
+    /// True advance minus commanded advance (mm).
+    pub length_error_mm: f32,
+    /// Line drift across the heading, along e1 and e2 (mm per mm; lines only).
+    pub drift: [f32; 2],
+    /// How far the tip turned (degrees): a rotation's lagged angle, a spin's net turn.
+    pub tip_rotation_deg: f32,
+}
+
+/// The values drawn for one run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Drawn {
+    /// The run's curvature factor on 1/r.
+    pub curvature_factor: f32,
+    /// Entry point error (mm).
+    pub entry_offset_mm: [f32; 3],
+    /// Entry direction error about e1 and e2 (degrees).
+    pub entry_tilt_deg: [f32; 2],
+    /// Target displacement (mm).
+    pub target_shift_mm: [f32; 3],
+    /// Per executed step.
+    pub steps: Vec<StepDraw>,
+}
+
+/// How a step ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Executed {
+    /// The commanded insertion done (mm; all of it unless the controller broke off).
+    pub inserted_mm: f32,
+    /// The controller broke off the step.
+    pub interrupted: bool,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Last {
+    Nothing,
+    Rotate,
+    Insert,
+    Spin,
+}
+
+/// One simulated insertion in progress.
+pub struct World {
+    scenario: Scenario,
+    p: Perturbation,
+    physics: SplitMix64,
+    tracker: SplitMix64,
+    tip: Frame,
+    segment_factor: f32,
+    line_drift: [f32; 2],
+    last: Last,
+    base_deg: f32,
+    tip_deg: f32,
+    depth: f32,
+    commanded: f32,
+    true_target: V3,
+    points: Vec<[f32; 3]>,
+    min_clearance: f32,
+    drawn: Drawn,
+    executed: Vec<Step>,
+}
+
+fn normal(g: &mut SplitMix64, sd: f32) -> f32 {
+    g.normal(f64::from(sd)) as f32
+}
+
+fn v3(a: [f32; 3]) -> V3 {
+    V3::new(a[0], a[1], a[2])
+}
+
+/// The frame turned rigidly by `angle` (radians) about the unit `axis`.
+fn turned(f: &Frame, axis: V3, angle: f32) -> Frame {
+    let mut out = *f;
+    for i in 0..3 {
+        out.r
+            .set_column(i, &rotate(f.r.column(i).into(), axis, angle));
+    }
+    out
+}
+
+impl World {
+    /// The world of a run: the needle set at `posture` (with the entry errors drawn), the target
+    /// displaced; `seed` fixes every draw of the run.
+    pub fn new(
+        scenario: &Scenario,
+        posture: &Posture,
+        p: &Perturbation,
+        seed: u64,
+    ) -> Result<World, PerturbError> {
+        p.validate()?;
+        let mut physics = seeded(seed);
+        let curvature_factor = (1.0 + normal(&mut physics, p.curvature_spread)).max(MIN_FACTOR);
+        let mut draw3 = |sd| [0; 3].map(|_| normal(&mut physics, sd));
+        let entry_offset_mm = draw3(p.entry_position_mm);
+        let tilt = draw3(p.entry_direction_deg);
+        let target_shift_mm = draw3(p.target_shift_mm);
+        let entry_tilt_deg = [tilt[0], tilt[1]];
+        let at = Schedule {
+            posture: *posture,
+            steps: Steps::new(),
+            duration_s: 0.0,
+            max_twist_deg: 0.0,
+        };
+        let mut tip = posture_frame(scenario, &at);
+        tip.p += v3(entry_offset_mm);
+        if entry_tilt_deg != [0.0; 2] {
+            tip = turned(&tip, tip.e1(), entry_tilt_deg[0].to_radians());
+            tip = turned(&tip, tip.e2(), entry_tilt_deg[1].to_radians());
+        }
+        let mut world = World {
+            scenario: scenario.clone(),
+            p: *p,
+            physics,
+            tracker: seeded(seed ^ TRACKER_STREAM),
+            tip,
+            segment_factor: 1.0,
+            line_drift: [0.0; 2],
+            last: Last::Nothing,
+            base_deg: 0.0,
+            tip_deg: 0.0,
+            depth: 0.0,
+            commanded: 0.0,
+            true_target: v3(scenario.target.position) + v3(target_shift_mm),
+            points: Vec::new(),
+            min_clearance: f32::INFINITY,
+            drawn: Drawn {
+                curvature_factor,
+                entry_offset_mm,
+                entry_tilt_deg,
+                target_shift_mm,
+                steps: Vec::new(),
+            },
+            executed: Vec::new(),
+        };
+        world.record(tip.p);
+        Ok(world)
+    }
+
+    /// The true tip frame.
+    pub fn tip(&self) -> Frame {
+        self.tip
+    }
+
+    /// The true (displaced) target.
+    pub fn true_target(&self) -> V3 {
+        self.true_target
+    }
+
+    /// The true tip path so far, points at most 1 mm apart from the entry.
+    pub fn points(&self) -> &[[f32; 3]] {
+        &self.points
+    }
+
+    /// Smallest clearance of the true path to any obstacle surface so far (mm; negative inside
+    /// one; infinite without obstacles). Plane scenarios' circles are cylinders across the plane.
+    pub fn min_clearance(&self) -> f32 {
+        self.min_clearance
+    }
+
+    /// What was drawn so far.
+    pub fn drawn(&self) -> &Drawn {
+        &self.drawn
+    }
+
+    /// The steps executed so far (an interrupted one with the length it reached).
+    pub fn executed(&self) -> &[Step] {
+        &self.executed
+    }
+
+    /// The perturbation the world runs with.
+    pub fn perturbation(&self) -> &Perturbation {
+        &self.p
+    }
+
+    /// A tracker measurement of the tip and the target now (draws the tracker's noise).
+    pub fn measure(&mut self) -> Measurement {
+        let g = &mut self.tracker;
+        let (pos_sd, head_sd) = (self.p.tracker_position_mm, self.p.tracker_heading_deg);
+        let noise = [0; 3].map(|_| normal(g, pos_sd));
+        let angles = [0; 3].map(|_| normal(g, head_sd).to_radians());
+        let target = [0; 3].map(|_| normal(g, pos_sd));
+        let mut f = self.tip;
+        if angles != [0.0; 3] {
+            f = turned(&f, f.e1(), angles[0]);
+            f = turned(&f, f.e2(), angles[1]);
+            f = f.rolled(angles[2]);
+        }
+        let arr = |v: V3| [v.x, v.y, v.z];
+        Measurement {
+            depth_mm: self.commanded,
+            position: arr(self.tip.p + v3(noise)),
+            heading: arr(f.e3()),
+            bevel: arr(f.e2()),
+            target: arr(self.true_target + v3(target)),
+        }
+    }
+
+    /// Executes one driver step; `on_measure` sees every measurement taken during it and may
+    /// break the step off (the tip stays where the measurement saw it).
+    pub fn execute(
+        &mut self,
+        step: &Step,
+        mut on_measure: impl FnMut(&Measurement) -> ControlFlow<()>,
+    ) -> Executed {
+        let mut draw = StepDraw::default();
+        let done = match step.op {
+            Op::Rotate { angle_deg } => {
+                draw.tip_rotation_deg = self.rotate_base(angle_deg);
+                self.last = Last::Rotate;
+                let m = self.measure();
+                let _ = on_measure(&m);
+                Executed {
+                    inserted_mm: 0.0,
+                    interrupted: false,
+                }
+            }
+            Op::Insert { length_mm } => {
+                if self.last != Last::Insert {
+                    let f = 1.0 + normal(&mut self.physics, self.p.segment_curvature_spread);
+                    self.segment_factor = f;
+                }
+                self.last = Last::Insert;
+                draw.segment_factor = self.segment_factor;
+                let factor = (self.drawn.curvature_factor * self.segment_factor).max(MIN_FACTOR);
+                let radius = self.scenario.needle.curvature_radius / factor;
+                self.push(
+                    SegmentKind::Arc,
+                    length_mm,
+                    radius,
+                    &mut draw,
+                    &mut on_measure,
+                )
+            }
+            Op::InsertSpin { length_mm, .. } => {
+                if self.last != Last::Spin {
+                    let sd = self.p.line_drift_mm_per_mm;
+                    self.line_drift = [0; 2].map(|_| normal(&mut self.physics, sd));
+                }
+                self.last = Last::Spin;
+                draw.drift = self.line_drift;
+                let [d1, d2] = self.line_drift;
+                let size = libm::sqrtf(d1 * d1 + d2 * d2);
+                let done = if size == 0.0 {
+                    let radius = self.scenario.needle.curvature_radius;
+                    self.push(
+                        SegmentKind::Line,
+                        length_mm,
+                        radius,
+                        &mut draw,
+                        &mut on_measure,
+                    )
+                } else {
+                    // The residual curvature bends the line towards d1 e1 + d2 e2: roll e2 there,
+                    // push an arc, roll back (the bevel itself is spinning, not turned).
+                    let roll = libm::atan2f(-d1, d2);
+                    self.tip = self.tip.rolled(roll);
+                    let radius = DRIFT_REFERENCE_MM / (2.0 * size);
+                    let done = self.push(
+                        SegmentKind::Arc,
+                        length_mm,
+                        radius,
+                        &mut draw,
+                        &mut on_measure,
+                    );
+                    self.tip = self.tip.rolled(-roll);
+                    done
+                };
+                draw.tip_rotation_deg = self.spin_settles();
+                done
+            }
+        };
+        self.drawn.steps.push(draw);
+        let mut record = *step;
+        match &mut record.op {
+            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
+                *length_mm = done.inserted_mm;
+            }
+            Op::Rotate { .. } => {}
+        }
+        self.executed.push(record);
+        done
+    }
+
+    /// Turns the base by `angle_deg`; the tip follows through the play. Returns the tip's turn.
+    fn rotate_base(&mut self, angle_deg: f32) -> f32 {
+        self.base_deg += angle_deg;
+        let lag = self.p.torsion_lag_deg_per_mm * self.depth;
+        let turn = if lag == 0.0 {
+            angle_deg
+        } else {
+            self.tip_deg.clamp(self.base_deg - lag, self.base_deg + lag) - self.tip_deg
+        };
+        self.tip_deg += turn;
+        if turn != 0.0 {
+            self.tip = self.tip.rolled(turn.to_radians());
+        }
+        turn
+    }
+
+    /// After a spin (whole turns alternating from the side of zero twist, as the schedule makes
+    /// them) the base is back where it was and the tip rests lag·depth past it on the side of the
+    /// first turn. Returns the tip's net turn.
+    fn spin_settles(&mut self) -> f32 {
+        let lag = self.p.torsion_lag_deg_per_mm * self.depth;
+        if lag == 0.0 {
+            return 0.0;
+        }
+        let first = if self.base_deg > 0.0 { -1.0 } else { 1.0 };
+        let settled = self.base_deg + first * lag.min(180.0);
+        let turn = settled - self.tip_deg;
+        self.tip_deg = settled;
+        self.tip = self.tip.rolled(turn.to_radians());
+        turn
+    }
+
+    /// Pushes the needle `length` (commanded) along a segment of `kind`, in pieces.
+    fn push(
+        &mut self,
+        kind: SegmentKind,
+        length: f32,
+        radius: f32,
+        draw: &mut StepDraw,
+        on_measure: &mut impl FnMut(&Measurement) -> ControlFlow<()>,
+    ) -> Executed {
+        let sd = self.p.insertion_error_mm * libm::sqrtf(length.max(0.0) / 100.0);
+        let error = normal(&mut self.physics, sd);
+        let true_len = (length + error).max(0.0);
+        draw.length_error_mm = true_len - length;
+        let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
+        let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
+        let start = self.tip;
+        let (mut t_prev, mut commanded) = (0.0, 0.0);
+        for k in 1..=pieces {
+            let share = k as f32 / pieces as f32;
+            let t = true_len * share;
+            self.clearance_along(
+                &start.advanced(kind, t_prev, radius),
+                kind,
+                t - t_prev,
+                radius,
+            );
+            self.tip = start.advanced(kind, t, radius);
+            self.record(self.tip.p);
+            self.depth += t - t_prev;
+            self.commanded += length * share - commanded;
+            commanded = length * share;
+            t_prev = t;
+            let m = self.measure();
+            if on_measure(&m).is_break() && k < pieces {
+                return Executed {
+                    inserted_mm: commanded,
+                    interrupted: true,
+                };
+            }
+        }
+        Executed {
+            inserted_mm: length,
+            interrupted: false,
+        }
+    }
+
+    fn record(&mut self, p: V3) {
+        self.points.push([p.x, p.y, p.z]);
+        if self.scenario.options.workspace == Workspace::PlaneYz {
+            // Circles of the plane are cylinders across it: clearance in the y-z projection.
+            for ob in &self.scenario.obstacles {
+                let (dy, dz) = (p.y - ob.center[1], p.z - ob.center[2]);
+                let d = libm::sqrtf(dy * dy + dz * dz) - ob.radius;
+                self.min_clearance = self.min_clearance.min(d);
+            }
+        }
+    }
+
+    /// Exact clearance of one piece (3-D scenarios; the plane's are measured at the points).
+    fn clearance_along(&mut self, start: &Frame, kind: SegmentKind, len: f32, radius: f32) {
+        if self.scenario.options.workspace != Workspace::Space {
+            return;
+        }
+        for ob in &self.scenario.obstacles {
+            let d = closest(start, kind, len, radius, &v3(ob.center)).distance - ob.radius;
+            self.min_clearance = self.min_clearance.min(d);
+        }
+    }
+}
