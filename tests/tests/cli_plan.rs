@@ -1,6 +1,6 @@
 //! `needle plan` end to end: the JSON contract, the table, restrictions and errors.
 
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, needle, needle_fails_with, needle_json, TempScenario};
 use serde_json::Value;
 use std::fmt::Write;
 
@@ -123,31 +123,8 @@ fn the_3d_example_needs_a_bevel_rotation() {
     );
 }
 
-fn scenario_file(text: &str) -> tempfile_path::TempFile {
-    tempfile_path::TempFile::new(text)
-}
-
-mod tempfile_path {
-    use std::path::PathBuf;
-    pub struct TempFile(pub PathBuf);
-    impl TempFile {
-        pub fn new(text: &str) -> Self {
-            use std::sync::atomic::{AtomicUsize, Ordering};
-            static N: AtomicUsize = AtomicUsize::new(0);
-            let p = std::env::temp_dir().join(format!(
-                "needle-e2e-{}-{}.toml",
-                std::process::id(),
-                N.fetch_add(1, Ordering::SeqCst)
-            ));
-            std::fs::write(&p, text).unwrap();
-            TempFile(p)
-        }
-    }
-    impl Drop for TempFile {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_file(&self.0);
-        }
-    }
+fn scenario_file(text: &str) -> TempScenario {
+    TempScenario::new(text)
 }
 
 fn paper_with(extra_obstacles: &str) -> String {
@@ -156,12 +133,7 @@ fn paper_with(extra_obstacles: &str) -> String {
 }
 
 fn fails_with(text: &str, needle_text: &str) {
-    let f = scenario_file(text);
-    let out = needle().arg("plan").arg(&f.0).output().unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains(needle_text), "stderr: {err}");
-    assert!(!err.contains("panicked"), "stderr: {err}");
+    needle_fails_with(text, &["plan", "{}"], needle_text);
 }
 
 #[test]

@@ -88,7 +88,8 @@ impl ScheduleJson {
 }
 
 impl StepJson {
-    fn of(op: &Op, duration_s: f32) -> StepJson {
+    /// The JSON form of one step (`best.schedule` and `simulate --detail` share it).
+    pub fn of(op: &Op, duration_s: f32) -> StepJson {
         let (angle_deg, length_mm, turns) = match *op {
             Op::Rotate { angle_deg } => (Some(angle_deg), None, None),
             Op::Insert { length_mm } => (None, Some(length_mm), None),

@@ -1,8 +1,8 @@
 //! The typed JSON of `needle simulate --json`.
 
 use super::{Spread, Summary};
+use crate::report::schedule::StepJson;
 use hil_sim::insertion::{Perturbation, Run};
-use planner_core::execute::schedule::{Op, Step};
 use serde::Serialize;
 
 /// The whole output.
@@ -67,49 +67,16 @@ pub struct RunJson<'a> {
     pub steps: Vec<StepJson>,
 }
 
-/// One executed driver step.
-#[derive(Serialize)]
-pub struct StepJson {
-    /// `rotate`, `insert` or `insert_spin`.
-    pub op: &'static str,
-    /// Rotation (degrees, signed).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub angle_deg: Option<f32>,
-    /// Insertion (mm).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub length_mm: Option<f32>,
-    /// Whole spin turns.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub turns: Option<u32>,
-    /// Duration (s).
-    pub duration_s: f32,
-}
-
-impl StepJson {
-    fn of(s: &Step) -> StepJson {
-        let (op, angle_deg, length_mm, turns) = match s.op {
-            Op::Rotate { angle_deg } => ("rotate", Some(angle_deg), None, None),
-            Op::Insert { length_mm } => ("insert", None, Some(length_mm), None),
-            Op::InsertSpin { length_mm, turns } => {
-                ("insert_spin", None, Some(length_mm), Some(turns))
-            }
-        };
-        StepJson {
-            op,
-            angle_deg,
-            length_mm,
-            turns,
-            duration_s: s.duration_s,
-        }
-    }
-}
-
 impl<'a> RunJson<'a> {
     /// One run's record.
     pub fn of(run: &'a Run) -> RunJson<'a> {
         RunJson {
             run,
-            steps: run.steps.iter().map(StepJson::of).collect(),
+            steps: run
+                .steps
+                .iter()
+                .map(|st| StepJson::of(&st.op, st.duration_s))
+                .collect(),
         }
     }
 }
