@@ -13,6 +13,7 @@ use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;
 use planner_core::Scenario;
 use serde_json::{json, Map, Value};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -320,9 +321,9 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     let figures = measure_all(&root, &scenarios, args.profile)?;
     if args.json {
         let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();
-        println!("{}", serde_json::to_string_pretty(&all)?);
+        writeln!(std::io::stdout(), "{}", serde_json::to_string_pretty(&all)?)?;
     } else {
-        print!("{}", table(&figures));
+        write!(std::io::stdout(), "{}", table(&figures))?;
     }
     let over: Vec<String> = figures.iter().flat_map(BoardFigures::over_budget).collect();
     if args.check && !over.is_empty() {

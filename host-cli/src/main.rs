@@ -8,6 +8,7 @@ use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
 use needle_cli::scenario::{load_scenario, load_scenario_shapes, restrict};
 use planner_core::execute::schedule::Schedule;
 use planner_core::{PlanReport, Scenario};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -128,15 +129,24 @@ fn print_plan(
     report: &PlanReport,
     schedule: &Schedule,
     stats: Stats,
-) {
+) -> Result<()> {
     if args.json {
-        println!("{}", plan_json(scenario, report, Some(schedule), stats));
+        writeln!(
+            std::io::stdout(),
+            "{}",
+            plan_json(scenario, report, Some(schedule), stats)
+        )?;
     } else {
-        print!("{}", plan_table(report, stats));
+        write!(std::io::stdout(), "{}", plan_table(report, stats))?;
         if args.schedule {
-            print!("{}", schedule_table(schedule, &scenario.driver));
+            write!(
+                std::io::stdout(),
+                "{}",
+                schedule_table(schedule, &scenario.driver)
+            )?;
         }
     }
+    Ok(())
 }
 
 fn plan(args: &PlanArgs) -> Result<()> {
@@ -150,7 +160,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
         .schedule
         .as_ref()
         .map_err(|e| anyhow!("no motor schedule for the best path: {e}"))?;
-    print_plan(args, &scenario, &planned.report, schedule, stats);
+    print_plan(args, &scenario, &planned.report, schedule, stats)?;
     if let Some(out) = &args.plot {
         analysis::write_plan_plot(&args.file, args.approx, &scenario, &planned.report, out)?;
     }
@@ -165,7 +175,7 @@ fn send(args: &SendArgs) -> Result<()> {
     let stats = Stats {
         time_us: device.time_us,
     };
-    print_plan(&args.plan, &scenario, &planned.report, schedule, stats);
+    print_plan(&args.plan, &scenario, &planned.report, schedule, stats)?;
     Ok(())
 }
 
@@ -186,13 +196,21 @@ fn bench(args: &BenchArgs) -> Result<()> {
         if args.json {
             out.push(needle_cli::bench::to_json(&name, &r));
         } else {
-            print!("{}", needle_cli::bench::table(&name, &r));
+            write!(std::io::stdout(), "{}", needle_cli::bench::table(&name, &r))?;
         }
     }
     if args.json {
-        println!("{}", serde_json::Value::Array(out));
+        writeln!(std::io::stdout(), "{}", serde_json::Value::Array(out))?;
     }
     Ok(())
+}
+
+/// Whether writing the output failed because its reader went away.
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 fn main() -> ExitCode {
@@ -214,6 +232,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader closed the pipe (`needle plan ... | head`): it has what it wanted.
+        Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

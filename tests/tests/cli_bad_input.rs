@@ -58,3 +58,28 @@ fn the_rrt_takes_no_form_flags_it_would_ignore() {
         needle_fails_with(&paper(), &args, "unexpected argument");
     }
 }
+
+#[test]
+fn a_reader_that_closes_the_pipe_early_ends_the_command_quietly() {
+    use std::io::Read;
+    use std::process::Stdio;
+    // Megabytes of JSON, far more than a pipe buffers: the writes after the reader left fail.
+    let mut child = needle_e2e::needle()
+        .args(["simulate", example("paper").to_str().unwrap()])
+        .args(["--runs", "400", "--detail", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "status {:?}, stderr: {err}",
+        out.status
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(first.starts_with(b"{\"runs\":400"));
+}

@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use planner_core::model::scenario::Obstacle;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// `needle approx`
@@ -116,9 +117,9 @@ pub fn run_approx(a: &ApproxArgs) -> Result<()> {
         });
     }
     if a.json {
-        println!("{}", ApproxJson { obstacles: out });
+        writeln!(std::io::stdout(), "{}", ApproxJson { obstacles: out })?;
     } else {
-        print!("{text}");
+        write!(std::io::stdout(), "{text}")?;
     }
     if let Some(p) = &a.plot {
         let scenario = file.to_scenario_with(&shapes)?;

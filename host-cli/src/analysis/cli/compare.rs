@@ -7,6 +7,7 @@ use crate::analysis::plot::{scene_svg, PlotPath, Scene};
 use crate::analysis::{compare, parallel, rrt};
 use crate::report::path_points;
 use anyhow::{bail, Result};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// `needle compare`
@@ -49,9 +50,9 @@ pub fn run_compare(a: &CompareArgs) -> Result<()> {
     });
     bar.finish_and_clear();
     if a.json {
-        println!("{}", compare::to_json(&c));
+        writeln!(std::io::stdout(), "{}", compare::to_json(&c))?;
     } else {
-        print!("{}", compare::to_table(&c));
+        write!(std::io::stdout(), "{}", compare::to_table(&c))?;
     }
     if let Some(p) = &a.plot {
         let mut paths = Vec::new();

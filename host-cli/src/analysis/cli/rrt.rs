@@ -10,6 +10,7 @@ use anyhow::Result;
 use planner_core::Scenario;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// `needle rrt`
@@ -126,10 +127,11 @@ pub fn run_rrt(a: &RrtCmd) -> Result<()> {
     let (scenario, shapes) = a.scenario.load()?;
     let o = rrt::run(&scenario, &a.rrt.options(a.seed))?;
     if a.json {
-        println!("{}", RrtJson::new(&scenario, &o));
+        writeln!(std::io::stdout(), "{}", RrtJson::new(&scenario, &o))?;
     } else {
         let s = &o.score;
-        println!(
+        writeln!(
+            std::io::stdout(),
             "RRT (seed {}): L = {:.2} mm, D = {:.4}, N = {}, F = {:.3}, clearance {:.2} mm, \
              target error {:.3} mm (tolerance {}), {} nodes, {} samples, {:.1} ms",
             a.seed,
@@ -143,15 +145,16 @@ pub fn run_rrt(a: &RrtCmd) -> Result<()> {
             o.tree.len(),
             o.iterations,
             o.time_us as f64 / 1000.0
-        );
+        )?;
         for (i, g) in o.segments.iter().enumerate() {
-            println!(
+            writeln!(
+                std::io::stdout(),
                 "  segment {}: {} {:.2} mm, bevel {:.1} deg",
                 i + 1,
                 g.kind.letter(),
                 g.length,
                 g.bevel_deg
-            );
+            )?;
         }
     }
     if let Some(p) = &a.plot {

@@ -9,6 +9,7 @@ use crate::analysis::simulate::{prepare, simulate, summarise};
 use crate::scenario::{load_scenario_shapes, restrict};
 use anyhow::{Context, Result};
 use hil_sim::insertion::Perturbation;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// `needle simulate`
@@ -69,7 +70,7 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
     let file = title_of(&a.file);
     if a.json {
         let out = to_json(&p, &runs, &summary, a.detail);
-        println!("{}", serde_json::to_string(&out)?);
+        writeln!(std::io::stdout(), "{}", serde_json::to_string(&out)?)?;
     } else {
         let header = Header {
             file: &file,
@@ -77,7 +78,7 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
             runs: runs.len(),
             seed: a.seed,
         };
-        print!("{}", to_table(&header, &p, &summary));
+        write!(std::io::stdout(), "{}", to_table(&header, &p, &summary))?;
     }
     if let Some(out) = &a.plot {
         let title = format!(

@@ -5,6 +5,7 @@ use super::output::{progress, title_of, write};
 use crate::analysis::sweep_plot::sweep_svg;
 use crate::analysis::{parallel, sweep};
 use anyhow::Result;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// `needle sweep`
@@ -56,9 +57,9 @@ pub fn run_sweep(a: &SweepArgs) -> Result<()> {
     let points = sweep::run(&scenario, a.weight, &range, threads, || bar.inc(1))?;
     bar.finish_and_clear();
     if a.json {
-        println!("{}", sweep::to_json(a.weight, &points));
+        writeln!(std::io::stdout(), "{}", sweep::to_json(a.weight, &points))?;
     } else {
-        print!("{}", sweep::to_table(a.weight, &points));
+        write!(std::io::stdout(), "{}", sweep::to_table(a.weight, &points))?;
     }
     if let Some(p) = &a.csv {
         write(p, &sweep::to_csv(a.weight, &points))?;
