@@ -164,3 +164,63 @@ fn sweep_and_approx_plots_show_their_structure() {
     assert_eq!(count(&svg, r#"class="rrt-tree""#), 1);
     assert_eq!(count(&svg, r#"data-form="RRT""#), 1);
 }
+
+#[test]
+fn axis_titles_stand_clear_of_the_ticks_and_the_legend_fits_its_longest_line() {
+    let paper = tmp("layout-paper.svg");
+    run(&[
+        "plot",
+        "examples/paper.toml",
+        "--output",
+        paper.to_str().unwrap(),
+    ]);
+    let svg = std::fs::read_to_string(&paper).unwrap();
+    // The y-axis title is upright (turned a quarter), so it cannot run into the tick labels.
+    assert_eq!(count(&svg, r#"transform="rotate(-90"#), 1, "{svg}");
+    assert!(
+        !svg.contains("in front of or behind"),
+        "a plane has no projection note"
+    );
+    let space = tmp("layout-space.svg");
+    run(&[
+        "plot",
+        "examples/space.toml",
+        "--output",
+        space.to_str().unwrap(),
+    ]);
+    let svg = std::fs::read_to_string(&space).unwrap();
+    assert_eq!(count(&svg, r#"transform="rotate(-90"#), 2);
+    assert!(
+        svg.contains("in front of or behind"),
+        "3-D views say they are projections"
+    );
+    // A long legend line widens the picture instead of running off its edge.
+    let compare = tmp("layout-compare.svg");
+    let _ = needle()
+        .args([
+            "compare",
+            "examples/paper.toml",
+            "--plot",
+            compare.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let svg = std::fs::read_to_string(&compare).unwrap();
+    let width: f64 = svg
+        .split("width=\"")
+        .nth(1)
+        .and_then(|w| w.split('"').next())
+        .and_then(|w| w.parse().ok())
+        .expect("an SVG width");
+    let label = svg
+        .split("legend-entry")
+        .filter_map(|t| t.split('>').nth(1)?.split('<').next())
+        .map(|t| t.chars().count())
+        .max()
+        .unwrap();
+    assert!(svg.contains("target error"), "the RRT's miss is labelled");
+    assert!(
+        width >= 700.0 + 6.0 * label as f64,
+        "width {width}, label {label} chars"
+    );
+}

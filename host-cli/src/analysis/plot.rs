@@ -79,6 +79,13 @@ const VIEW_W: f64 = 560.0;
 const LEGEND_W: f64 = 340.0;
 const PAD: f64 = 50.0;
 
+/// Under the legend of a 3-D scene: the views are projections.
+const PROJECTION_NOTE: [&str; 3] = [
+    "3-D: each view is a projection; a path drawn",
+    "across a disc passes in front of or behind",
+    "that sphere (clearances are measured in 3-D)",
+];
+
 fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
@@ -145,11 +152,11 @@ fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
         "middle",
         "axis-label",
     );
-    svg.text(
-        [x0 - 36.0, y0 + hgt / 2.0],
+    // Upright and left of the widest tick label ("-100" is about 24 px), so the two never meet.
+    svg.vertical_text(
+        [x0 - 40.0, y0 + hgt / 2.0],
         &format!("{} (mm)", AXIS[view.v]),
         11.0,
-        "middle",
         "axis-label",
     );
     svg.end_group();
@@ -180,9 +187,22 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         ));
         top += size[1] + PAD + 10.0;
     }
-    let legend_lines = scene.paths.len() + scene.notes.len() + 3;
+    let mut notes = scene.notes.clone();
+    if planes.len() > 1 {
+        notes.extend(PROJECTION_NOTE.iter().map(|n| n.to_string()));
+    }
+    let legend_lines = scene.paths.len() + notes.len() + 3;
     let height = top.max(PAD + 30.0 + 18.0 * legend_lines as f64);
-    let width = PAD + 20.0 + VIEW_W + 30.0 + LEGEND_W;
+    // Wide enough for the longest legend line (about 6.5 px a character at 11 px).
+    let longest = scene
+        .paths
+        .iter()
+        .map(|p| p.label.chars().count() + 5)
+        .chain(notes.iter().map(|n| n.chars().count()))
+        .max()
+        .unwrap_or(0);
+    let legend_w = LEGEND_W.max(6.5 * longest as f64 + 20.0);
+    let width = PAD + 20.0 + VIEW_W + 30.0 + legend_w;
     let mut svg = Svg::new(width, height);
     svg.text([PAD, 24.0], &scene.title, 14.0, "start", "title");
     for (k, (view, hi)) in views.iter().enumerate() {
@@ -282,11 +302,11 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         svg.circle(target, 1.5, "target", "fill:#000");
         svg.raw("</g>");
     }
-    legend(&mut svg, scene, PAD + 20.0 + VIEW_W + 30.0);
+    legend(&mut svg, scene, &notes, PAD + 20.0 + VIEW_W + 30.0);
     svg.finish()
 }
 
-fn legend(svg: &mut Svg, scene: &Scene<'_>, x: f64) {
+fn legend(svg: &mut Svg, scene: &Scene<'_>, notes: &[String], x: f64) {
     svg.group("legend");
     let mut y = PAD + 10.0;
     for p in &scene.paths {
@@ -300,7 +320,7 @@ fn legend(svg: &mut Svg, scene: &Scene<'_>, x: f64) {
         svg.text([x + 30.0, y], &p.label, 11.0, "start", "legend-entry");
         y += 18.0;
     }
-    for n in &scene.notes {
+    for n in notes {
         svg.text([x, y], n, 11.0, "start", "legend-note");
         y += 18.0;
     }

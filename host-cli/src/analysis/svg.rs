@@ -135,6 +135,18 @@ impl Svg {
         ));
     }
 
+    /// A text label turned a quarter turn anticlockwise about its anchor point (a y-axis title).
+    pub fn vertical_text(&mut self, at: [f64; 2], text: &str, size: f64, class: &str) {
+        self.raw(&format!(
+            r#"<text class="{}" x="{x}" y="{y}" font-size="{}" text-anchor="middle" font-family="sans-serif" transform="rotate(-90 {x} {y})">{}</text>"#,
+            esc(class),
+            f(size),
+            esc(text),
+            x = f(at[0]),
+            y = f(at[1]),
+        ));
+    }
+
     /// A text label; `anchor` is start, middle or end.
     pub fn text(&mut self, at: [f64; 2], text: &str, size: f64, anchor: &str, class: &str) {
         self.raw(&format!(

@@ -51,7 +51,7 @@ pub(super) fn rrt_scene_paths(
     let s = &o.score;
     let path = PlotPath {
         label: format!(
-            "RRT: N = {}, F = {:.2}, L = {:.1} mm, {:.2} mm off",
+            "RRT: N = {}, F = {:.2}, L = {:.1} mm, target error {:.2} mm",
             s.control_degree, s.objective, s.length, s.target_error
         ),
         form: "RRT".into(),
