@@ -195,3 +195,62 @@ proptest! {
         prop_assert_eq!(&replies[0].body, &ReplyBody::Pong { nonce });
     }
 }
+
+/// Uploads `scenario`, lets the service plan it and fetches the encoded result back.
+fn plan_on_service(scenario: &Scenario) -> planner_core::wire::PlanResult {
+    let mut dev = Box::new(DeviceService::new());
+    let mut replies = Vec::new();
+    for f in upload_frames(9, scenario) {
+        dev.receive(&f);
+        replies.extend(run(&mut dev));
+    }
+    let len = replies
+        .iter()
+        .find_map(|r| match r.body {
+            ReplyBody::Finished { len, .. } => Some(len),
+            _ => None,
+        })
+        .expect("the plan finishes");
+    let mut bytes = Vec::new();
+    while bytes.len() < usize::from(len) {
+        let offset = bytes.len() as u16;
+        dev.receive(&frame(
+            9,
+            RequestBody::Fetch {
+                offset,
+                max_len: 192,
+            },
+        ));
+        for r in run(&mut dev) {
+            if let ReplyBody::Part { data, .. } = r.body {
+                bytes.extend_from_slice(&data);
+            }
+        }
+    }
+    postcard::from_bytes(&bytes).expect("a plan result")
+}
+
+#[test]
+fn the_device_refuses_bad_scenarios_with_the_same_typed_errors_as_the_host() {
+    use planner_core::{Field, PlanError};
+    let mut far = Scenario::paper();
+    far.obstacles.clear();
+    far.target.position = [0.0, 0.0, 1e12];
+    let mut fine = Scenario::paper();
+    fine.target.tolerance = 1e-9;
+    let mut weight = Scenario::paper();
+    weight.weights.penalty = -1.0;
+    let mut driver = Scenario::paper();
+    driver.driver.spin_rate = 0.0;
+    for (s, want) in [
+        (&far, PlanError::OutOfRange(Field::TargetPosition)),
+        (&weight, PlanError::OutOfRange(Field::WeightPenalty)),
+        (&driver, PlanError::NotPositive(Field::SpinRate)),
+    ] {
+        assert_eq!(s.validate(), Err(want));
+        assert_eq!(plan_on_service(s).err(), Some(want));
+    }
+    let host = fine.validate().unwrap_err();
+    assert!(matches!(host, PlanError::ToleranceTooFine { .. }));
+    assert_eq!(plan_on_service(&fine).err(), Some(host));
+}
