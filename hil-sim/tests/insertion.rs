@@ -157,6 +157,30 @@ fn a_torsional_lag_turns_the_bend_plane() {
 }
 
 #[test]
+fn the_in_plane_deviation_sees_only_what_stays_in_the_plane() {
+    let scenario = Scenario::paper();
+    // A curvature error keeps the path in the plan's plane: both deviations agree.
+    let r = run(&scenario, "R", &only("curvature_spread", 0.1), 2);
+    let (rms, max) = (r.path_rms_in_plane.unwrap(), r.path_max_in_plane.unwrap());
+    assert!(r.path_rms > 0.1);
+    assert!((rms - r.path_rms).abs() < 1e-4 && (max - r.path_max).abs() < 1e-4);
+    // A torsional lag rolls LRR's bend planes out of the plane: the view across it sees little.
+    let r = run(&scenario, "LRR", &only("torsion_lag_deg_per_mm", 0.2), 2);
+    let rms = r.path_rms_in_plane.unwrap();
+    assert!(
+        r.path_rms > 0.5 && rms < 0.1 * r.path_rms,
+        "{rms} vs {}",
+        r.path_rms
+    );
+    // Never more than the 3-D deviation; none in a 3-D scenario.
+    let r = run(&scenario, "RL", &Perturbation::default(), 4);
+    assert!(r.path_rms_in_plane.unwrap() <= r.path_rms + 1e-6);
+    assert!(r.path_max_in_plane.unwrap() <= r.path_max + 1e-6);
+    let r = run(&space(), "RL", &Perturbation::default(), 4);
+    assert_eq!((r.path_rms_in_plane, r.path_max_in_plane), (None, None));
+}
+
+#[test]
 fn a_target_shift_moves_the_imaged_target_and_nothing_else() {
     let scenario = Scenario::paper();
     let (o, s) = form(&scenario, "RL");

@@ -7,6 +7,7 @@ use planner_core::check::rebuild;
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::model::clearance::closest;
 use planner_core::model::kinematics::{PathGeometry, V3};
+use planner_core::model::scenario::Workspace;
 use planner_core::{FormOutcome, Scenario};
 use std::ops::ControlFlow;
 
@@ -24,6 +25,12 @@ pub struct Run {
     pub path_rms: f32,
     /// Largest distance of a point to the planned path (mm).
     pub path_max: f32,
+    /// For a plane scenario, [`Run::path_rms`] in the plan's plane: each point projected onto
+    /// the plane before its distance to the (planar) plan is taken, what a camera over a planar
+    /// phantom sees; `None` in 3-D.
+    pub path_rms_in_plane: Option<f32>,
+    /// For a plane scenario, the largest in-plane deviation; `None` in 3-D.
+    pub path_max_in_plane: Option<f32>,
     /// The true path entered an obstacle.
     pub collided: bool,
     /// Smallest clearance of the true path (mm).
@@ -38,19 +45,28 @@ pub struct Run {
 /// The planned path of `outcome`, to measure deviations from.
 pub struct Planned {
     geo: PathGeometry,
+    /// The plan lies in the plane x = this (plane scenarios).
+    plane_x: Option<f32>,
 }
 
 impl Planned {
     /// The path `outcome` describes in `scenario`.
     pub fn of(scenario: &Scenario, outcome: &FormOutcome) -> Planned {
-        Planned {
-            geo: rebuild(
-                scenario,
-                outcome.form,
-                &outcome.insertion,
-                &outcome.segments,
-            ),
-        }
+        let geo = rebuild(
+            scenario,
+            outcome.form,
+            &outcome.insertion,
+            &outcome.segments,
+        );
+        let plane_x =
+            (scenario.options.workspace == Workspace::PlaneYz).then_some(geo.starts[0].p.x);
+        Planned { geo, plane_x }
+    }
+
+    /// For a plane scenario, the distance from `p` projected onto the plan's plane to the plan
+    /// (the deviation a view across the plane sees); `None` in 3-D.
+    pub fn distance_in_plane(&self, p: [f32; 3]) -> Option<f32> {
+        self.plane_x.map(|x| self.distance([x, p[1], p[2]]))
     }
 
     /// Exact distance from `p` to the planned path (nearest point over its segments).
@@ -82,12 +98,19 @@ pub fn open_loop(
 pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
     let points = world.points().to_vec();
     let (mut sum, mut max) = (0.0f64, 0.0f32);
+    let (mut sum_in, mut max_in) = (0.0f64, 0.0f32);
     for p in &points {
         let d = planned.distance(*p);
         sum += f64::from(d) * f64::from(d);
         max = max.max(d);
+        if let Some(d) = planned.distance_in_plane(*p) {
+            sum_in += f64::from(d) * f64::from(d);
+            max_in = max_in.max(d);
+        }
     }
-    let path_rms = (sum / points.len().max(1) as f64).sqrt() as f32;
+    let n = points.len().max(1) as f64;
+    let path_rms = (sum / n).sqrt() as f32;
+    let in_plane = planned.plane_x.is_some();
     let miss = world.tip().p - world.true_target();
     Run {
         seed,
@@ -95,6 +118,8 @@ pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
         target_error: miss.norm(),
         path_rms,
         path_max: max,
+        path_rms_in_plane: in_plane.then(|| (sum_in / n).sqrt() as f32),
+        path_max_in_plane: in_plane.then_some(max_in),
         collided: world.min_clearance() < 0.0,
         min_clearance: world.min_clearance(),
         points,

@@ -103,6 +103,11 @@ pub struct Summary {
     pub path_rms: Spread,
     /// Each run's largest deviation from the planned path.
     pub path_max: Spread,
+    /// Plane scenarios: each run's RMS deviation in the plan's plane (the points projected onto
+    /// it), what a view across a planar phantom measures.
+    pub path_rms_in_plane: Option<Spread>,
+    /// Plane scenarios: each run's largest in-plane deviation.
+    pub path_max_in_plane: Option<Spread>,
     /// Runs whose true path entered an obstacle.
     pub collisions: usize,
     /// Smallest clearance over all runs (mm).
@@ -115,12 +120,21 @@ pub fn summarise(runs: &[Run]) -> Summary {
         target_error: Spread::of(runs.iter().map(|r| r.target_error)),
         path_rms: Spread::of(runs.iter().map(|r| r.path_rms)),
         path_max: Spread::of(runs.iter().map(|r| r.path_max)),
+        path_rms_in_plane: in_plane(runs, |r| r.path_rms_in_plane),
+        path_max_in_plane: in_plane(runs, |r| r.path_max_in_plane),
         collisions: runs.iter().filter(|r| r.collided).count(),
         min_clearance: runs
             .iter()
             .map(|r| r.min_clearance)
             .fold(f32::INFINITY, f32::min),
     }
+}
+
+fn in_plane(runs: &[Run], f: impl Fn(&Run) -> Option<f32>) -> Option<Spread> {
+    let values: Option<Vec<f32>> = runs.iter().map(f).collect();
+    values
+        .filter(|v| !v.is_empty())
+        .map(|v| Spread::of(v.into_iter()))
 }
 
 #[cfg(test)]

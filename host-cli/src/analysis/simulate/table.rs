@@ -40,6 +40,10 @@ pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
     row(&mut out, "target error", &s.target_error);
     row(&mut out, "path deviation, run RMS", &s.path_rms);
     row(&mut out, "path deviation, run max", &s.path_max);
+    if let (Some(rms), Some(max)) = (&s.path_rms_in_plane, &s.path_max_in_plane) {
+        row(&mut out, "  in the plane, run RMS", rms);
+        row(&mut out, "  in the plane, run max", max);
+    }
     let clear = if s.min_clearance.is_finite() {
         format!("{:.3} mm", s.min_clearance)
     } else {
