@@ -85,6 +85,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     let config = ClientConfig {
         timeout: Duration::from_secs(10),
         retries: 2,
+        deadline: None,
     };
     let link = open(&LinkTarget::Tcp(qemu.addr.clone())).expect("connect to QEMU");
     let mut client = Client::new(link, config);

@@ -31,6 +31,7 @@ fn five_hundred_plans_over_a_noisy_line() {
     let config = ClientConfig {
         timeout: Duration::from_millis(100),
         retries: 20,
+        deadline: None,
     };
     let mut client = Client::new(Sim(device), config);
     let mut hello_ok = false;

@@ -19,12 +19,17 @@ pub struct LinkArgs {
     /// TCP address of the device instead of a serial port (QEMU, `hil-sim --tcp`).
     #[arg(long)]
     pub tcp: Option<String>,
-    /// Seconds to wait for each answer (and longest silence while planning).
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds of silence allowed per exchange (no frame at all, intact or damaged, from the
+    /// device), and the longest silence while it plans.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.timeout.as_secs_f64())]
     pub timeout: f64,
-    /// Times a request is repeated after silence or a damaged frame before giving up.
-    #[arg(long, default_value_t = 5)]
+    /// Times one request is repeated (after a damaged frame, at once; after silence, at an
+    /// interval adapted to the round trip) before giving up.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.retries)]
     pub retries: u32,
+    /// Seconds the whole command (greeting, upload, planning, fetch) may take.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.deadline.map_or(120.0, |d| d.as_secs_f64()))]
+    pub deadline: f64,
 }
 
 impl LinkArgs {
@@ -43,16 +48,21 @@ impl LinkArgs {
 
     /// Opens the link and greets the device (the protocol version is checked here).
     pub fn connect(&self) -> Result<(Client<Box<dyn Transport>>, DeviceInfo)> {
-        if !(self.timeout > 0.0 && self.timeout.is_finite()) {
-            bail!("--timeout must be a positive number of seconds");
+        for (name, v) in [("--timeout", self.timeout), ("--deadline", self.deadline)] {
+            if !(v > 0.0 && v <= 1e6) {
+                bail!("{name} must be a positive number of seconds (at most 1e6), not {v}");
+            }
         }
+        let deadline = Duration::from_secs_f64(self.deadline);
         let target = self.target();
         let link = open(&target)?;
         let config = ClientConfig {
             timeout: Duration::from_secs_f64(self.timeout),
             retries: self.retries,
+            deadline: Some(deadline),
         };
         let mut client = Client::new(link, config);
+        client.set_deadline(deadline);
         let info = client
             .hello()
             .with_context(|| format!("no planner device on {target}"))?;
