@@ -124,7 +124,7 @@ impl fmt::Display for LinkError {
             LinkError::Io(e) => write!(f, "link failed: {e}"),
             LinkError::Lost { what, after, error } => write!(
                 f,
-                "the link failed during the {what} after {}: {error}",
+                "the link failed during the {what} ({} into the operation): {error}",
                 secs(*after)
             ),
             LinkError::NoAnswer {

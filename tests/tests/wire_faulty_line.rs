@@ -20,6 +20,7 @@ fn noisy(seed: u64) -> LineConfig {
         flip_rate: 0.01,
         drop_rate: 0.01,
         seed,
+        ..LineConfig::default()
     }
 }
 
