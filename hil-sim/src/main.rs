@@ -64,9 +64,16 @@ fn main() -> Result<()> {
             TcpListener::bind(addr).with_context(|| format!("cannot listen on {addr}"))?;
         writeln!(out, "{}", listener.local_addr()?)?;
         out.flush()?;
-        for conn in listener.incoming() {
+        for (k, conn) in (0u64..).zip(listener.incoming()) {
             let mut conn = conn?;
             conn.set_nodelay(true)?;
+            // Each connection its own fault pattern (a pty's line goes on from client to
+            // client): the same seeds every time would give every session the same faults.
+            let config = ServeConfig {
+                to_device: line(a.seed.wrapping_add(2 * k)),
+                to_host: line(a.seed.wrapping_add(2 * k + 1)),
+                ..config
+            };
             if let Err(e) = serve(&mut conn, &mut device, &config) {
                 eprintln!("hil-sim: connection ended: {e}");
             }

@@ -21,10 +21,10 @@ use std::time::{Duration, Instant};
 pub(crate) const MIN_CHUNK: usize = 16;
 
 /// Smallest resend interval after silence.
-pub(crate) const MIN_RESEND: Duration = Duration::from_millis(20);
+pub(crate) const MIN_RESEND: Duration = Duration::from_millis(10);
 
 /// Resend interval before any round trip has been measured.
-pub(crate) const FIRST_RESEND: Duration = Duration::from_millis(200);
+pub(crate) const FIRST_RESEND: Duration = Duration::from_millis(50);
 
 /// Time and count bounds of the retry policy.
 #[derive(Clone, Copy, Debug)]
@@ -107,6 +107,8 @@ pub struct Client<T: Transport> {
     /// Start of the current operation.
     pub(crate) op_start: Instant,
     pub(crate) until: Option<(Instant, Duration)>,
+    /// When the frame now arriving last received a byte, if one is open.
+    open_since: Option<Instant>,
 }
 
 impl<T: Transport> Client<T> {
@@ -134,6 +136,7 @@ impl<T: Transport> Client<T> {
             op_end: None,
             op_start: Instant::now(),
             until: None,
+            open_since: None,
         }
     }
 
@@ -246,11 +249,23 @@ impl<T: Transport> Client<T> {
             if now >= deadline {
                 return Ok(None);
             }
-            let n = self.link.recv(&mut buf, deadline - now)?;
+            // A frame left open (its closing delimiter lost) ends only with the next frame: after
+            // the transport's frame gap without a byte it is damaged, and the request is resent.
+            let settle = self.open_since.map(|t| t + self.link.frame_gap());
+            let until = settle.map_or(deadline, |s| s.min(deadline));
+            let n = self
+                .link
+                .recv(&mut buf, until.saturating_duration_since(now))?;
             if n == 0 {
+                if self.open_since.is_some() && Instant::now() < deadline {
+                    self.open_since = None;
+                    self.decoder.resync();
+                    return Ok(Some(Event::Damaged));
+                }
                 return Ok(None);
             }
             self.stats.bytes_in += n as u64;
+            self.open_since = (buf[n - 1] != 0).then(Instant::now);
             for &b in &buf[..n] {
                 if let Some(ev) = self.decoder.push(b) {
                     let ev = match ev.map(postcard::from_bytes::<Reply>) {

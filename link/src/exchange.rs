@@ -131,19 +131,31 @@ impl<T: Transport> Client<T> {
                         silent += 1;
                         break Next::Resend;
                     }
-                    Some(Event::Damaged) => {
-                        last_heard = now;
-                        tries.damaged += 1;
-                        self.stats.detected += 1;
-                        silent = 0;
-                        if may_resend {
-                            break Next::Resend;
-                        }
-                        continue;
-                    }
-                    Some(Event::Reply(r)) => *r,
+                    Some(Event::Damaged) => None,
+                    Some(Event::Reply(r)) => Some(*r),
                 };
                 last_heard = now;
+                // A damaged frame, or the device saying it got one (this request or an earlier
+                // one): the device is alive, the request is worth sending again at once.
+                let line_fault = reply.as_ref().is_some_and(|r| match r.body {
+                    ReplyBody::Fault(f) => {
+                        is_line_fault(f) && (r.header.id == 0 || f == Fault::Undecodable)
+                    }
+                    _ => false,
+                });
+                let Some(reply) = reply.filter(|_| !line_fault) else {
+                    if line_fault {
+                        tries.line_faults += 1;
+                    } else {
+                        tries.damaged += 1;
+                    }
+                    self.stats.detected += 1;
+                    silent = 0;
+                    if may_resend {
+                        break Next::Resend;
+                    }
+                    continue;
+                };
                 if let ReplyBody::Fault(Fault::UnsupportedVersion { supported, .. }) = reply.body {
                     return Err(LinkError::Version { device: supported });
                 }
@@ -154,18 +166,6 @@ impl<T: Transport> Client<T> {
                 }
                 if reply.body == ReplyBody::Fault(Fault::Internal) {
                     return Err(LinkError::Device(Fault::Internal));
-                }
-                if let ReplyBody::Fault(f) = reply.body {
-                    if is_line_fault(f) && (reply.header.id == 0 || f == Fault::Undecodable) {
-                        // The device saw a damaged frame: this request, or an earlier one.
-                        tries.line_faults += 1;
-                        self.stats.detected += 1;
-                        silent = 0;
-                        if may_resend {
-                            break Next::Resend;
-                        }
-                        continue;
-                    }
                 }
                 if reply.header.id == id {
                     if let Some(r) = accept(&reply.body) {

@@ -174,16 +174,14 @@ impl<T: Transport> Client<T> {
                 total,
                 form,
                 feasible,
-            } => {
-                if done > news.done || news.total == 0 {
-                    *news = Progress {
-                        done,
-                        total,
-                        form,
-                        feasible,
-                    };
-                    progress(*news);
-                }
+            } if done > news.done || news.total == 0 => {
+                *news = Progress {
+                    done,
+                    total,
+                    form,
+                    feasible,
+                };
+                progress(*news);
             }
             ReplyBody::Finished { len, crc } => {
                 self.finished = Some((id, len, crc));
