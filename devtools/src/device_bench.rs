@@ -25,6 +25,7 @@ const STACK_PAINT: u32 = 0xCCCC_CCCC;
 const LINK: ClientConfig = ClientConfig {
     timeout: Duration::from_secs(5),
     retries: 0,
+    deadline: None,
 };
 
 /// Longest silence while the device plans (the client asks nothing meanwhile: a status query

@@ -1,5 +1,5 @@
-//! A faulty serial line: flips and drops bytes at given rates (seeded, so runs repeat), and a
-//! pacer that makes bytes take the time they take at a baud rate (8N1: 10 bits a byte).
+//! A faulty serial line: flips and drops bytes at given rates and corrupts runs of bytes (bursts,
+//! as noise from a motor would; seeded, so runs repeat), and a pacer that makes bytes take the time they take at a baud rate (8N1: 10 bits a byte).
 
 use rand::{Rng, RngExt, SeedableRng};
 use rand_xoshiro::SplitMix64;
@@ -12,6 +12,11 @@ pub struct LineConfig {
     pub flip_rate: f64,
     /// Fraction of bytes lost.
     pub drop_rate: f64,
+    /// Fraction of bytes that start a burst: this byte and the next `burst_len - 1` are all
+    /// replaced by different bytes.
+    pub burst_rate: f64,
+    /// Bytes corrupted by one burst.
+    pub burst_len: u32,
     /// Seed of the fault pattern.
     pub seed: u64,
 }
@@ -25,6 +30,8 @@ pub struct LineStats {
     pub flipped: u64,
     /// Bytes lost.
     pub dropped: u64,
+    /// Bursts started.
+    pub bursts: u64,
 }
 
 /// One direction of a line.
@@ -33,6 +40,8 @@ pub struct FaultyLine {
     config: LineConfig,
     faults: SplitMix64,
     stats: LineStats,
+    /// Bytes of the current burst still to corrupt.
+    burst_left: u32,
 }
 
 impl FaultyLine {
@@ -44,6 +53,7 @@ impl FaultyLine {
             // give unrelated fault patterns.
             faults: SplitMix64::seed_from_u64(config.seed),
             stats: LineStats::default(),
+            burst_left: 0,
         }
     }
 
@@ -65,6 +75,16 @@ impl FaultyLine {
     pub fn carry(&mut self, bytes: &[u8], out: &mut Vec<u8>) {
         for &b in bytes {
             self.stats.bytes += 1;
+            if self.burst_left == 0 && self.chance(self.config.burst_rate) {
+                self.stats.bursts += 1;
+                self.burst_left = self.config.burst_len;
+            }
+            if self.burst_left > 0 {
+                self.burst_left -= 1;
+                self.stats.flipped += 1;
+                out.push(b ^ ((self.faults.next_u64() % 255) as u8 + 1));
+                continue;
+            }
             if self.chance(self.config.drop_rate) {
                 self.stats.dropped += 1;
                 continue;
@@ -121,6 +141,7 @@ mod tests {
             flip_rate: 0.01,
             drop_rate: 0.01,
             seed: 7,
+            ..LineConfig::default()
         };
         let data = vec![0x5A; 200_000];
         let (mut a, mut b) = (FaultyLine::new(cfg), FaultyLine::new(cfg));
@@ -141,6 +162,40 @@ mod tests {
         let mut out_c = Vec::new();
         c.carry(&data, &mut out_c);
         assert_ne!(out_a, out_c);
+    }
+
+    #[test]
+    fn bursts_corrupt_runs_of_bytes() {
+        let cfg = LineConfig {
+            burst_rate: 0.001,
+            burst_len: 20,
+            seed: 3,
+            ..LineConfig::default()
+        };
+        let data = vec![0x5A; 100_000];
+        let mut line = FaultyLine::new(cfg);
+        let mut out = Vec::new();
+        line.carry(&data, &mut out);
+        let s = line.stats();
+        assert_eq!(out.len(), data.len(), "bursts corrupt, they do not drop");
+        assert!((60..140).contains(&s.bursts), "{s:?}");
+        // Every corrupted byte lies in a run of 20 (runs may touch).
+        let bad: Vec<bool> = out.iter().map(|&x| x != 0x5A).collect();
+        assert_eq!(bad.iter().filter(|&&x| x).count() as u64, s.flipped);
+        assert_eq!(s.flipped, 20 * s.bursts);
+        let mut run = 0;
+        for (i, &b) in bad.iter().enumerate() {
+            if b {
+                run += 1;
+            }
+            if !b || i + 1 == bad.len() {
+                assert!(
+                    run % 20 == 0,
+                    "a run of {run} corrupted bytes ending at {i}"
+                );
+                run = 0;
+            }
+        }
     }
 
     #[test]

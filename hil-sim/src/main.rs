@@ -22,6 +22,12 @@ struct Args {
     /// Fraction of bytes lost on the line, in each direction.
     #[arg(long, default_value_t = 0.0)]
     drop_rate: f64,
+    /// Fraction of bytes that start a burst of corrupted bytes, in each direction.
+    #[arg(long, default_value_t = 0.0)]
+    burst_rate: f64,
+    /// Bytes corrupted by one burst.
+    #[arg(long, default_value_t = 20)]
+    burst_len: u32,
     /// Seed of the fault pattern.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -32,12 +38,18 @@ struct Args {
 
 fn main() -> Result<()> {
     let a = Args::parse();
-    for (name, rate) in [("--flip-rate", a.flip_rate), ("--drop-rate", a.drop_rate)] {
+    for (name, rate) in [
+        ("--flip-rate", a.flip_rate),
+        ("--drop-rate", a.drop_rate),
+        ("--burst-rate", a.burst_rate),
+    ] {
         anyhow::ensure!((0.0..=1.0).contains(&rate), "{name} must be within 0 and 1");
     }
     let line = |seed| LineConfig {
         flip_rate: a.flip_rate,
         drop_rate: a.drop_rate,
+        burst_rate: a.burst_rate,
+        burst_len: a.burst_len,
         seed,
     };
     let config = ServeConfig {
@@ -52,9 +64,16 @@ fn main() -> Result<()> {
             TcpListener::bind(addr).with_context(|| format!("cannot listen on {addr}"))?;
         writeln!(out, "{}", listener.local_addr()?)?;
         out.flush()?;
-        for conn in listener.incoming() {
+        for (k, conn) in (0u64..).zip(listener.incoming()) {
             let mut conn = conn?;
             conn.set_nodelay(true)?;
+            // Each connection its own fault pattern (a pty's line goes on from client to
+            // client): the same seeds every time would give every session the same faults.
+            let config = ServeConfig {
+                to_device: line(a.seed.wrapping_add(2 * k)),
+                to_host: line(a.seed.wrapping_add(2 * k + 1)),
+                ..config
+            };
             if let Err(e) = serve(&mut conn, &mut device, &config) {
                 eprintln!("hil-sim: connection ended: {e}");
             }

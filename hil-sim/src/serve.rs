@@ -10,17 +10,33 @@ use std::time::Duration;
 pub trait Stream: Read + Write {
     /// How long a read waits for the first byte.
     fn set_wait(&mut self, wait: Duration) -> io::Result<()>;
+    /// Reads what has arrived without waiting (`WouldBlock` or `TimedOut` if nothing has).
+    fn read_now(&mut self, buf: &mut [u8]) -> io::Result<usize>;
 }
 
 impl Stream for TcpStream {
     fn set_wait(&mut self, wait: Duration) -> io::Result<()> {
         self.set_read_timeout(Some(wait))
     }
+
+    // A socket's read timeout counts in scheduler ticks (4-10 ms), far longer than a form takes
+    // to plan here: a non-blocking read keeps the simulated device as fast as the real one.
+    fn read_now(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.set_nonblocking(true)?;
+        let r = self.read(buf);
+        self.set_nonblocking(false)?;
+        r
+    }
 }
 
 impl Stream for serialport::TTYPort {
     fn set_wait(&mut self, wait: Duration) -> io::Result<()> {
         serialport::SerialPort::set_timeout(self, wait).map_err(io::Error::from)
+    }
+
+    fn read_now(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.set_wait(Duration::ZERO)?;
+        self.read(buf)
     }
 }
 
@@ -51,12 +67,13 @@ pub fn serve(
     let (mut carried, mut sent) = (Vec::new(), Vec::new());
     let mut busy = false;
     loop {
-        stream.set_wait(if busy {
-            Duration::from_millis(1)
+        let got = if busy {
+            stream.read_now(&mut buf)
         } else {
-            Duration::from_millis(20)
-        })?;
-        match stream.read(&mut buf) {
+            stream.set_wait(Duration::from_millis(20))?;
+            stream.read(&mut buf)
+        };
+        match got {
             Ok(0) => return Ok(()),
             Ok(n) => {
                 rx_pace.wait(n);

@@ -169,7 +169,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
 
 fn send(args: &SendArgs) -> Result<()> {
     let scenario = load(&args.plan)?;
-    let (result, device) = device::commands::plan_on_device(&scenario, &args.link)?;
+    let (result, device) = device::send::plan_on_device(&scenario, &args.link)?;
     let planned = result.context("planning failed")?;
     let schedule = device::verify::verified_schedule(&scenario, &planned)?;
     let stats = Stats {

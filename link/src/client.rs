@@ -1,10 +1,12 @@
 //! A protocol session with one device: its state, and the frame layer under every request.
 //!
-//! Every exchange sends one request and waits up to `timeout` for its answer; on silence, or on
-//! a damaged frame (caught by the CRC here, or reported by the device), it sends the request
-//! again, at most `retries` times, then gives up with [`LinkError::NoAnswer`]. Every request is
-//! idempotent, so a repeat never does harm. Chunk sizes shrink when frames get damaged and grow
-//! back as they get through, so a noisy line still carries a plan.
+//! Every exchange sends one request until an answer to it arrives (the policy is in `exchange`):
+//! at once again after a damaged frame, again after a resend interval adapted to the measured
+//! round trip when the line is silent, until the device has been silent for `timeout`, the
+//! request has been repeated `retries` times, or the operation's `deadline` passes. Every
+//! request is idempotent, so a repeat never does harm, and replies are matched to the request
+//! by id and offset, so the answers to earlier attempts are dropped. Chunk sizes shrink when
+//! frames get damaged and grow back as they get through, so a noisy line still carries a plan.
 
 use crate::error::{too_large, LinkError};
 use crate::transport::Transport;
@@ -18,21 +20,37 @@ use std::time::{Duration, Instant};
 /// Smallest chunk the client shrinks to on a noisy line.
 pub(crate) const MIN_CHUNK: usize = 16;
 
-/// Timeouts and retries.
+/// Smallest resend interval after silence.
+pub(crate) const MIN_RESEND: Duration = Duration::from_millis(10);
+
+/// Resend interval before any round trip has been measured.
+pub(crate) const FIRST_RESEND: Duration = Duration::from_millis(50);
+
+/// Time and count bounds of the retry policy.
 #[derive(Clone, Copy, Debug)]
 pub struct ClientConfig {
-    /// Longest wait for an answer (and longest silence while planning).
+    /// Silence allowed per exchange: it fails once the device has sent no frame at all (intact
+    /// or damaged) for this long. Also the longest silence while the device plans.
     pub timeout: Duration,
-    /// Repeats of a request before giving up.
+    /// Most repeats of one request (after damaged frames or silence).
     pub retries: u32,
+    /// Longest time one operation (a hello, a ping, a whole plan) may take; `None`: no bound
+    /// but the others.
+    pub deadline: Option<Duration>,
+}
+
+impl ClientConfig {
+    /// The defaults of `needle send`: 5 s of silence, 40 repeats, 120 s for a whole plan.
+    pub const DEFAULT: ClientConfig = ClientConfig {
+        timeout: Duration::from_secs(5),
+        retries: 40,
+        deadline: Some(Duration::from_secs(120)),
+    };
 }
 
 impl Default for ClientConfig {
     fn default() -> Self {
-        ClientConfig {
-            timeout: Duration::from_secs(5),
-            retries: 5,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -45,8 +63,10 @@ pub struct LinkStats {
     pub retried: u64,
     /// Damaged frames detected: by the CRC here, or reported by the device.
     pub detected: u64,
-    /// Waits that ended in silence.
+    /// Waits that ended in silence (a resend interval passed without a frame).
     pub timeouts: u64,
+    /// Intact replies dropped because they answer an earlier request or attempt.
+    pub stale: u64,
     /// Bytes sent and received.
     pub bytes_out: u64,
     /// Bytes received.
@@ -80,6 +100,15 @@ pub struct Client<T: Transport> {
     /// While the device plans: wait this long in silence, asking nothing (see
     /// [`Client::with_quiet_planning`]); `None`: ask for the status after `timeout`.
     pub(crate) quiet_planning: Option<Duration>,
+    /// Smoothed round trip and its mean deviation (answers to first sends only).
+    pub(crate) rtt: Option<(Duration, Duration)>,
+    /// End of the current operation (from `config.deadline`) and of everything (`set_deadline`).
+    pub(crate) op_end: Option<(Instant, Duration)>,
+    /// Start of the current operation.
+    pub(crate) op_start: Instant,
+    pub(crate) until: Option<(Instant, Duration)>,
+    /// When the frame now arriving last received a byte, if one is open.
+    open_since: Option<Instant>,
 }
 
 impl<T: Transport> Client<T> {
@@ -103,7 +132,57 @@ impl<T: Transport> Client<T> {
             finished: None,
             abandoned: None,
             quiet_planning: None,
+            rtt: None,
+            op_end: None,
+            op_start: Instant::now(),
+            until: None,
+            open_since: None,
         }
+    }
+
+    /// Ends everything this client does from now on within `limit` (a whole `needle send`, the
+    /// hello included), on top of the per-operation `deadline`.
+    pub fn set_deadline(&mut self, limit: Duration) {
+        self.until = Some((Instant::now() + limit, limit));
+    }
+
+    /// Starts the clock of one operation.
+    pub(crate) fn begin(&mut self) {
+        self.op_start = Instant::now();
+        self.op_end = self.config.deadline.map(|d| (Instant::now() + d, d));
+    }
+
+    /// The earliest deadline in force, with its length.
+    pub(crate) fn deadline(&self) -> Option<(Instant, Duration)> {
+        match (self.op_end, self.until) {
+            (Some(a), Some(b)) => Some(if a.0 <= b.0 { a } else { b }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// How long to wait in silence before sending a request again: the measured round trip
+    /// with four deviations (Jacobson's estimator), at least [`MIN_RESEND`], at most half the
+    /// silence allowed; doubled for each silent attempt of the same request.
+    pub(crate) fn resend_interval(&self, silent_attempts: u32) -> Duration {
+        let base = match self.rtt {
+            Some((srtt, dev)) => srtt + 4 * dev,
+            None => FIRST_RESEND,
+        };
+        let cap = (self.config.timeout / 2).max(MIN_RESEND);
+        (base * 2u32.saturating_pow(silent_attempts.min(16)))
+            .max(MIN_RESEND)
+            .min(cap)
+    }
+
+    /// Takes one round-trip sample.
+    pub(crate) fn sample_rtt(&mut self, rtt: Duration) {
+        self.rtt = Some(match self.rtt {
+            None => (rtt, rtt / 2),
+            Some((srtt, dev)) => {
+                let err = srtt.abs_diff(rtt);
+                ((srtt * 7 + rtt) / 8, (dev * 3 + err) / 4)
+            }
+        });
     }
 
     /// Numbers requests from `first` on instead of a per-process value. Measurements want this:
@@ -170,11 +249,23 @@ impl<T: Transport> Client<T> {
             if now >= deadline {
                 return Ok(None);
             }
-            let n = self.link.recv(&mut buf, deadline - now)?;
+            // A frame left open (its closing delimiter lost) ends only with the next frame: after
+            // the transport's frame gap without a byte it is damaged, and the request is resent.
+            let settle = self.open_since.map(|t| t + self.link.frame_gap());
+            let until = settle.map_or(deadline, |s| s.min(deadline));
+            let n = self
+                .link
+                .recv(&mut buf, until.saturating_duration_since(now))?;
             if n == 0 {
+                if self.open_since.is_some() && Instant::now() < deadline {
+                    self.open_since = None;
+                    self.decoder.resync();
+                    return Ok(Some(Event::Damaged));
+                }
                 return Ok(None);
             }
             self.stats.bytes_in += n as u64;
+            self.open_since = (buf[n - 1] != 0).then(Instant::now);
             for &b in &buf[..n] {
                 if let Some(ev) = self.decoder.push(b) {
                     let ev = match ev.map(postcard::from_bytes::<Reply>) {

@@ -17,14 +17,17 @@ impl<T: Transport> Client<T> {
                     offset,
                     max_len: chunk as u16,
                 };
-                let data = self.exchange_with("fetch", id, make, &mut |b| match b {
-                    ReplyBody::Part {
-                        offset: o,
-                        total,
-                        data,
-                    } if *o == offset && *total == len && !data.is_empty() => Some(data.clone()),
-                    _ => None,
-                })?;
+                let data =
+                    self.exchange_with("fetch", Some(offset), id, make, &mut |b| match b {
+                        ReplyBody::Part {
+                            offset: o,
+                            total,
+                            data,
+                        } if *o == offset && *total == len && !data.is_empty() => {
+                            Some(data.clone())
+                        }
+                        _ => None,
+                    })?;
                 out.extend_from_slice(&data);
             }
             out.truncate(usize::from(len));

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 impl<T: Transport> Client<T> {
     /// Asks the device who it is; fails on a protocol version mismatch.
     pub fn hello(&mut self) -> Result<DeviceInfo, LinkError> {
+        self.begin();
         let id = self.new_id();
         let info = self.exchange("hello", id, &RequestBody::Hello, |b| match b {
             ReplyBody::Hello(info) => Some(info.clone()),
@@ -37,19 +38,30 @@ impl<T: Transport> Client<T> {
         self.config = ClientConfig {
             timeout: interval,
             retries: 0,
+            deadline: None,
         };
-        let deadline = Instant::now() + patience;
-        let mut attempts = 0u32;
+        let start = Instant::now();
+        let deadline = start + patience;
+        let mut sent = 0u32;
         let result = loop {
-            attempts = attempts.saturating_add(1);
             match self.hello() {
-                Err(LinkError::NoAnswer { .. }) if Instant::now() < deadline => {}
-                Err(LinkError::NoAnswer { .. }) => {
+                Err(LinkError::NoAnswer { tries, .. }) if Instant::now() < deadline => {
+                    sent = sent.saturating_add(tries.sent);
+                }
+                Err(LinkError::NoAnswer {
+                    what,
+                    offset,
+                    mut tries,
+                    why,
+                }) => {
+                    tries.sent = sent.saturating_add(tries.sent);
+                    tries.elapsed = start.elapsed();
                     break Err(LinkError::NoAnswer {
-                        what: "hello",
-                        attempts,
-                        timeout: interval,
-                    })
+                        what,
+                        offset,
+                        tries,
+                        why,
+                    });
                 }
                 other => break other,
             }
@@ -60,6 +72,7 @@ impl<T: Transport> Client<T> {
 
     /// Round-trip time of one ping.
     pub fn ping(&mut self) -> Result<Duration, LinkError> {
+        self.begin();
         let id = self.new_id();
         let nonce = u32::from(id) << 16 | 0x5A5A;
         let start = Instant::now();
@@ -71,6 +84,12 @@ impl<T: Transport> Client<T> {
 
     /// Stops request `id` on the device; true if something was running.
     pub fn cancel(&mut self, id: u16) -> Result<bool, LinkError> {
+        self.begin();
+        self.cancel_inner(id)
+    }
+
+    /// `cancel` within the operation already under way.
+    pub(crate) fn cancel_inner(&mut self, id: u16) -> Result<bool, LinkError> {
         self.exchange("cancel", id, &RequestBody::Cancel, |b| match b {
             ReplyBody::Cancelled { was_active } => Some(*was_active),
             _ => None,

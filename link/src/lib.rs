@@ -23,6 +23,6 @@ pub mod transport;
 mod upload;
 
 pub use client::{Client, ClientConfig, LinkStats};
-pub use error::LinkError;
+pub use error::{GaveUp, LinkError, Tries};
 pub use plan::Progress;
 pub use transport::{open, tcp, LinkTarget, Transport};

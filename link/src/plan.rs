@@ -7,7 +7,7 @@ use crate::transport::Transport;
 use planner_core::model::form::Form;
 use planner_core::wire::{PlanRequest, PlanResult, ReplyBody, RequestBody, MAX_PLAN_REQUEST};
 use planner_core::Scenario;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// One progress report of the device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,6 +42,7 @@ impl<T: Transport> Client<T> {
         request: &[u8],
         progress: &mut dyn FnMut(Progress),
     ) -> Result<PlanResult, LinkError> {
+        self.begin();
         let id = self.new_id();
         self.finished = None;
         let result = self.upload(id, request).and_then(|()| {
@@ -63,23 +64,65 @@ impl<T: Transport> Client<T> {
     }
 
     /// Waits for request `id`'s `Finished { len, crc }`, passing on progress reports. After a
-    /// silence of `timeout`, or a damaged frame, it asks for the status, unless planning is quiet.
+    /// silence of three times the longest gap between reports so far (at least the resend
+    /// interval, at most `timeout`), or a damaged frame, it asks for the status, unless planning
+    /// is quiet. Ends at the operation's deadline.
     fn await_plan(
         &mut self,
         id: u16,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(u16, u32), LinkError> {
+        let mut news = Progress {
+            done: 0,
+            total: 0,
+            form: None,
+            feasible: false,
+        };
+        let mut last_news = Instant::now();
+        let mut longest_gap = Duration::ZERO;
+        let mut seen = 0u8;
         loop {
             if let Some((fid, len, crc)) = self.finished.take() {
                 if fid == id {
                     return Ok((len, crc));
                 }
             }
-            let silence = self.quiet_planning.unwrap_or(self.config.timeout);
-            let deadline = Instant::now() + silence;
-            let ask = match self.next_event(deadline)? {
+            let now = Instant::now();
+            if let Some((end, limit)) = self.deadline() {
+                if now >= end {
+                    return Err(LinkError::PlanTooLong {
+                        done: (news.done, news.total),
+                        after: self.op_start.elapsed(),
+                        limit,
+                    });
+                }
+            }
+            let silence = self.quiet_planning.unwrap_or_else(|| {
+                (longest_gap * 3)
+                    .max(self.resend_interval(0))
+                    .min(self.config.timeout)
+            });
+            let deadline = self.deadline();
+            let mut until = now + silence;
+            if let Some((end, _)) = deadline {
+                until = until.min(end);
+            }
+            let event = match self.next_event(until) {
+                Err(LinkError::Io(e)) => return Err(self.lost("plan status", e)),
+                other => other?,
+            };
+            let ask = match event {
+                // The wait ran to `until` (in-process silence costs no time): the deadline, or
+                // the silence allowed.
                 None => {
                     self.stats.timeouts += 1;
+                    if let Some((_, limit)) = deadline.filter(|d| until == d.0) {
+                        return Err(LinkError::PlanTooLong {
+                            done: (news.done, news.total),
+                            after: self.op_start.elapsed(),
+                            limit,
+                        });
+                    }
                     if self.quiet_planning.is_some() {
                         return Err(LinkError::NoResult { waited: silence });
                     }
@@ -92,25 +135,37 @@ impl<T: Transport> Client<T> {
                     self.quiet_planning.is_none()
                 }
                 Some(Event::Reply(r)) if r.header.id == id => {
-                    self.on_plan_news(id, &r.body, progress)?;
+                    self.on_plan_news(id, &r.body, &mut news, progress)?;
                     false
                 }
-                Some(Event::Reply(_)) => false,
+                Some(Event::Reply(_)) => {
+                    self.stats.stale += 1;
+                    false
+                }
             };
             if ask {
-                let news = self.exchange("plan status", id, &RequestBody::Status, |b| {
+                let reply = self.exchange("plan status", id, &RequestBody::Status, |b| {
                     matches!(b, ReplyBody::Progress { .. } | ReplyBody::Finished { .. })
                         .then(|| b.clone())
                 })?;
-                self.on_plan_news(id, &news, progress)?;
+                self.on_plan_news(id, &reply, &mut news, progress)?;
+            }
+            if news.done != seen {
+                let now = Instant::now();
+                seen = news.done;
+                longest_gap = longest_gap.max(now - last_news);
+                last_news = now;
             }
         }
     }
 
+    /// Takes one report about request `id`; progress reports older than `news` (answers to
+    /// repeated status requests) are dropped.
     fn on_plan_news(
         &mut self,
         id: u16,
         body: &ReplyBody,
+        news: &mut Progress,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(), LinkError> {
         match *body {
@@ -119,12 +174,15 @@ impl<T: Transport> Client<T> {
                 total,
                 form,
                 feasible,
-            } => progress(Progress {
-                done,
-                total,
-                form,
-                feasible,
-            }),
+            } if done > news.done || news.total == 0 => {
+                *news = Progress {
+                    done,
+                    total,
+                    form,
+                    feasible,
+                };
+                progress(*news);
+            }
             ReplyBody::Finished { len, crc } => {
                 self.finished = Some((id, len, crc));
             }

@@ -9,9 +9,18 @@ use std::time::Duration;
 pub trait Transport {
     /// Sends all of `bytes`.
     fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
-    /// Reads what has arrived, waiting at most `timeout` for the first byte; `Ok(0)` on timeout.
+    /// Reads what has arrived, waiting at most `timeout` for the first byte; `Ok(0)` on timeout
+    /// (a transport that knows at once that nothing will come may return `Ok(0)` early).
     fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
+    /// The longest pause between two bytes of one frame: a frame still open after this long has
+    /// lost its closing delimiter. Devices send each frame whole.
+    fn frame_gap(&self) -> Duration {
+        FRAME_GAP
+    }
 }
+
+/// [`Transport::frame_gap`] of a link that carries a frame at once (TCP, in-process).
+pub const FRAME_GAP: Duration = Duration::from_millis(5);
 
 /// Where the device is.
 #[derive(Clone, Debug)]
@@ -43,11 +52,20 @@ impl<T: Transport + ?Sized> Transport for Box<T> {
     fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
         (**self).recv(buf, timeout)
     }
+    fn frame_gap(&self) -> Duration {
+        (**self).frame_gap()
+    }
 }
 
-struct Serial(Box<dyn serialport::SerialPort>);
+struct Serial(Box<dyn serialport::SerialPort>, u32);
 
 impl Transport for Serial {
+    /// Twenty byte times (8N1), at least [`FRAME_GAP`].
+    fn frame_gap(&self) -> Duration {
+        let byte = Duration::from_secs_f64(10.0 / f64::from(self.1.max(1)));
+        (byte * 20).max(FRAME_GAP)
+    }
+
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.0.write_all(bytes)?;
         self.0.flush()
@@ -100,7 +118,7 @@ pub fn open(target: &LinkTarget) -> Result<Box<dyn Transport>> {
                 .with_context(|| format!("cannot open serial port {path}"))?;
             // Bytes a previous session left in the buffers would only be skipped as garbage.
             let _ = port.clear(serialport::ClearBuffer::All);
-            Ok(Box::new(Serial(port)))
+            Ok(Box::new(Serial(port, *baud)))
         }
         LinkTarget::Tcp(addr) => {
             let s =

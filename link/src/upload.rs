@@ -7,12 +7,13 @@ use planner_core::wire::crc::crc32;
 use planner_core::wire::{Chunk, Fault, ReplyBody, RequestBody};
 
 impl<T: Transport> Client<T> {
-    /// Uploads `bytes` as request `id`, chunk by chunk from where the device says it is.
+    /// Uploads `bytes` as request `id`, chunk by chunk from where the device says it is. An
+    /// ack is the answer to the chunk at `offset` if it moves past `offset`, or starts over at 0
+    /// (a device that lost the upload); any other ack repeats an earlier one and is dropped.
     pub(crate) fn upload(&mut self, id: u16, bytes: &[u8]) -> Result<(), LinkError> {
         let total = u16::try_from(bytes.len()).map_err(|_| too_large("scenario too large"))?;
         let crc = crc32(bytes);
         let mut offset = 0u16;
-        let mut stalls = 0;
         while offset < total {
             let make = |chunk: usize| {
                 let start = usize::from(offset);
@@ -24,8 +25,12 @@ impl<T: Transport> Client<T> {
                     data: Chunk::from_slice(&bytes[start..start + n]).unwrap_or_default(),
                 }
             };
-            let answer = self.exchange_with("upload", id, make, &mut |b| match b {
-                ReplyBody::Uploaded { received, total: t } if *t == total => Some(*received),
+            let answer = self.exchange_with("upload", Some(offset), id, make, &mut |b| match b {
+                ReplyBody::Uploaded { received, total: t }
+                    if *t == total && (*received > offset || *received == 0) =>
+                {
+                    Some(*received)
+                }
                 _ => None,
             });
             let received = match answer {
@@ -33,24 +38,12 @@ impl<T: Transport> Client<T> {
                 Err(LinkError::Device(Fault::Busy { active }))
                     if Some(active) == self.abandoned =>
                 {
-                    self.cancel(active)?;
+                    self.cancel_inner(active)?;
                     self.abandoned = None;
                     continue;
                 }
                 other => other?,
             };
-            if received <= offset {
-                stalls += 1;
-                if stalls > self.config.retries {
-                    return Err(LinkError::NoAnswer {
-                        what: "upload",
-                        attempts: stalls,
-                        timeout: self.config.timeout,
-                    });
-                }
-            } else {
-                stalls = 0;
-            }
             offset = received.min(total);
         }
         Ok(())

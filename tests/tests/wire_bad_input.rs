@@ -17,6 +17,7 @@ fn client() -> Client<Sim> {
     let config = ClientConfig {
         timeout: Duration::from_millis(100),
         retries: 2,
+        deadline: None,
     };
     Client::new(Sim(InProcess::new()), config)
 }

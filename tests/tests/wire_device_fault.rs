@@ -46,6 +46,7 @@ fn an_internal_fault_ends_the_request_with_a_clear_error() {
     let config = ClientConfig {
         timeout: Duration::from_secs(5),
         retries: 3,
+        deadline: None,
     };
     let mut client = Client::new(device, config);
     let start = Instant::now();

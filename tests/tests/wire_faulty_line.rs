@@ -20,6 +20,7 @@ fn noisy(seed: u64) -> LineConfig {
         flip_rate: 0.01,
         drop_rate: 0.01,
         seed,
+        ..LineConfig::default()
     }
 }
 
@@ -31,6 +32,7 @@ fn five_hundred_plans_over_a_noisy_line() {
     let config = ClientConfig {
         timeout: Duration::from_millis(100),
         retries: 20,
+        deadline: None,
     };
     let mut client = Client::new(Sim(device), config);
     let mut hello_ok = false;

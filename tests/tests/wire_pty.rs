@@ -107,8 +107,8 @@ fn a_silent_device_gives_a_clear_error_not_a_hang() {
     let start = Instant::now();
     let (ok, _, err) = run_needle(&["ping", "--tcp", &addr, "--timeout", "0.2", "--retries", "2"]);
     assert!(!ok);
-    assert!(err.contains("did not answer"), "{err}");
-    assert!(err.contains("3 attempts"), "{err}");
+    assert!(err.contains("did not answer the hello"), "{err}");
+    assert!(err.contains("gave up after 0.20 s of silence"), "{err}");
     assert!(start.elapsed() < Duration::from_secs(10));
     let (ok, _, err) = run_needle(&["info", "--port", "/dev/no-such-port"]);
     assert!(!ok);

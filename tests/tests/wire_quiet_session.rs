@@ -6,7 +6,7 @@ mod wire_support;
 
 use hil_sim::InProcess;
 use needle_e2e::example;
-use needle_link::{Client, ClientConfig, LinkError, Transport};
+use needle_link::{Client, ClientConfig, GaveUp, LinkError, Transport};
 use planner_core::wire::{
     encode_frame, FrameDecoder, Header, Reply, ReplyBody, Request, RequestBody, ENCODE_SCRATCH,
     MAX_FRAME,
@@ -42,6 +42,7 @@ impl Transport for Recorded {
 const LINK: ClientConfig = ClientConfig {
     timeout: Duration::from_secs(5),
     retries: 0,
+    deadline: None,
 };
 
 #[test]
@@ -119,11 +120,19 @@ fn hello_within_repeats_the_hello_until_its_patience_runs_out() {
     match err {
         LinkError::NoAnswer {
             what: "hello",
-            attempts,
-            timeout,
+            tries,
+            why,
+            ..
         } => {
-            assert_eq!(attempts as usize, sent);
-            assert_eq!(timeout, Duration::from_millis(100));
+            assert_eq!(tries.sent as usize, sent);
+            assert!(tries.elapsed >= Duration::from_millis(500), "{tries:?}");
+            assert!(tries.elapsed <= waited, "{tries:?} in {waited:?}");
+            assert_eq!(
+                why,
+                GaveUp::Silence {
+                    allowed: Duration::from_millis(100)
+                }
+            );
         }
         other => panic!("expected NoAnswer, got {other}"),
     }

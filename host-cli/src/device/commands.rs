@@ -1,11 +1,10 @@
-//! The device commands of `needle`: `send`, `ping`, `info`, `ports`.
+//! The device commands of `needle`: how to reach the device, `ping`, `info`, `ports` (`send`
+//! is in [`super::send`]).
 
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
-use needle_link::{open, Client, ClientConfig, LinkStats, LinkTarget, Progress, Transport};
-use planner_core::wire::{DeviceInfo, PlanResult};
-use planner_core::Scenario;
-use std::time::{Duration, Instant};
+use needle_link::{open, Client, ClientConfig, LinkTarget, Transport};
+use planner_core::wire::DeviceInfo;
+use std::time::Duration;
 
 /// How to reach the device, shared by `send`, `ping` and `info`.
 #[derive(clap::Args, Clone, Debug)]
@@ -19,12 +18,17 @@ pub struct LinkArgs {
     /// TCP address of the device instead of a serial port (QEMU, `hil-sim --tcp`).
     #[arg(long)]
     pub tcp: Option<String>,
-    /// Seconds to wait for each answer (and longest silence while planning).
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds of silence allowed per exchange (no frame at all, intact or damaged, from the
+    /// device), and the longest silence while it plans.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.timeout.as_secs_f64())]
     pub timeout: f64,
-    /// Times a request is repeated after silence or a damaged frame before giving up.
-    #[arg(long, default_value_t = 5)]
+    /// Times one request is repeated (after a damaged frame, at once; after silence, at an
+    /// interval adapted to the round trip) before giving up.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.retries)]
     pub retries: u32,
+    /// Seconds the whole command (greeting, upload, planning, fetch) may take.
+    #[arg(long, default_value_t = ClientConfig::DEFAULT.deadline.map_or(120.0, |d| d.as_secs_f64()))]
+    pub deadline: f64,
 }
 
 impl LinkArgs {
@@ -41,75 +45,42 @@ impl LinkArgs {
         }
     }
 
-    /// Opens the link and greets the device (the protocol version is checked here).
-    pub fn connect(&self) -> Result<(Client<Box<dyn Transport>>, DeviceInfo)> {
-        if !(self.timeout > 0.0 && self.timeout.is_finite()) {
-            bail!("--timeout must be a positive number of seconds");
+    /// The retry policy's bounds, checked.
+    pub fn config(&self) -> Result<ClientConfig> {
+        for (name, v) in [("--timeout", self.timeout), ("--deadline", self.deadline)] {
+            if !(v > 0.0 && v <= 1e6) {
+                bail!("{name} must be a positive number of seconds (at most 1e6), not {v}");
+            }
         }
-        let target = self.target();
-        let link = open(&target)?;
-        let config = ClientConfig {
+        Ok(ClientConfig {
             timeout: Duration::from_secs_f64(self.timeout),
             retries: self.retries,
-        };
+            deadline: Some(Duration::from_secs_f64(self.deadline)),
+        })
+    }
+
+    /// Opens the link and greets the device (the protocol version is checked here); everything
+    /// the client does from now on ends within `--deadline`.
+    pub fn connect(&self) -> Result<(Client<Box<dyn Transport>>, DeviceInfo)> {
+        let config = self.config()?;
+        self.connect_within(config, config.deadline.unwrap_or(Duration::MAX))
+    }
+
+    /// Like `connect`, all within `limit`.
+    pub fn connect_within(
+        &self,
+        config: ClientConfig,
+        limit: Duration,
+    ) -> Result<(Client<Box<dyn Transport>>, DeviceInfo)> {
+        let target = self.target();
+        let link = open(&target)?;
         let mut client = Client::new(link, config);
+        client.set_deadline(limit);
         let info = client
             .hello()
             .with_context(|| format!("no planner device on {target}"))?;
         Ok((client, info))
     }
-}
-
-/// What a plan on the device took.
-#[derive(Clone, Copy, Debug)]
-pub struct DevicePlanStats {
-    /// Wall-clock time from upload to the fetched result (µs).
-    pub time_us: u64,
-    /// Link counters.
-    pub link: LinkStats,
-}
-
-/// Plans `scenario` on the device, with a progress bar on a terminal.
-pub fn plan_on_device(
-    scenario: &Scenario,
-    link: &LinkArgs,
-) -> Result<(PlanResult, DevicePlanStats)> {
-    let (mut client, info) = link.connect()?;
-    if scenario.obstacles.len() > usize::from(info.max_obstacles) {
-        bail!(
-            "the scenario has {} obstacles but the device holds at most {}",
-            scenario.obstacles.len(),
-            info.max_obstacles
-        );
-    }
-    // Hidden when stderr is not a terminal, so piped output stays exactly `needle plan`'s.
-    let bar = ProgressBar::new(scenario.options.selected_forms().iter().count() as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} planning on the device [{bar:30}] {pos}/{len} forms {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    let start = Instant::now();
-    let mut on_progress = |p: Progress| {
-        bar.set_length(u64::from(p.total));
-        bar.set_position(u64::from(p.done));
-        if let Some(f) = p.form {
-            bar.set_message(format!(
-                "{f}: {}",
-                if p.feasible { "feasible" } else { "infeasible" }
-            ));
-        }
-    };
-    let result = client.plan(scenario, &mut on_progress);
-    bar.finish_and_clear();
-    let result = result.context("planning on the device failed")?;
-    let stats = DevicePlanStats {
-        time_us: start.elapsed().as_micros() as u64,
-        link: client.stats(),
-    };
-    Ok((result, stats))
 }
 
 /// `needle ping`: round-trip times.

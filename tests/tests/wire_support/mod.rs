@@ -66,6 +66,14 @@ impl SimProcess {
     }
 }
 
+impl SimProcess {
+    /// Kills it now (the device vanishes).
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 impl Drop for SimProcess {
     fn drop(&mut self) {
         let _ = self.child.kill();
