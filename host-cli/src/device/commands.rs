@@ -4,6 +4,7 @@
 use anyhow::{bail, Context, Result};
 use needle_link::{open, Client, ClientConfig, LinkTarget, Transport};
 use planner_core::wire::DeviceInfo;
+use std::io::Write;
 use std::time::Duration;
 
 /// How to reach the device, shared by `send`, `ping` and `info`.
@@ -88,20 +89,23 @@ pub fn ping(link: &LinkArgs, count: u32) -> Result<()> {
     let (mut client, info) = link.connect()?;
     for i in 0..count.max(1) {
         let rtt = client.ping()?;
-        println!(
+        writeln!(
+            std::io::stdout(),
             "pong from {} ({}): seq={} time={:.3} ms",
             info.name,
             link.target(),
             i + 1,
             rtt.as_secs_f64() * 1e3
-        );
+        )?;
     }
     let s = client.stats();
     if s.retried > 0 {
-        println!(
+        writeln!(
+            std::io::stdout(),
             "{} frames sent again, {} damaged frames detected",
-            s.retried, s.detected
-        );
+            s.retried,
+            s.detected
+        )?;
     }
     Ok(())
 }
@@ -121,17 +125,33 @@ pub fn info(link: &LinkArgs, json: bool) -> Result<()> {
             "max_chunk": info.max_chunk,
             "upload_capacity": info.upload_capacity,
         });
-        println!("{v}");
+        writeln!(std::io::stdout(), "{v}")?;
     } else {
-        println!("device:             {}", info.name);
-        println!("firmware:           {}", info.firmware);
-        println!("build:              {}", info.build);
-        println!("protocol:           {}", info.protocol);
-        println!("max obstacles:      {}", info.max_obstacles);
-        println!("max control degree: {}", info.max_control_degree);
-        println!("path forms:         {}", info.form_count);
-        println!("chunk size:         {} bytes", info.max_chunk);
-        println!("upload capacity:    {} bytes", info.upload_capacity);
+        writeln!(std::io::stdout(), "device:             {}", info.name)?;
+        writeln!(std::io::stdout(), "firmware:           {}", info.firmware)?;
+        writeln!(std::io::stdout(), "build:              {}", info.build)?;
+        writeln!(std::io::stdout(), "protocol:           {}", info.protocol)?;
+        writeln!(
+            std::io::stdout(),
+            "max obstacles:      {}",
+            info.max_obstacles
+        )?;
+        writeln!(
+            std::io::stdout(),
+            "max control degree: {}",
+            info.max_control_degree
+        )?;
+        writeln!(std::io::stdout(), "path forms:         {}", info.form_count)?;
+        writeln!(
+            std::io::stdout(),
+            "chunk size:         {} bytes",
+            info.max_chunk
+        )?;
+        writeln!(
+            std::io::stdout(),
+            "upload capacity:    {} bytes",
+            info.upload_capacity
+        )?;
     }
     Ok(())
 }
@@ -140,11 +160,12 @@ pub fn info(link: &LinkArgs, json: bool) -> Result<()> {
 pub fn ports() -> Result<()> {
     let ports = serialport::available_ports().context("cannot list serial ports")?;
     if ports.is_empty() {
-        println!("no serial ports found");
+        writeln!(std::io::stdout(), "no serial ports found")?;
     }
     for p in ports {
         match p.port_type {
-            serialport::SerialPortType::UsbPort(u) => println!(
+            serialport::SerialPortType::UsbPort(u) => writeln!(
+                std::io::stdout(),
                 "{}  usb {:04x}:{:04x}  {}  {}{}",
                 p.port_name,
                 u.vid,
@@ -154,10 +175,16 @@ pub fn ports() -> Result<()> {
                 u.serial_number
                     .map(|s| format!("  serial {s}"))
                     .unwrap_or_default()
-            ),
-            serialport::SerialPortType::PciPort => println!("{}  pci", p.port_name),
-            serialport::SerialPortType::BluetoothPort => println!("{}  bluetooth", p.port_name),
-            serialport::SerialPortType::Unknown => println!("{}  unknown", p.port_name),
+            )?,
+            serialport::SerialPortType::PciPort => {
+                writeln!(std::io::stdout(), "{}  pci", p.port_name)?
+            }
+            serialport::SerialPortType::BluetoothPort => {
+                writeln!(std::io::stdout(), "{}  bluetooth", p.port_name)?
+            }
+            serialport::SerialPortType::Unknown => {
+                writeln!(std::io::stdout(), "{}  unknown", p.port_name)?
+            }
         }
     }
     Ok(())
