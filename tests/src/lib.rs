@@ -7,6 +7,7 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 pub mod reference;
+pub mod soundness;
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {

@@ -3,10 +3,9 @@
 //! error, and every form reported feasible passes the reference's f64 re-check (end point, every
 //! clearance, bounds), which shares no code with the core.
 
-use needle_e2e::reference::{evaluate_outcome, is_feasible};
-use planner_core::execute::nominal;
+use needle_e2e::soundness;
 use planner_core::model::scenario::{Obstacle, Workspace};
-use planner_core::{plan_scheduled, Scenario};
+use planner_core::Scenario;
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
@@ -99,38 +98,7 @@ proptest! {
     }
 }
 
-/// `plan` refuses exactly what validation refuses; what it plans passes the f64 re-check and the
-/// schedule's nominal check.
+/// The shared soundness check (`needle_e2e::soundness`), as a proptest failure.
 fn check_plan(s: &Scenario) -> Result<(), TestCaseError> {
-    let valid = s.validate();
-    match plan_scheduled(s) {
-        Err(e) => {
-            if let Err(v) = valid {
-                prop_assert_eq!(e, v, "plan refuses with the validation's error");
-            }
-        }
-        Ok(planned) => {
-            prop_assert!(
-                valid.is_ok(),
-                "an invalid scenario was planned: {:?}",
-                valid
-            );
-            // The report gives the insertion angles as f32 degrees, rounded by up to 5e-7 degrees
-            // each: a posture the optimiser put on the tilt bound may lie that far beyond it when
-            // the reported numbers are measured in f64 (found by this test: 10.0000005 degrees
-            // for a 10-degree bound), so the f64 check widens the cone by 1e-5 degrees.
-            let mut rounded = s.clone();
-            rounded.entry.max_tilt_deg += 1e-5;
-            for o in planned.report.forms.iter().filter(|o| o.feasible) {
-                let ev = evaluate_outcome(&rounded, o);
-                let ok = is_feasible(&rounded, &ev);
-                prop_assert!(ok, "{} fails the f64 check: {:?}", o.form, ev);
-            }
-            let best = planned.report.best().expect("a plan names its best form");
-            prop_assert!(best.feasible);
-            let schedule = planned.schedule.as_ref().expect("a plan has a schedule");
-            prop_assert!(nominal::check(s, schedule).feasible);
-        }
-    }
-    Ok(())
+    soundness::check_plan(s).map_err(TestCaseError::fail)
 }
