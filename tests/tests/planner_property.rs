@@ -102,3 +102,43 @@ proptest! {
 fn check_plan(s: &Scenario) -> Result<(), TestCaseError> {
     soundness::check_plan(s).map_err(TestCaseError::fail)
 }
+
+/// Found by the planner fuzz target: with a 0.4-degree tilt bound every form's posture lay
+/// 2e-5 degrees outside it, because cos of the bound rounds to within 6e-8 of 1 in f32. The
+/// optimiser now measures the cone by versines (docs/protocol.md, fuzzing).
+#[test]
+fn a_tilt_bound_of_a_fraction_of_a_degree_is_kept() {
+    use planner_core::model::scenario::{Driver, Entry, Needle, Target, Weights};
+    let mut s = Scenario::paper();
+    s.needle = Needle {
+        curvature_radius: 63.7,
+        max_arc_deg: 310.7255,
+        max_line_length: 130.48225,
+    };
+    s.entry = Entry {
+        position: [0.0, 2.319713e-15, -13.882353],
+        direction: [-0.69411767, -1.0, 2.319713e-15],
+        max_tilt_deg: 0.40512702,
+    };
+    s.target = Target {
+        position: [60.0, -41.251545, 139.41176],
+        tolerance: 0.8255779,
+    };
+    s.obstacles.clear();
+    s.weights = Weights {
+        length: 4.3137255,
+        risk: 8.627451,
+        penalty: 1725.4902,
+        control: 8.627451,
+    };
+    s.options.max_control_degree = 4;
+    s.options.workspace = Workspace::Space;
+    s.options.min_clearance = 4.3137255;
+    s.driver = Driver {
+        insert_speed: 28.247526,
+        rotate_speed: 1.0290048,
+        spin_rate: 19.373377,
+        max_twist_deg: 1557.2809,
+    };
+    soundness::check_plan(&s).unwrap();
+}

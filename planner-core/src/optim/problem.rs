@@ -7,7 +7,9 @@
 //! problem ([`Problem::plane`]), so bevel rotations are constants of 0 or pi.
 
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
-use crate::model::kinematics::{entry_basis, insertion_frame, rotate, PathGeometry, Screw, V3};
+use crate::model::kinematics::{
+    entry_basis, insertion_frame, rotate, Frame, PathGeometry, Screw, V3,
+};
 use crate::model::scenario::{Scenario, Workspace};
 use nalgebra::Matrix3;
 
@@ -45,14 +47,27 @@ pub struct Problem<'a> {
     pub min_clearance: f32,
     /// cos of the tilt bound.
     pub cos_max_tilt: f32,
+    /// 1 - cos of the tilt bound, as 2 sin²(bound / 2): exact in f32 even for a bound of a
+    /// fraction of a degree, where cos itself rounds to within 6e-8 of 1 (found by fuzzing: a
+    /// 0.4-degree bound was exceeded by 2e-5 degrees).
+    pub vers_max_tilt: f32,
     /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
     pub basis: Matrix3<f32>,
+    /// A continuation's fixed start (the tip in tissue): no insertion angles, and a bevel
+    /// variable before every arc, the first one included (the rotation done where the tip is).
+    pub start: Option<Frame>,
     entry: V3,
     target: V3,
 }
 
 pub(super) fn v3(a: [f32; 3]) -> V3 {
     V3::new(a[0], a[1], a[2])
+}
+
+/// 1 - cos(a), as 2 sin²(a / 2).
+fn versine(a: f32) -> f32 {
+    let h = crate::fmath::sin(0.5 * a);
+    2.0 * h * h
 }
 
 /// Relative shrink of the tilt and arc bounds (about 30 f32 ulps).
@@ -119,15 +134,56 @@ impl<'a> Problem<'a> {
             radius,
             min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
             cos_max_tilt: crate::fmath::cos(tilt),
+            vers_max_tilt: versine(tilt),
             basis: entry_basis(scenario.entry.direction),
+            start: None,
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
         }
     }
 
+    /// The problem of continuing along `form` from the tip frame `start` (always in 3-D): the
+    /// variables are the segments' lengths and the bevel rotation before every arc.
+    pub fn continuation(scenario: &'a Scenario, form: Form, start: Frame) -> Problem<'a> {
+        let from_entry = Problem::new(scenario, form, 0);
+        let mut p = from_entry.clone();
+        p.plane = false;
+        p.m_eq = 3;
+        p.fixed_bevels = [0.0; MAX_CONTROL_DEGREE];
+        p.start = Some(start);
+        p.basis = start.r;
+        p.lower = [0.0; MAX_VARS];
+        p.upper = [0.0; MAX_VARS];
+        for i in 0..form.len() {
+            p.upper[i] = from_entry.upper[from_entry.length_var(i)];
+        }
+        p.n = form.len();
+        for _ in 0..form.arc_count() {
+            // Bevel angles are periodic; the box only keeps them finite.
+            p.lower[p.n] = -4.0 * core::f32::consts::PI;
+            p.upper[p.n] = 4.0 * core::f32::consts::PI;
+            p.n += 1;
+        }
+        p
+    }
+
+    /// Number of insertion-angle variables: 2 in 3-D, 1 in the plane, 0 for a continuation.
+    fn angle_count(&self) -> usize {
+        match (self.start.is_some(), self.plane) {
+            (true, _) => 0,
+            (false, true) => 1,
+            (false, false) => 2,
+        }
+    }
+
+    /// Whether the tilt cone constrains this problem (3-D plans from the entry).
+    pub fn has_tilt(&self) -> bool {
+        !self.plane && self.start.is_none()
+    }
+
     /// Index of segment `i`'s length variable.
     pub fn length_var(&self, i: usize) -> usize {
-        i + if self.plane { 1 } else { 2 }
+        i + self.angle_count()
     }
 
     /// Index of the bevel variable before segment `i`, if it has one.
@@ -138,12 +194,16 @@ impl<'a> Problem<'a> {
         let arcs_before = (0..i)
             .filter(|&j| self.form.kind(j) == SegmentKind::Arc)
             .count();
-        Some(2 + self.form.len() + arcs_before)
+        Some(self.angle_count() + self.form.len() + arcs_before)
     }
 
     /// theta1, theta2 of `x`.
     pub fn angles(&self, x: &Vars) -> (f32, f32) {
-        (x[0], if self.plane { 0.0 } else { x[1] })
+        match self.angle_count() {
+            0 => (0.0, 0.0),
+            1 => (x[0], 0.0),
+            _ => (x[0], x[1]),
+        }
     }
 
     /// Bevel rotation before each segment.
@@ -166,15 +226,22 @@ impl<'a> Problem<'a> {
         l
     }
 
-    /// cos(tilt) - cos(max tilt): non-negative inside the tilt cone.
+    /// cos(tilt) - cos(max tilt): non-negative inside the tilt cone. Computed as
+    /// vers(max) - (vers(t1) + cos(t1) vers(t2)), the same quantity without the cancellation.
     pub fn tilt_margin(&self, x: &Vars) -> f32 {
+        if self.start.is_some() {
+            return 1.0;
+        }
         let (t1, t2) = self.angles(x);
-        crate::fmath::cos(t1) * crate::fmath::cos(t2) - self.cos_max_tilt
+        self.vers_max_tilt - (versine(t1) + crate::fmath::cos(t1) * versine(t2))
     }
 
     /// Gradient of [`Problem::tilt_margin`].
     pub fn tilt_margin_grad(&self, x: &Vars) -> Vars {
         let mut g = [0.0; MAX_VARS];
+        if self.start.is_some() {
+            return g;
+        }
         let (t1, t2) = self.angles(x);
         g[0] = -crate::fmath::sin(t1) * crate::fmath::cos(t2);
         if !self.plane {
@@ -186,7 +253,10 @@ impl<'a> Problem<'a> {
     /// The path of `x`.
     pub fn geometry(&self, x: &Vars) -> PathGeometry {
         let (t1, t2) = self.angles(x);
-        let first = insertion_frame(self.entry, &self.basis, t1, t2);
+        let first = match self.start {
+            Some(frame) => frame,
+            None => insertion_frame(self.entry, &self.basis, t1, t2),
+        };
         PathGeometry::build(
             self.form,
             first,
@@ -201,9 +271,11 @@ impl<'a> Problem<'a> {
         let mut s = [Screw::ZERO; MAX_VARS];
         let b1: V3 = self.basis.column(0).into();
         let b2: V3 = self.basis.column(1).into();
-        s[0] = Screw::about(b1, self.entry, V3::zeros());
-        if !self.plane {
-            s[1] = Screw::about(rotate(b2, b1, x[0]), self.entry, V3::zeros());
+        if self.start.is_none() {
+            s[0] = Screw::about(b1, self.entry, V3::zeros());
+            if !self.plane {
+                s[1] = Screw::about(rotate(b2, b1, x[0]), self.entry, V3::zeros());
+            }
         }
         for i in 0..self.form.len() {
             let ls = geo.length_screw(i);

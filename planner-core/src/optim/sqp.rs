@@ -161,6 +161,12 @@ fn lagrangian_grad(
 /// Runs the SQP from `x0` (restored onto the target first). `None` when the start cannot be made
 /// feasible.
 pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
+    solve_within(p, x0, MAX_ITERATIONS)
+}
+
+/// [`solve`] with at most `max_iterations` iterations (a replan's fixed budget).
+pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<LocalSolution> {
+    let max_iterations = max_iterations.min(MAX_ITERATIONS);
     let mut evals = 0u32;
     let mut x = *x0;
     if !restore(p, &mut x, &mut evals) {
@@ -182,7 +188,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     let mut iterations = 0;
     let mut step_norm = f32::INFINITY;
     let mut qp = Qp::new(n, h, cur_d.grad);
-    while iterations < MAX_ITERATIONS {
+    while iterations < max_iterations {
         iterations += 1;
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
         // can be dependent (a singular working set): the QP is then retried with fewer of them,
@@ -247,7 +253,11 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             .iter()
             .map(|&(o, row)| (o, sol.mult[row]))
             .collect();
-        let tilt_mult = if p.plane { 0.0 } else { sol.mult[tilt_row] };
+        let tilt_mult = if p.has_tilt() {
+            sol.mult[tilt_row]
+        } else {
+            0.0
+        };
         let g_old = lagrangian_grad(p, &cur.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
         p.derivatives_into(&next, &mut cur_d);
         let g_new = lagrangian_grad(p, &next.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
@@ -355,7 +365,7 @@ pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivativ
         qp.push_row(&unit, -(p.upper[k] - x[k]).min(TRUST));
     }
     let tilt = qp.m;
-    if !p.plane {
+    if p.has_tilt() {
         qp.push_row(&p.tilt_margin_grad(x), -p.tilt_margin(x));
     }
     tilt
