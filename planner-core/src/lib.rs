@@ -34,6 +34,7 @@ pub(crate) mod optim;
 pub mod report;
 pub(crate) mod search;
 pub mod session;
+pub mod steer;
 pub mod wire;
 
 pub use error::{Field, PlanError};

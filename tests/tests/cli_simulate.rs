@@ -185,3 +185,94 @@ fn bad_input_is_a_clear_error() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+#[test]
+fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
+    let run = |threads: &str| {
+        let out = needle()
+            .args(["simulate", &paper(), "--runs", "12", "--seed", "5"])
+            .args(["--closed-loop", "--compare-open-loop", "--json", "--detail"])
+            .args(["--threads", threads])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+    };
+    let text = run("1");
+    assert_eq!(
+        text,
+        run("2"),
+        "closed loop repeats bit for bit on any thread count"
+    );
+    let v: Value = serde_json::from_slice(&text).unwrap();
+    assert_eq!(v["closed_loop"], true);
+    let s = &v["summary"];
+    for k in [
+        "replans",
+        "replan_failures",
+        "stops",
+        "target_error",
+        "collisions",
+    ] {
+        assert!(s.get(k).is_some(), "summary lacks {k}");
+    }
+    assert_eq!(
+        keys(&s["stops"]),
+        ["bad_measurement", "no_safe_continuation", "tracking_lost"]
+    );
+    assert!(s["replans"].as_u64().unwrap() > 12);
+    assert_eq!(s["collisions"], 0);
+    let closed = s["target_error"]["mean"].as_f64().unwrap();
+    let open = v["open_loop_summary"]["target_error"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert!(closed < 0.5 * open, "closed {closed} mm, open {open} mm");
+    let runs = v["runs_detail"].as_array().unwrap();
+    assert_eq!(runs.len(), 12);
+    for r in runs {
+        assert!(r["stop_reason"].is_null(), "{}", r["stop_reason"]);
+        assert!(r["steering"]["readings"].as_u64().unwrap() > 50);
+    }
+}
+
+#[test]
+fn a_tracker_dropout_longer_than_the_gap_stops_with_tracking_lost() {
+    let v = needle_json(&[
+        "simulate",
+        &paper(),
+        "--runs",
+        "4",
+        "--closed-loop",
+        "--json",
+        "--detail",
+        "--fault",
+        "dropout_rate=1",
+        "--fault",
+        "dropout_mm=50",
+    ]);
+    assert_eq!(v["summary"]["stops"]["tracking_lost"], 4);
+    for r in v["runs_detail"].as_array().unwrap() {
+        assert_eq!(r["stop_reason"], "tracking_lost");
+        assert!(r["steering"]["no_fix"].as_u64().unwrap() >= 10);
+    }
+    let bad = needle()
+        .args([
+            "simulate",
+            &paper(),
+            "--closed-loop",
+            "--fault",
+            "outlier_rate=2",
+        ])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("outlier_rate = 2 is out of range (0 to 1)"),
+        "{err}"
+    );
+}

@@ -28,10 +28,12 @@
 //! assert!((world.tip().p - world.true_target()).norm() < 10.0);
 //! ```
 
+mod closed;
 mod perturbation;
 mod run;
 mod world;
 
+pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller, TrackerFaults};
 pub use perturbation::{PerturbError, Perturbation, KEYS};
 pub use run::{finish, open_loop, Planned, Run};
 pub use world::{

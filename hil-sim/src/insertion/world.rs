@@ -50,6 +50,8 @@ const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
 pub struct Measurement {
     /// Commanded insertion so far (mm): what the robot knows without the tracker.
     pub depth_mm: f32,
+    /// Commanded base rotation so far (degrees, accumulated): the robot's rotation stage.
+    pub base_deg: f32,
     /// Measured tip position (mm).
     pub position: [f32; 3],
     /// Measured unit heading.
@@ -254,6 +256,7 @@ impl World {
         let arr = |v: V3| [v.x, v.y, v.z];
         Measurement {
             depth_mm: self.commanded,
+            base_deg: self.base_deg,
             position: arr(self.tip.p + v3(noise)),
             heading: arr(f.e3()),
             bevel: arr(f.e2()),

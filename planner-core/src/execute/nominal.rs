@@ -2,7 +2,7 @@
 //! alone (not by the plan's numbers), so it re-checks what the driver will do: where the tip
 //! ends, how close it passes every obstacle, and whether the twist stays within the limit.
 
-use super::schedule::{Op, Schedule};
+use super::schedule::{Op, Schedule, Step};
 use crate::model::clearance::closest;
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{entry_basis, insertion_frame, Frame, V3};
@@ -27,11 +27,26 @@ pub fn posture_frame(scenario: &Scenario, schedule: &Schedule) -> Frame {
 pub fn execute(
     scenario: &Scenario,
     schedule: &Schedule,
-    mut segment: impl FnMut(&Frame, SegmentKind, f32),
+    segment: impl FnMut(&Frame, SegmentKind, f32),
 ) -> Frame {
     let radius = scenario.needle.curvature_radius;
-    let mut tip = posture_frame(scenario, schedule);
-    for step in &schedule.steps {
+    execute_from(
+        posture_frame(scenario, schedule),
+        &schedule.steps,
+        radius,
+        segment,
+    )
+}
+
+/// Executes `steps` on a nominal needle of arc radius `radius` whose tip starts at `tip`, as
+/// [`execute`] does.
+pub fn execute_from(
+    mut tip: Frame,
+    steps: &[Step],
+    radius: f32,
+    mut segment: impl FnMut(&Frame, SegmentKind, f32),
+) -> Frame {
+    for step in steps {
         let (kind, length) = match step.op {
             Op::Rotate { angle_deg } => {
                 tip = tip.rolled(angle_deg.to_radians());

@@ -11,7 +11,7 @@
 
 use crate::model::form::{SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::scenario::{Driver, Scenario};
-use crate::report::FormOutcome;
+use crate::report::{FormOutcome, SegmentPlan};
 use crate::PlanError;
 use core::f32::consts::PI;
 use serde::{Deserialize, Serialize};
@@ -181,9 +181,45 @@ pub fn schedule(scenario: &Scenario, outcome: &FormOutcome) -> Result<Schedule, 
         peak: 0.0,
         limit: d.max_twist_deg,
     };
+    let steps = segment_steps(d, &outcome.segments, false, &mut twist)?;
+    let duration_s = steps.iter().map(|s| s.duration_s).sum();
+    Ok(Schedule {
+        posture,
+        steps,
+        duration_s,
+        max_twist_deg: twist.peak,
+    })
+}
+
+/// The steps that continue from a tip in tissue along `segments` (each bevel the rotation
+/// before its segment, the first one included), with the shaft twisted `twist_deg` already.
+/// Returns the steps and the largest accumulated twist they reach.
+pub fn continuation_steps(
+    driver: &Driver,
+    segments: &[SegmentPlan],
+    twist_deg: f32,
+) -> Result<(Steps, f32), ScheduleError> {
+    driver.validate().map_err(ScheduleError::Driver)?;
+    let mut twist = Twist {
+        now: twist_deg,
+        peak: libm::fabsf(twist_deg),
+        limit: driver.max_twist_deg,
+    };
+    let steps = segment_steps(driver, segments, true, &mut twist)?;
+    Ok((steps, twist.peak))
+}
+
+/// A rotation (where the bevel turns; before the first segment only with `rotate_first`) and
+/// an insertion per segment.
+fn segment_steps(
+    d: &Driver,
+    segments: &[SegmentPlan],
+    rotate_first: bool,
+    twist: &mut Twist,
+) -> Result<Steps, ScheduleError> {
     let mut steps = Steps::new();
-    for (i, seg) in outcome.segments.iter().enumerate() {
-        if i > 0 && seg.bevel_deg != 0.0 {
+    for (i, seg) in segments.iter().enumerate() {
+        if (i > 0 || rotate_first) && seg.bevel_deg != 0.0 {
             let angle_deg = twist.rotation(seg.bevel_deg);
             let duration_s = libm::fabsf(angle_deg) / d.rotate_speed;
             push(&mut steps, Op::Rotate { angle_deg }, duration_s)?;
@@ -204,13 +240,7 @@ pub fn schedule(scenario: &Scenario, outcome: &FormOutcome) -> Result<Schedule, 
             }
         }
     }
-    let duration_s = steps.iter().map(|s| s.duration_s).sum();
-    Ok(Schedule {
-        posture,
-        steps,
-        duration_s,
-        max_twist_deg: twist.peak,
-    })
+    Ok(steps)
 }
 
 fn push(steps: &mut Steps, op: Op, duration_s: f32) -> Result<(), ScheduleError> {

@@ -2,13 +2,17 @@
 
 use super::output::{progress, title_of, write};
 use crate::analysis::parallel;
+use crate::analysis::simulate::closed::{simulate_closed, summarise_steering};
+use crate::analysis::simulate::json::closed_json;
 use crate::analysis::simulate::json::to_json;
 use crate::analysis::simulate::plot::simulate_svg;
+use crate::analysis::simulate::table::closed_table;
 use crate::analysis::simulate::table::{to_table, Header};
 use crate::analysis::simulate::{prepare, simulate, summarise};
 use crate::scenario::{load_scenario_shapes, restrict};
 use anyhow::{Context, Result};
-use hil_sim::insertion::Perturbation;
+use hil_sim::insertion::{Perturbation, TrackerFaults};
+use planner_core::steer::SteerConfig;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -41,6 +45,16 @@ pub struct SimulateArgs {
     /// Threads (default: every core).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Steer every run with the closed-loop controller (replanning from each tracker reading).
+    #[arg(long)]
+    pub closed_loop: bool,
+    /// With --closed-loop: a tracker fault, KEY=VALUE (repeatable): dropout_rate, dropout_mm,
+    /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
+    #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
+    pub fault: Vec<String>,
+    /// With --closed-loop: also run the same worlds open loop and print both side by side.
+    #[arg(long, requires = "closed_loop")]
+    pub compare_open_loop: bool,
 }
 
 /// Runs `needle simulate`.
@@ -62,30 +76,82 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
         progress(a.runs, &format!("simulate {form}"))
     };
     let threads = a.threads.unwrap_or_else(parallel::default_threads).max(1);
-    let runs = simulate(&scenario, &prepared, &p, a.runs, a.seed, threads, || {
-        bar.inc(1)
-    })?;
-    bar.finish_and_clear();
-    let summary = summarise(&runs);
     let file = title_of(&a.file);
-    if a.json {
-        let out = to_json(&p, &runs, &summary, a.detail);
-        writeln!(std::io::stdout(), "{}", serde_json::to_string(&out)?)?;
+    let header = Header {
+        file: &file,
+        form: &form,
+        runs: a.runs,
+        seed: a.seed,
+    };
+    let open_needed = !a.closed_loop || a.compare_open_loop;
+    let runs = if open_needed {
+        simulate(&scenario, &prepared, &p, a.runs, a.seed, threads, || {
+            bar.inc(1)
+        })?
     } else {
-        let header = Header {
-            file: &file,
-            form: &form,
-            runs: runs.len(),
-            seed: a.seed,
-        };
-        write!(std::io::stdout(), "{}", to_table(&header, &p, &summary))?;
+        Vec::new()
+    };
+    let closed = if a.closed_loop {
+        bar.reset();
+        bar.set_message(format!("closed loop {form}"));
+        let mut faults = TrackerFaults::default();
+        for kv in &a.fault {
+            faults
+                .apply(kv)
+                .map_err(|e| anyhow::anyhow!("--fault: {e}"))?;
+        }
+        let config = SteerConfig::DEFAULT;
+        let c = simulate_closed(
+            &scenario,
+            &prepared,
+            &p,
+            &faults,
+            &config,
+            a.runs,
+            a.seed,
+            threads,
+            || bar.inc(1),
+        )?;
+        Some(c)
+    } else {
+        None
+    };
+    bar.finish_and_clear();
+    let open_summary = (!runs.is_empty()).then(|| summarise(&runs));
+    let mut out = std::io::stdout();
+    match &closed {
+        None => {
+            let summary = open_summary.unwrap_or_else(|| summarise(&runs));
+            if a.json {
+                let j = to_json(&p, &runs, &summary, a.detail);
+                writeln!(out, "{}", serde_json::to_string(&j)?)?;
+            } else {
+                write!(out, "{}", to_table(&header, &p, &summary))?;
+            }
+        }
+        Some(c) => {
+            let plain: Vec<_> = c.iter().map(|r| r.run.clone()).collect();
+            let summary = summarise(&plain);
+            let steering = summarise_steering(c);
+            if a.json {
+                let j = closed_json(&p, c, &summary, &steering, open_summary.as_ref(), a.detail);
+                writeln!(out, "{}", serde_json::to_string(&j)?)?;
+            } else {
+                let t = closed_table(&header, &p, &summary, &steering, open_summary.as_ref());
+                write!(out, "{t}")?;
+            }
+        }
     }
     if let Some(out) = &a.plot {
+        let (shown, kind) = match &closed {
+            Some(c) => (c.iter().map(|r| r.run.clone()).collect(), "closed-loop"),
+            None => (runs.clone(), "open-loop"),
+        };
         let title = format!(
-            "{file}: {form}, {} simulated open-loop insertions",
-            runs.len()
+            "{file}: {form}, {} simulated {kind} insertions",
+            shown.len()
         );
-        let svg = simulate_svg(&scenario, &shapes, &prepared.outcome, &runs, &title);
+        let svg = simulate_svg(&scenario, &shapes, &prepared.outcome, &shown, &title);
         write(out, &svg)?;
     }
     Ok(())

@@ -1,16 +1,18 @@
 //! The typed JSON of `needle simulate --json`.
 
+use super::closed::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
-use hil_sim::insertion::{Perturbation, Run};
+use hil_sim::insertion::{ClosedRun, Perturbation, Run};
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// The whole output.
 #[derive(Serialize)]
 pub struct SimulateJson<'a> {
     /// Number of runs.
     pub runs: usize,
-    /// Always false: the schedule is executed open loop.
+    /// False: the schedule is executed open loop (see [`ClosedJson`] for the closed loop).
     pub closed_loop: bool,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
@@ -101,15 +103,107 @@ pub fn to_json<'a>(
         runs: runs.len(),
         closed_loop: false,
         perturbation: *p,
-        summary: SummaryJson {
-            target_error: error(&summary.target_error),
-            path_deviation: DeviationJson {
-                rms: summary.path_rms.rms,
-                max: summary.path_max.max,
-            },
-            collisions: summary.collisions,
-            min_clearance: summary.min_clearance,
-        },
+        summary: summary_json(summary),
         runs_detail: detail.then(|| runs.iter().map(RunJson::of).collect()),
+    }
+}
+
+/// The closed loop's summary: the open-loop figures of the steered runs and the steering's own.
+#[derive(Serialize)]
+pub struct ClosedSummaryJson {
+    /// Target error, path deviation, collisions and clearance of the steered runs.
+    #[serde(flatten)]
+    pub figures: SummaryJson,
+    /// New continuations commanded, over all runs.
+    pub replans: u64,
+    /// Replans that found nothing passing the check (the last continuation kept or a stop).
+    pub replan_failures: u64,
+    /// Runs stopped before the target, by reason (every reason listed).
+    pub stops: BTreeMap<&'static str, usize>,
+    /// Tracker fixes rejected as outliers.
+    pub outliers: u64,
+    /// Readings without a fix.
+    pub no_fix: u64,
+    /// Stale or repeated readings.
+    pub stale: u64,
+}
+
+/// `needle simulate --closed-loop --json`.
+#[derive(Serialize)]
+pub struct ClosedJson<'a> {
+    /// Number of runs.
+    pub runs: usize,
+    /// True.
+    pub closed_loop: bool,
+    /// The perturbation every run drew from.
+    pub perturbation: Perturbation,
+    /// Figures over the steered runs.
+    pub summary: ClosedSummaryJson,
+    /// With --compare-open-loop: the same worlds executed open loop.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub open_loop_summary: Option<SummaryJson>,
+    /// Per run, with `--detail`: as open loop, plus `stop_reason` (null when the target was
+    /// reached) and the controller's counters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runs_detail: Option<Vec<ClosedRunJson<'a>>>,
+}
+
+/// One steered run.
+#[derive(Serialize)]
+pub struct ClosedRunJson<'a> {
+    /// The open-loop record's keys.
+    #[serde(flatten)]
+    pub run: RunJson<'a>,
+    /// Why the controller stopped before the target (`no_safe_continuation`, `tracking_lost`,
+    /// `bad_measurement`), or null.
+    pub stop_reason: Option<&'static str>,
+    /// The controller's counters.
+    pub steering: planner_core::steer::SteerStats,
+}
+
+fn summary_json(summary: &Summary) -> SummaryJson {
+    SummaryJson {
+        target_error: error(&summary.target_error),
+        path_deviation: DeviationJson {
+            rms: summary.path_rms.rms,
+            max: summary.path_max.max,
+        },
+        collisions: summary.collisions,
+        min_clearance: summary.min_clearance,
+    }
+}
+
+/// The JSON of a closed-loop simulation.
+pub fn closed_json<'a>(
+    p: &Perturbation,
+    runs: &'a [ClosedRun],
+    summary: &Summary,
+    steering: &SteeringSummary,
+    open: Option<&Summary>,
+    detail: bool,
+) -> ClosedJson<'a> {
+    ClosedJson {
+        runs: runs.len(),
+        closed_loop: true,
+        perturbation: *p,
+        summary: ClosedSummaryJson {
+            figures: summary_json(summary),
+            replans: steering.replans,
+            replan_failures: steering.replan_failures,
+            stops: steering.stops.clone(),
+            outliers: steering.outliers,
+            no_fix: steering.no_fix,
+            stale: steering.stale,
+        },
+        open_loop_summary: open.map(summary_json),
+        runs_detail: detail.then(|| {
+            runs.iter()
+                .map(|r| ClosedRunJson {
+                    run: RunJson::of(&r.run),
+                    stop_reason: r.stop_reason.map(|s| s.name()),
+                    steering: r.stats,
+                })
+                .collect()
+        }),
     }
 }

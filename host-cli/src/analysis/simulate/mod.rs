@@ -2,6 +2,7 @@
 //! insertion simulator of `hil-sim`), in parallel, and the figures over the runs. Simulated
 //! figures, always called so.
 
+pub mod closed;
 pub mod json;
 pub mod plot;
 pub mod table;

@@ -1,5 +1,6 @@
 //! The table `needle simulate` prints.
 
+use super::closed::SteeringSummary;
 use super::{Spread, Summary};
 use hil_sim::insertion::{Perturbation, KEYS};
 use std::fmt::Write;
@@ -53,6 +54,115 @@ pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
         out,
         "collisions: {} of {} runs; smallest clearance {clear}",
         s.collisions, h.runs
+    );
+    let values: Vec<String> = KEYS
+        .iter()
+        .map(|k| format!("{k}={}", p.get(k).unwrap_or(f32::NAN)))
+        .collect();
+    let _ = writeln!(out, "perturbation: {}", values.join(" "));
+    out
+}
+
+fn pair(out: &mut String, what: &str, closed: &Spread, open: Option<&Spread>) {
+    let _ = write!(
+        out,
+        "{what:<28}{:>9.3}{:>9.3}{:>9.3}{:>9.3}",
+        closed.mean, closed.rms, closed.p95, closed.max
+    );
+    if let Some(o) = open {
+        let _ = write!(
+            out,
+            "   |{:>9.3}{:>9.3}{:>9.3}{:>9.3}",
+            o.mean, o.rms, o.p95, o.max
+        );
+    }
+    let _ = writeln!(out);
+}
+
+/// The table of a closed-loop simulation, with the open loop beside it when given.
+pub fn closed_table(
+    h: &Header<'_>,
+    p: &Perturbation,
+    s: &Summary,
+    steering: &SteeringSummary,
+    open: Option<&Summary>,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "simulated closed-loop insertions of {} in {}: {} runs, seeds {}..",
+        h.form, h.file, h.runs, h.seed
+    );
+    let _ = write!(
+        out,
+        "{:<28}{:>9}{:>9}{:>9}{:>9}",
+        "closed loop (mm)", "mean", "rms", "p95", "max"
+    );
+    if open.is_some() {
+        let _ = write!(
+            out,
+            "   |{:>9}{:>9}{:>9}{:>9}",
+            "open:mean", "rms", "p95", "max"
+        );
+    }
+    let _ = writeln!(out);
+    pair(
+        &mut out,
+        "target error",
+        &s.target_error,
+        open.map(|o| &o.target_error),
+    );
+    pair(
+        &mut out,
+        "path deviation, run RMS",
+        &s.path_rms,
+        open.map(|o| &o.path_rms),
+    );
+    pair(
+        &mut out,
+        "path deviation, run max",
+        &s.path_max,
+        open.map(|o| &o.path_max),
+    );
+    let clear = |c: f32| {
+        if c.is_finite() {
+            format!("{c:.3} mm")
+        } else {
+            "no obstacles".into()
+        }
+    };
+    let _ = write!(
+        out,
+        "collisions: {} of {} runs; smallest clearance {}",
+        s.collisions,
+        h.runs,
+        clear(s.min_clearance)
+    );
+    if let Some(o) = open {
+        let _ = write!(
+            out,
+            "   (open loop: {} collisions; smallest clearance {})",
+            o.collisions,
+            clear(o.min_clearance)
+        );
+    }
+    let _ = writeln!(out);
+    let stops: Vec<String> = steering
+        .stops
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect();
+    let _ = writeln!(
+        out,
+        "steering: {} replans, {} replan failures; stops before the target: {}",
+        steering.replans,
+        steering.replan_failures,
+        stops.join(", ")
+    );
+    let _ = writeln!(
+        out,
+        "tracker: {} outliers rejected, {} readings without a fix, {} stale or repeated",
+        steering.outliers, steering.no_fix, steering.stale
     );
     let values: Vec<String> = KEYS
         .iter()

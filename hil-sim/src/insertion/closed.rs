@@ -1,0 +1,287 @@
+//! One closed-loop run: the world executes the controller's steps, the tracker measures the tip
+//! after every piece, and each reading goes to the controller (in-process, or on a device over
+//! the wire), whose reply may replace the steps or stop the insertion. Tracker faults (dropouts,
+//! outliers, repeated and stale sequence numbers) are drawn from their own stream, so turning
+//! them on does not change the tissue or the tracker's noise.
+
+use super::run::{finish, Planned, Run};
+use super::world::{Measurement, World};
+use super::PerturbError;
+use crate::random::{seeded, Draw, SplitMix64};
+use planner_core::execute::schedule::{Schedule, Step};
+use planner_core::steer::{
+    Command, Pose, Reading, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
+    TipMeasurement,
+};
+use planner_core::Scenario;
+use serde::Serialize;
+use std::ops::ControlFlow;
+
+/// Offsets the fault stream from the physics stream of the same seed.
+const FAULT_STREAM: u64 = 0x4641_554C_5453_2121;
+
+/// What the controller on the other side of the readings is.
+pub trait Controller {
+    /// Why a reading could not be answered (a link error, for a device).
+    type Error;
+    /// Answers one reading.
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, Self::Error>;
+    /// The controller's counters.
+    fn stats(&mut self) -> Result<SteerStats, Self::Error>;
+}
+
+impl Controller for Steering {
+    type Error = std::convert::Infallible;
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, Self::Error> {
+        Ok(Steering::update(self, m))
+    }
+    fn stats(&mut self) -> Result<SteerStats, Self::Error> {
+        Ok(Steering::stats(self))
+    }
+}
+
+/// Tracker faults (all off by default): dropouts per millimetre, the others per reading.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct TrackerFaults {
+    /// Chance per millimetre of insertion that a dropout starts.
+    pub dropout_rate: f32,
+    /// Insertion a dropout lasts (mm).
+    pub dropout_mm: f32,
+    /// Chance that a reading's position is an outlier.
+    pub outlier_rate: f32,
+    /// How far an outlier is off (mm, in a random direction).
+    pub outlier_mm: f32,
+    /// Chance that a reading is sent twice (the same sequence number again).
+    pub repeat_rate: f32,
+    /// Chance that an old reading (an earlier sequence number) arrives after a reading.
+    pub stale_rate: f32,
+}
+
+impl TrackerFaults {
+    /// The keys of `--fault`, in the order of the fields.
+    pub const KEYS: [&'static str; 6] = [
+        "dropout_rate",
+        "dropout_mm",
+        "outlier_rate",
+        "outlier_mm",
+        "repeat_rate",
+        "stale_rate",
+    ];
+
+    /// Applies one `KEY=VALUE` (rates in [0, 1], lengths in [0, 1000] mm).
+    pub fn apply(&mut self, assignment: &str) -> Result<(), String> {
+        let (key, value) = assignment
+            .split_once('=')
+            .ok_or_else(|| format!("`{assignment}` is not KEY=VALUE"))?;
+        let (key, value) = (key.trim(), value.trim());
+        let v: f32 = value
+            .parse()
+            .map_err(|_| format!("{key}: `{value}` is not a number"))?;
+        let (slot, max) = match key {
+            "dropout_rate" => (&mut self.dropout_rate, 1.0),
+            "dropout_mm" => (&mut self.dropout_mm, 1000.0),
+            "outlier_rate" => (&mut self.outlier_rate, 1.0),
+            "outlier_mm" => (&mut self.outlier_mm, 1000.0),
+            "repeat_rate" => (&mut self.repeat_rate, 1.0),
+            "stale_rate" => (&mut self.stale_rate, 1.0),
+            _ => {
+                return Err(format!(
+                    "unknown fault `{key}` (one of {})",
+                    Self::KEYS.join(", ")
+                ))
+            }
+        };
+        if !(0.0..=max).contains(&v) {
+            return Err(format!("{key} = {v} is out of range (0 to {max})"));
+        }
+        *slot = v;
+        Ok(())
+    }
+}
+
+/// A closed-loop run's figures: the run, why it stopped and the controller's counters.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ClosedRun {
+    /// The run (target error, deviations, clearance, points).
+    #[serde(flatten)]
+    pub run: Run,
+    /// Why the controller stopped; `None` when it reached the target.
+    pub stop_reason: Option<StopReason>,
+    /// The controller's counters.
+    pub stats: SteerStats,
+    /// Path evaluations of each reading that replanned.
+    #[serde(skip)]
+    pub replan_evaluations: Vec<u32>,
+}
+
+/// Why a closed-loop run could not be made.
+#[derive(Debug)]
+pub enum ClosedLoopError<E> {
+    /// The perturbation is invalid.
+    Perturbation(PerturbError),
+    /// The controller could not start.
+    Start(SteerError),
+    /// The controller did not answer.
+    Controller(E),
+}
+
+impl<E: std::fmt::Display> std::fmt::Display for ClosedLoopError<E> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ClosedLoopError::Perturbation(e) => write!(f, "{e}"),
+            ClosedLoopError::Start(e) => write!(f, "steering cannot start: {e}"),
+            ClosedLoopError::Controller(e) => write!(f, "the controller did not answer: {e}"),
+        }
+    }
+}
+
+impl<E: std::fmt::Debug + std::fmt::Display> std::error::Error for ClosedLoopError<E> {}
+
+/// The tracker between the world and the controller: numbers readings and injects faults.
+struct Tracker {
+    faults: TrackerFaults,
+    g: SplitMix64,
+    seq: u32,
+    dropout_until: f32,
+    depth: f32,
+    previous: Option<TipMeasurement>,
+}
+
+impl Tracker {
+    /// The readings one world measurement turns into (the reading itself, and maybe a repeat or
+    /// an old one after it).
+    fn readings(&mut self, m: &Measurement) -> Vec<TipMeasurement> {
+        self.seq += 1;
+        let f = self.faults;
+        let mut pose = Some(Pose {
+            position: m.position,
+            heading: m.heading,
+            bevel: Some(m.bevel),
+        });
+        let pushed = (m.depth_mm - self.depth).max(0.0);
+        self.depth = m.depth_mm;
+        if f.dropout_rate > 0.0 && self.g.unit() < f64::from(f.dropout_rate * pushed) {
+            self.dropout_until = self.dropout_until.max(m.depth_mm + f.dropout_mm);
+        }
+        if m.depth_mm < self.dropout_until {
+            pose = None;
+        }
+        if let Some(p) = pose.as_mut() {
+            if f.outlier_rate > 0.0 && self.g.unit() < f64::from(f.outlier_rate) {
+                let dir = [0; 3].map(|_| self.g.normal(1.0) as f32);
+                let n = dir.iter().map(|v| v * v).sum::<f32>().sqrt().max(1e-6);
+                for (x, d) in p.position.iter_mut().zip(dir) {
+                    *x += d / n * f.outlier_mm;
+                }
+            }
+        }
+        let reading = TipMeasurement {
+            seq: self.seq,
+            depth_mm: m.depth_mm,
+            base_deg: m.base_deg,
+            pose,
+            target: pose.map(|_| m.target),
+        };
+        let mut out = vec![reading];
+        if f.repeat_rate > 0.0 && self.g.unit() < f64::from(f.repeat_rate) {
+            out.push(reading);
+        }
+        if let Some(old) = self.previous {
+            if f.stale_rate > 0.0 && self.g.unit() < f64::from(f.stale_rate) {
+                out.push(old);
+            }
+        }
+        self.previous = Some(reading);
+        out
+    }
+}
+
+/// Starts the in-process controller for `schedule`.
+pub fn in_process(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    config: &SteerConfig,
+) -> Result<Steering, SteerError> {
+    Steering::start(scenario, schedule, config)
+}
+
+/// Runs one closed-loop insertion in the world of `seed`, steered by `controller` (started on
+/// `schedule`).
+pub fn closed_loop<C: Controller>(
+    scenario: &Scenario,
+    planned: &Planned,
+    schedule: &Schedule,
+    p: &super::Perturbation,
+    faults: &TrackerFaults,
+    controller: &mut C,
+    seed: u64,
+) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
+    let mut world =
+        World::new(scenario, &schedule.posture, p, seed).map_err(ClosedLoopError::Perturbation)?;
+    let mut tracker = Tracker {
+        faults: *faults,
+        g: seeded(seed ^ FAULT_STREAM),
+        seq: 0,
+        dropout_until: f32::NEG_INFINITY,
+        depth: 0.0,
+        previous: None,
+    };
+    let mut steps: Vec<Step> = schedule.steps.to_vec();
+    let mut stop: Option<StopReason> = None;
+    let mut failure: Option<C::Error> = None;
+    let mut replan_evaluations = Vec::new();
+    // Each continuation has at most MAX_STEPS steps and each reading may replace it; the world
+    // ends the loop when the steps run out, the controller when it stops.
+    'continuations: loop {
+        let mut next: Option<Vec<Step>> = None;
+        for step in &steps {
+            world.execute(step, |m| {
+                for reading in tracker.readings(m) {
+                    let reply = match controller.update(&reading) {
+                        Ok(r) => r,
+                        Err(e) => {
+                            failure = Some(e);
+                            return ControlFlow::Break(());
+                        }
+                    };
+                    if matches!(reply.reading, Reading::Repeated | Reading::Stale) {
+                        continue; // a repeat or an old reading: nothing new to act on
+                    }
+                    if reply.replanned {
+                        replan_evaluations.push(reply.evaluations);
+                    }
+                    match reply.command {
+                        Command::Continue => {}
+                        Command::Replace(s) => next = Some(s.to_vec()),
+                        Command::Stop(reason) => stop = Some(reason),
+                    }
+                }
+                if stop.is_some() || next.is_some() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            });
+            if let Some(e) = failure.take() {
+                return Err(ClosedLoopError::Controller(e));
+            }
+            if stop.is_some() {
+                break 'continuations;
+            }
+            if next.is_some() {
+                break;
+            }
+        }
+        match next {
+            Some(s) => steps = s,
+            None => break,
+        }
+    }
+    let stats = controller.stats().map_err(ClosedLoopError::Controller)?;
+    Ok(ClosedRun {
+        run: finish(&world, planned, seed),
+        stop_reason: stop.filter(|r| *r != StopReason::TargetReached),
+        stats,
+        replan_evaluations,
+    })
+}

@@ -1,0 +1,406 @@
+//! The tip-state estimator: an error-state Kalman filter on the tip frame and the tissue's
+//! effective curvature, fed by the robot's own progress (insertion depth and base rotation, which
+//! drive the kinematic prediction) and the tracker's noisy poses; and a separate filter for the
+//! target as imaging sees it.
+//!
+//! Error state (7): position (world, mm), a small rotation in the tip's own axes (radians: about
+//! e1 and e2 tilts the heading, about e3 rolls the bevel), and the curvature factor (the tissue
+//! bends the needle with curvature factor / radius; Moreira & Misra 2015 estimate it online the
+//! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
+//! the same unicycle step the planner uses, so the filter and the planner share one model.
+
+use crate::model::form::SegmentKind;
+use crate::model::kinematics::{rotate, Frame, V3};
+use nalgebra::{Matrix3, SMatrix, SVector};
+
+/// Size of the error state.
+pub const STATES: usize = 7;
+type Cov = SMatrix<f32, STATES, STATES>;
+type ErrorState = SVector<f32, STATES>;
+
+/// Smallest and largest curvature factor the estimate may take.
+pub const FACTOR_RANGE: (f32, f32) = (0.2, 5.0);
+
+/// The estimator's noise model: what the controller assumes about tissue and tracker. These are
+/// the controller's own constants (from the same literature as the simulator's defaults, see
+/// docs/execution.md), never read from the simulated world.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NoiseModel {
+    /// Tracker position noise, per axis (mm).
+    pub position_mm: f32,
+    /// Tracker orientation noise, per axis (degrees).
+    pub orientation_deg: f32,
+    /// Prior spread of the entry point, per axis (mm).
+    pub entry_position_mm: f32,
+    /// Prior spread of the entry direction (degrees).
+    pub entry_direction_deg: f32,
+    /// Prior spread of the curvature factor (relative).
+    pub curvature_spread: f32,
+    /// Added spread of the curvature factor at each new arc (relative).
+    pub segment_curvature_spread: f32,
+    /// Play of the tip's roll behind the base, per mm of depth (degrees per mm).
+    pub torsion_lag_deg_per_mm: f32,
+    /// Heading random walk while spinning a line (degrees per square-root mm).
+    pub line_walk_deg: f32,
+    /// Advance error over 100 mm (mm).
+    pub insertion_error_mm: f32,
+    /// Prior spread of the target, per axis (mm).
+    pub target_mm: f32,
+}
+
+impl NoiseModel {
+    /// The defaults: the literature figures docs/execution.md cites for each.
+    pub const DEFAULT: NoiseModel = NoiseModel {
+        position_mm: 0.5,
+        orientation_deg: 0.5,
+        entry_position_mm: 0.2,
+        entry_direction_deg: 0.5,
+        curvature_spread: 0.03,
+        segment_curvature_spread: 0.01,
+        torsion_lag_deg_per_mm: 0.2,
+        line_walk_deg: 0.15,
+        insertion_error_mm: 0.3,
+        target_mm: 0.5,
+    };
+
+    /// Every figure finite and positive.
+    pub fn is_valid(&self) -> bool {
+        [
+            self.position_mm,
+            self.orientation_deg,
+            self.entry_position_mm,
+            self.entry_direction_deg,
+            self.curvature_spread,
+            self.segment_curvature_spread,
+            self.torsion_lag_deg_per_mm,
+            self.line_walk_deg,
+            self.insertion_error_mm,
+            self.target_mm,
+        ]
+        .iter()
+        .all(|v| v.is_finite() && *v > 0.0)
+    }
+}
+
+impl Default for NoiseModel {
+    fn default() -> Self {
+        NoiseModel::DEFAULT
+    }
+}
+
+/// Innovations beyond this many standard deviations (squared, summed over the axes) are
+/// outliers: about 5 sigma for three axes.
+const GATE: f32 = 25.0;
+
+/// The rotation matrix of the rotation vector `w` (Rodrigues).
+fn exp_so3(w: V3) -> Matrix3<f32> {
+    let angle = crate::fmath::sqrt(w.dot(&w));
+    if angle < 1e-9 {
+        return Matrix3::identity();
+    }
+    let axis = w / angle;
+    Matrix3::from_columns(&[
+        rotate(V3::x(), axis, angle),
+        rotate(V3::y(), axis, angle),
+        rotate(V3::z(), axis, angle),
+    ])
+}
+
+/// The small rotation vector taking `a` to `b`, in `a`'s axes.
+fn log_small(a: &Matrix3<f32>, b: &Matrix3<f32>) -> V3 {
+    let m = a.transpose() * b;
+    V3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    ) * 0.5
+}
+
+/// Gram–Schmidt on the columns, keeping the heading.
+fn orthonormal(r: &Matrix3<f32>) -> Option<Matrix3<f32>> {
+    let e3: V3 = r.column(2).into();
+    let e3 = e3.try_normalize(1e-6)?;
+    let b: V3 = r.column(1).into();
+    let e2 = (b - e3 * b.dot(&e3)).try_normalize(1e-6)?;
+    Some(Matrix3::from_columns(&[e2.cross(&e3), e2, e3]))
+}
+
+/// The estimated tip, curvature and target, with their uncertainty.
+#[derive(Clone, Debug)]
+pub struct Estimate {
+    /// Estimated tip frame.
+    pub tip: Frame,
+    /// Estimated curvature factor (the tissue bends arcs with radius = nominal / this).
+    pub factor: f32,
+    /// Estimated target.
+    pub target: V3,
+    cov: Cov,
+    target_var: f32,
+    noise: NoiseModel,
+}
+
+impl Estimate {
+    /// The prior at the start of an insertion: the planned posture with the model's spreads.
+    pub fn new(tip: Frame, target: V3, noise: &NoiseModel) -> Estimate {
+        let mut cov = Cov::zeros();
+        let dir = noise.entry_direction_deg.to_radians();
+        for k in 0..3 {
+            cov[(k, k)] = noise.entry_position_mm * noise.entry_position_mm;
+        }
+        cov[(3, 3)] = dir * dir;
+        cov[(4, 4)] = dir * dir;
+        cov[(5, 5)] = 1e-6;
+        cov[(6, 6)] = noise.curvature_spread * noise.curvature_spread;
+        Estimate {
+            tip,
+            factor: 1.0,
+            target,
+            cov,
+            target_var: noise.target_mm * noise.target_mm,
+            noise: *noise,
+        }
+    }
+
+    /// The frame `f` and factor `k` moved by the error state `d`.
+    fn plus(f: &Frame, k: f32, d: &ErrorState) -> (Frame, f32) {
+        let frame = Frame {
+            p: f.p + V3::new(d[0], d[1], d[2]),
+            r: f.r * exp_so3(V3::new(d[3], d[4], d[5])),
+        };
+        (frame, k + d[6])
+    }
+
+    /// The error state taking (`a`, `ka`) to (`b`, `kb`).
+    fn minus(a: &Frame, ka: f32, b: &Frame, kb: f32) -> ErrorState {
+        let dp = b.p - a.p;
+        let dw = log_small(&a.r, &b.r);
+        ErrorState::from_column_slice(&[dp.x, dp.y, dp.z, dw.x, dw.y, dw.z, kb - ka])
+    }
+
+    /// The base turned the shaft by `angle_deg` at inserted depth `depth_mm`: the tip is rolled
+    /// by as much, give or take the torsional play.
+    pub fn rotated(&mut self, angle_deg: f32, depth_mm: f32) {
+        self.tip = self.tip.rolled(angle_deg.to_radians());
+        let play = (self.noise.torsion_lag_deg_per_mm * depth_mm).to_radians();
+        self.cov[(5, 5)] += play * play;
+    }
+
+    /// A spun line settles the tip's roll anywhere within the play of the base.
+    pub fn spun(&mut self, depth_mm: f32) {
+        let play = (self.noise.torsion_lag_deg_per_mm * depth_mm).to_radians();
+        self.cov[(5, 5)] += play * play;
+    }
+
+    /// A new arc begins: its curvature may differ from the last one's.
+    pub fn new_arc(&mut self) {
+        let s = self.noise.segment_curvature_spread;
+        self.cov[(6, 6)] += s * s;
+    }
+
+    /// The robot pushed `length` mm along a segment of `kind` (arcs of nominal radius `radius`).
+    pub fn advanced(&mut self, kind: SegmentKind, length: f32, radius: f32) {
+        if !(length > 0.0) {
+            return;
+        }
+        let step = |f: &Frame, k: f32| {
+            let k = k.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
+            f.advanced(kind, length, radius / k)
+        };
+        let next = step(&self.tip, self.factor);
+        // The Jacobian by central differences of the same step.
+        let mut phi = Cov::zeros();
+        for j in 0..STATES {
+            let h = if j < 3 { 1e-2 } else { 1e-3 };
+            let mut d = ErrorState::zeros();
+            d[j] = h;
+            let (fp, kp) = Estimate::plus(&self.tip, self.factor, &d);
+            d[j] = -h;
+            let (fm, km) = Estimate::plus(&self.tip, self.factor, &d);
+            let up = Estimate::minus(&next, self.factor, &step(&fp, kp), kp);
+            let down = Estimate::minus(&next, self.factor, &step(&fm, km), km);
+            phi.set_column(j, &((up - down) / (2.0 * h)));
+        }
+        self.cov = phi * self.cov * phi.transpose();
+        // Process noise: the advance along the heading, the heading's walk on lines.
+        let along = next.e3();
+        let q_len = self.noise.insertion_error_mm * self.noise.insertion_error_mm / 100.0 * length;
+        for a in 0..3 {
+            for b in 0..3 {
+                self.cov[(a, b)] += q_len * along[a] * along[b];
+            }
+        }
+        if kind == SegmentKind::Line {
+            let walk = self.noise.line_walk_deg.to_radians();
+            self.cov[(3, 3)] += walk * walk * length;
+            self.cov[(4, 4)] += walk * walk * length;
+        }
+        self.tip = next;
+    }
+
+    /// Fuses a measured tip position; `false` (and no change) for an outlier.
+    pub fn fuse_position(&mut self, z: V3) -> bool {
+        let r = self.noise.position_mm * self.noise.position_mm;
+        let y = z - self.tip.p;
+        let mut h = SMatrix::<f32, 3, STATES>::zeros();
+        for k in 0..3 {
+            h[(k, k)] = 1.0;
+        }
+        self.fuse(&h, y, r)
+    }
+
+    /// Fuses a measured heading and (when the sensor gives it) bevel direction; `false` (and no
+    /// change) for an outlier or a degenerate measurement.
+    pub fn fuse_orientation(&mut self, heading: V3, bevel: Option<V3>) -> bool {
+        let r = self.noise.orientation_deg.to_radians();
+        let r = r * r;
+        match bevel {
+            Some(b) => {
+                let Some(m) = orthonormal(&Matrix3::from_columns(&[V3::zeros(), b, heading]))
+                else {
+                    return false;
+                };
+                let y = log_small(&self.tip.r, &m);
+                let mut h = SMatrix::<f32, 3, STATES>::zeros();
+                for k in 0..3 {
+                    h[(k, 3 + k)] = 1.0;
+                }
+                self.fuse(&h, y, r)
+            }
+            None => {
+                let Some(hd) = heading.try_normalize(1e-6) else {
+                    return false;
+                };
+                // In the tip's axes the heading tilts by (w2, -w1, 1).
+                let local = self.tip.r.transpose() * hd;
+                let y = V3::new(-local.y, local.x, 0.0);
+                let mut h = SMatrix::<f32, 3, STATES>::zeros();
+                h[(0, 3)] = 1.0;
+                h[(1, 4)] = 1.0;
+                // The third row observes nothing: a huge variance keeps it out.
+                self.fuse_rows(&h, y, [r, r, 1e12])
+            }
+        }
+    }
+
+    fn fuse(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: f32) -> bool {
+        self.fuse_rows(h, y, [r; 3])
+    }
+
+    /// The Kalman update of three rows `h` with innovation `y` and noise variances `r`.
+    fn fuse_rows(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: [f32; 3]) -> bool {
+        let mut s = h * self.cov * h.transpose();
+        for k in 0..3 {
+            s[(k, k)] += r[k];
+        }
+        let Some(s_inv) = s.try_inverse() else {
+            return false;
+        };
+        let d2 = (y.transpose() * s_inv * y)[(0, 0)];
+        if !d2.is_finite() || d2 > GATE {
+            return false;
+        }
+        let k = self.cov * h.transpose() * s_inv;
+        let d = k * y;
+        let (tip, factor) = Estimate::plus(&self.tip, self.factor, &d);
+        let Some(rotation) = orthonormal(&tip.r) else {
+            return false;
+        };
+        self.tip = Frame {
+            p: tip.p,
+            r: rotation,
+        };
+        self.factor = factor.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
+        let ikh = Cov::identity() - k * h;
+        // Joseph form keeps the covariance symmetric and positive in f32.
+        let mut rk = SMatrix::<f32, 3, 3>::zeros();
+        for i in 0..3 {
+            rk[(i, i)] = r[i];
+        }
+        let cov = ikh * self.cov * ikh.transpose() + k * rk * k.transpose();
+        self.cov = (cov + cov.transpose()) * 0.5;
+        true
+    }
+
+    /// Fuses a measured target position; `false` for an outlier.
+    pub fn fuse_target(&mut self, z: V3) -> bool {
+        let r = self.noise.position_mm * self.noise.position_mm;
+        let y = z - self.target;
+        let s = self.target_var + r;
+        if !(y.dot(&y) / s <= GATE) {
+            return false;
+        }
+        let k = self.target_var / s;
+        self.target += y * k;
+        self.target_var *= 1.0 - k;
+        true
+    }
+
+    /// Standard deviation of the position estimate (mm, the largest axis).
+    pub fn position_sd(&self) -> f32 {
+        let v = self.cov[(0, 0)].max(self.cov[(1, 1)]).max(self.cov[(2, 2)]);
+        crate::fmath::sqrt(v)
+    }
+
+    /// Standard deviation of the target estimate, per axis (mm).
+    pub fn target_sd(&self) -> f32 {
+        crate::fmath::sqrt(self.target_var)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::kinematics::{entry_basis, insertion_frame};
+
+    fn start() -> Frame {
+        let basis = entry_basis([0.0, 0.0, 1.0]);
+        insertion_frame(V3::zeros(), &basis, 0.1, -0.05)
+    }
+
+    #[test]
+    fn exact_readings_keep_the_estimate_on_the_path() {
+        let noise = NoiseModel::DEFAULT;
+        let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+        let mut truth = start();
+        for k in 0..60 {
+            let kind = if k < 30 {
+                SegmentKind::Arc
+            } else {
+                SegmentKind::Line
+            };
+            if k == 10 {
+                e.rotated(30.0, 10.0);
+                truth = truth.rolled(30f32.to_radians());
+                assert!(e.fuse_position(truth.p));
+                assert!(e.fuse_orientation(truth.e3(), Some(truth.e2())));
+            }
+            e.advanced(kind, 1.0, 63.7);
+            truth = truth.advanced(kind, 1.0, 63.7);
+            assert!(e.fuse_position(truth.p), "reading {k}");
+            assert!(
+                e.fuse_orientation(truth.e3(), Some(truth.e2())),
+                "reading {k}"
+            );
+            let miss = (e.tip.p - truth.p).norm();
+            assert!(miss < 1e-3, "reading {k}: {miss}");
+            assert!((e.factor - 1.0).abs() < 1e-3, "reading {k}: {}", e.factor);
+        }
+    }
+
+    #[test]
+    fn the_curvature_factor_is_learnt_from_an_arc() {
+        let noise = NoiseModel::DEFAULT;
+        let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+        let mut truth = start();
+        for _ in 0..40 {
+            e.advanced(SegmentKind::Arc, 1.0, 63.7);
+            truth = truth.advanced(SegmentKind::Arc, 1.0, 63.7 / 1.06);
+            assert!(e.fuse_position(truth.p));
+            assert!(e.fuse_orientation(truth.e3(), Some(truth.e2())));
+        }
+        assert!((e.factor - 1.06).abs() < 0.01, "{}", e.factor);
+        let miss = (e.tip.p - truth.p).norm();
+        assert!(miss < 0.05, "{miss}");
+    }
+}

@@ -1,0 +1,394 @@
+//! Re-planning the rest of the path from an estimated tip: the same objective and constraints as
+//! the global plan (target reached, every clearance above the scenario's floor, the segment
+//! bounds), solved by the same SQP from a fixed start, warm-started from what remains of the
+//! current continuation, then from a few short forms; and the check every continuation passes
+//! before it is commanded, which executes its motor steps on the nominal needle (not the
+//! optimiser's numbers).
+
+use crate::execute::nominal::execute_from;
+use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
+use crate::model::clearance::closest;
+use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
+use crate::model::kinematics::{Frame, V3};
+use crate::model::scenario::{Scenario, Workspace};
+use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::optim::sqp::solve_within;
+use crate::report::{SegmentPlan, Segments};
+
+/// Spacing of the sampled clearance check across a plane scenario's cylinders (mm).
+const PLANE_SPACING: f32 = 0.25;
+
+/// What executing a continuation's steps on the nominal needle from the estimated tip gives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction {
+    /// Distance from the predicted end to the estimated target (mm).
+    pub target_error: f32,
+    /// Smallest predicted clearance to any obstacle surface (mm; infinite without obstacles).
+    pub min_clearance: f32,
+    /// The predicted end frame.
+    pub end: Frame,
+}
+
+/// Executes `steps` from `tip` with arc radius `radius` and measures the end against `target` and
+/// the clearance to every obstacle, as the simulated tissue counts it: exact to spheres in 3-D;
+/// in a plane scenario to the circles' cylinders across the plane, from points `PLANE_SPACING`
+/// apart less half that spacing (no point of the path is farther from a sample).
+pub fn predict(
+    scenario: &Scenario,
+    tip: &Frame,
+    steps: &[Step],
+    radius: f32,
+    target: V3,
+) -> Prediction {
+    let plane = scenario.options.workspace == Workspace::PlaneYz;
+    let mut min_clearance = f32::INFINITY;
+    let end = execute_from(*tip, steps, radius, |start, kind, length| {
+        for ob in &scenario.obstacles {
+            let d = if plane {
+                let pieces = libm::ceilf(length / PLANE_SPACING).clamp(1.0, 4096.0) as u32;
+                let mut least = f32::INFINITY;
+                for k in 0..=pieces {
+                    let q = start.point_at(kind, length * k as f32 / pieces as f32, radius);
+                    let (dy, dz) = (q.y - ob.center[1], q.z - ob.center[2]);
+                    least = least.min(crate::fmath::sqrt(dy * dy + dz * dz));
+                }
+                least - ob.radius - 0.5 * length / pieces as f32
+            } else {
+                let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
+                closest(start, kind, length, radius, &c).distance - ob.radius
+            };
+            min_clearance = min_clearance.min(d);
+        }
+    });
+    let miss = end.p - target;
+    Prediction {
+        target_error: crate::fmath::sqrt(miss.dot(&miss)),
+        min_clearance,
+        end,
+    }
+}
+
+/// The segments the remaining `steps` drive: each rotation becomes the bevel before the next
+/// arc (a spun line keeps the bevel where it is).
+pub fn segments_of(steps: &[Step]) -> Option<Segments> {
+    let mut out = Segments::new();
+    let mut pending = 0.0f32;
+    for step in steps {
+        let (kind, length) = match step.op {
+            Op::Rotate { angle_deg } => {
+                pending += angle_deg;
+                continue;
+            }
+            Op::Insert { length_mm } => (SegmentKind::Arc, length_mm),
+            Op::InsertSpin { length_mm, .. } => (SegmentKind::Line, length_mm),
+        };
+        let bevel_deg = if kind == SegmentKind::Arc {
+            core::mem::take(&mut pending)
+        } else {
+            0.0
+        };
+        out.push(SegmentPlan {
+            kind,
+            length,
+            bevel_deg,
+        })
+        .ok()?;
+    }
+    Some(out)
+}
+
+/// The form of `segments` (`None` when it is empty, too long or has two lines in a row).
+pub fn form_of(segments: &[SegmentPlan]) -> Option<Form> {
+    let mut arcs = 0u8;
+    for (i, s) in segments.iter().enumerate().take(MAX_CONTROL_DEGREE) {
+        if s.kind == SegmentKind::Arc {
+            arcs |= 1 << i;
+        }
+    }
+    Form::new(segments.len(), arcs)
+}
+
+/// An angle in degrees wrapped to (-180, 180].
+fn wrapped_deg(rad: f32) -> f32 {
+    let mut d = rad.to_degrees() % 360.0;
+    if d > 180.0 {
+        d -= 360.0;
+    } else if d <= -180.0 {
+        d += 360.0;
+    }
+    d
+}
+
+/// What a replan needs: the scenario, the estimate, and the budget.
+pub struct ReplanInput<'a> {
+    /// The planning problem (obstacles, weights, bounds, driver).
+    pub scenario: &'a Scenario,
+    /// The estimated tip.
+    pub tip: Frame,
+    /// The estimated target.
+    pub target: V3,
+    /// Arc radius of the tissue as estimated (mm).
+    pub radius: f32,
+    /// The shaft's accumulated twist now (degrees).
+    pub twist_deg: f32,
+    /// SQP iterations per attempt.
+    pub iterations: u32,
+}
+
+/// A continuation that passed the check.
+#[derive(Clone, Debug)]
+pub struct Replanned {
+    /// The motor steps from the tip on.
+    pub steps: Steps,
+    /// Its check.
+    pub prediction: Prediction,
+    /// Evaluations spent (all attempts).
+    pub evaluations: u32,
+    /// SQP iterations spent (all attempts).
+    pub iterations: u32,
+}
+
+/// The sub-problem's scenario: the tip as entry, the estimated target and tissue, in 3-D. A
+/// plane scenario's circles become spheres centred in the tip's plane x = tip.x (the cylinder
+/// they stand for, where the path is); the check then measures the true cylinders.
+fn sub_scenario(input: &ReplanInput) -> Scenario {
+    let mut s = input.scenario.clone();
+    let t = input.target;
+    s.target.position = [t.x, t.y, t.z];
+    s.entry.position = [input.tip.p.x, input.tip.p.y, input.tip.p.z];
+    let h = input.tip.e3();
+    s.entry.direction = [h.x, h.y, h.z];
+    s.needle.curvature_radius = input.radius;
+    if s.options.workspace == Workspace::PlaneYz {
+        for o in s.obstacles.iter_mut() {
+            o.center[0] = input.tip.p.x;
+        }
+    }
+    s.options.workspace = Workspace::Space;
+    s
+}
+
+/// Solves `form` from the tip, from `start` (lengths in mm, bevels in degrees before each arc).
+fn attempt(
+    input: &ReplanInput,
+    sub: &Scenario,
+    form: Form,
+    start: &[SegmentPlan],
+    spent: &mut (u32, u32),
+) -> Option<Replanned> {
+    let p = Problem::continuation(sub, form, input.tip);
+    let mut x0: Vars = [0.0; MAX_VARS];
+    for (i, seg) in start.iter().enumerate().take(form.len()) {
+        let k = p.length_var(i);
+        x0[k] = (seg.length / input.radius).clamp(p.lower[k], p.upper[k]);
+        if let Some(b) = p.bevel_var(i) {
+            x0[b] = seg.bevel_deg.to_radians();
+        }
+    }
+    let sol = solve_within(&p, &x0, input.iterations);
+    let Some(sol) = sol else {
+        spent.0 += 1;
+        return None;
+    };
+    spent.0 += sol.evaluations;
+    spent.1 += sol.iterations;
+    let lengths = p.lengths(&sol.eval.x);
+    let bevels = p.bevels(&sol.eval.x);
+    let mut segments = Segments::new();
+    for i in 0..form.len() {
+        segments
+            .push(SegmentPlan {
+                kind: form.kind(i),
+                length: lengths[i],
+                bevel_deg: wrapped_deg(bevels[i]),
+            })
+            .ok()?;
+    }
+    let (steps, peak) =
+        continuation_steps(&input.scenario.driver, &segments, input.twist_deg).ok()?;
+    let prediction = predict(
+        input.scenario,
+        &input.tip,
+        &steps,
+        input.radius,
+        input.target,
+    );
+    let floor = input.scenario.options.min_clearance;
+    let sound = prediction.target_error <= input.scenario.target.tolerance
+        && prediction.min_clearance > floor
+        && peak <= input.scenario.driver.max_twist_deg;
+    sound.then_some(Replanned {
+        steps,
+        prediction,
+        evaluations: spent.0,
+        iterations: spent.1,
+    })
+}
+
+/// Variants of the remaining segments with one degree of freedom more, each the same path but
+/// for a millimetre: a short line before the first arc, a short line in the middle of the
+/// longest arc, or that arc split in two (a bevel rotation more between the halves); a lone line
+/// gets an arc aimed at the target before it. A line moves the rest of the path forward along
+/// the heading where it is inserted, which no length or bevel of a fixed-curvature arc can do.
+fn variants(remaining: &[SegmentPlan], aim_deg: f32) -> [Option<Segments>; 3] {
+    let line = SegmentPlan {
+        kind: SegmentKind::Line,
+        length: 1.0,
+        bevel_deg: 0.0,
+    };
+    let longest = (0..remaining.len())
+        .filter(|&i| remaining[i].kind == SegmentKind::Arc)
+        .max_by(|&a, &b| remaining[a].length.total_cmp(&remaining[b].length));
+    let Some(k) = longest else {
+        let mut out = Segments::new();
+        let arc = SegmentPlan {
+            kind: SegmentKind::Arc,
+            length: 1.0,
+            bevel_deg: aim_deg,
+        };
+        let ok = out.push(arc).is_ok() && remaining.iter().all(|s| out.push(*s).is_ok());
+        return [ok.then_some(out), None, None];
+    };
+    let build = |at: usize, middle: &[SegmentPlan]| -> Option<Segments> {
+        let mut out = Segments::new();
+        for (i, seg) in remaining.iter().enumerate() {
+            if i == at {
+                for m in middle {
+                    out.push(*m).ok()?;
+                }
+            } else {
+                out.push(*seg).ok()?;
+            }
+        }
+        Some(out)
+    };
+    let arc = remaining[k];
+    let half = SegmentPlan {
+        length: 0.5 * arc.length,
+        ..arc
+    };
+    let second = SegmentPlan {
+        bevel_deg: 0.0,
+        ..half
+    };
+    let first_arc = (0..remaining.len()).find(|&i| remaining[i].kind == SegmentKind::Arc);
+    let before = first_arc.and_then(|i| {
+        let preceded = i > 0 && remaining[i - 1].kind == SegmentKind::Line;
+        (!preceded)
+            .then(|| build(i, &[line, remaining[i]]))
+            .flatten()
+    });
+    [
+        before,
+        build(k, &[half, line, second]),
+        build(k, &[half, second]),
+    ]
+}
+
+/// Re-plans from the estimate: the remaining segments first (warm start), then the same with a
+/// degree of freedom more ([`variants`]), then the short forms RL, LR and RR aimed at the target.
+/// Returns the continuation (if any passes the check), the evaluations and the iterations spent.
+pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
+    let sub = sub_scenario(input);
+    let mut spent = (0u32, 0u32);
+    // Aim the bevel at the target, across the heading.
+    let local = input.tip.r.transpose() * (input.target - input.tip.p);
+    let bevel_deg = crate::fmath::atan2(-local.x, local.y).to_degrees();
+    let [a, b, c] = variants(remaining, bevel_deg);
+    let warm = [Segments::from_slice(remaining).ok(), a, b, c];
+    for start in warm.iter().flatten() {
+        let Some(form) = form_of(start) else {
+            continue;
+        };
+        if let Some(r) = attempt(input, &sub, form, start, &mut spent) {
+            return (Some(r), spent.0, spent.1);
+        }
+    }
+    let ahead = local.z.max(1.0);
+    let sideways = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
+    let turn = crate::fmath::atan2(2.0 * sideways, ahead);
+    let arc = (turn * input.radius).max(0.5);
+    let seg = |kind, length, bevel_deg| SegmentPlan {
+        kind,
+        length,
+        bevel_deg,
+    };
+    let line = (ahead - 0.5 * arc).max(0.5);
+    let short = [
+        (
+            "RL",
+            [
+                seg(SegmentKind::Arc, arc, bevel_deg),
+                seg(SegmentKind::Line, line, 0.0),
+            ],
+        ),
+        (
+            "LR",
+            [
+                seg(SegmentKind::Line, line, 0.0),
+                seg(SegmentKind::Arc, arc, bevel_deg),
+            ],
+        ),
+        (
+            "RR",
+            [
+                seg(SegmentKind::Arc, arc, bevel_deg),
+                seg(SegmentKind::Arc, arc, 180.0),
+            ],
+        ),
+    ];
+    for (word, start) in short {
+        let Some(form) = Form::parse(word) else {
+            continue;
+        };
+        if let Some(r) = attempt(input, &sub, form, &start, &mut spent) {
+            return (Some(r), spent.0, spent.1);
+        }
+    }
+    (None, spent.0, spent.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::execute::nominal::posture_frame;
+    use crate::execute::schedule::schedule;
+
+    #[test]
+    fn a_rolled_tip_is_steered_back_onto_the_target() {
+        let mut scenario = Scenario::paper();
+        scenario.options.workspace = Workspace::Space;
+        let best = crate::plan(&scenario).unwrap().best().unwrap().clone();
+        let s = schedule(&scenario, &best).unwrap();
+        let r = scenario.needle.curvature_radius;
+        let tip = posture_frame(&scenario, &s)
+            .advanced(SegmentKind::Arc, 12.0, r)
+            .rolled(3f32.to_radians());
+        let mut remaining = Segments::new();
+        for (i, seg) in best.segments.iter().enumerate() {
+            let mut seg = *seg;
+            seg.bevel_deg = 0.0;
+            if i == 0 {
+                seg.length -= 12.0;
+            }
+            remaining.push(seg).unwrap();
+        }
+        let t = scenario.target.position;
+        let input = ReplanInput {
+            scenario: &scenario,
+            tip,
+            target: V3::new(t[0], t[1], t[2]),
+            radius: r,
+            twist_deg: 0.0,
+            iterations: 10,
+        };
+        let (found, evaluations, iterations) = replan(&input, &remaining);
+        let found = found.expect("a continuation");
+        std::println!(
+            "{evaluations} evaluations, {iterations} iterations: {:?}",
+            found.steps
+        );
+        assert!(found.prediction.target_error <= scenario.target.tolerance);
+        assert!(matches!(found.steps[0].op, Op::Rotate { .. }));
+    }
+}

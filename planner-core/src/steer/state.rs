@@ -1,0 +1,376 @@
+//! The steering controller's state machine: readings in, commands out.
+
+use super::estimate::Estimate;
+use super::replan::{predict, replan, segments_of, Prediction, ReplanInput};
+use super::{
+    Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
+};
+use crate::execute::nominal::posture_frame;
+use crate::execute::schedule::{Op, Schedule, Step, Steps, MAX_STEPS};
+use crate::model::form::SegmentKind;
+use crate::model::kinematics::V3;
+use crate::model::scenario::Scenario;
+
+/// Progress within a step counts as done this close to its end (mm, degrees): the robot's
+/// counters add the pieces of a push in f32.
+const DONE_SLACK: f32 = 1e-3;
+
+/// The closed-loop controller of one insertion (see the [module](super) documentation).
+#[derive(Clone, Debug)]
+pub struct Steering {
+    scenario: Scenario,
+    config: SteerConfig,
+    estimate: Estimate,
+    steps: Steps,
+    end_depth: [f32; MAX_STEPS],
+    end_base: [f32; MAX_STEPS],
+    cursor: usize,
+    depth: f32,
+    base: f32,
+    last_fix_depth: f32,
+    last_kind: Option<SegmentKind>,
+    /// The last reading came during a spun line: its bevel direction is meaningless.
+    spinning: bool,
+    last_seq: Option<u32>,
+    last_reply: Option<SteerReply>,
+    stopped: Option<StopReason>,
+    stats: SteerStats,
+}
+
+fn finite3(a: &[f32; 3]) -> bool {
+    a.iter().all(|v| v.is_finite())
+}
+
+fn v3(a: [f32; 3]) -> V3 {
+    V3::new(a[0], a[1], a[2])
+}
+
+impl Steering {
+    /// Starts steering `schedule` (the plan's motor steps) in `scenario`, the needle set at the
+    /// schedule's posture with nothing inserted yet.
+    pub fn start(
+        scenario: &Scenario,
+        schedule: &Schedule,
+        config: &SteerConfig,
+    ) -> Result<Steering, SteerError> {
+        scenario.validate().map_err(SteerError::Scenario)?;
+        if !config.is_valid() {
+            return Err(SteerError::BadConfig);
+        }
+        if schedule.steps.is_empty() {
+            return Err(SteerError::EmptySchedule);
+        }
+        let tip = posture_frame(scenario, schedule);
+        let estimate = Estimate::new(tip, v3(scenario.target.position), &config.noise);
+        let mut s = Steering {
+            scenario: scenario.clone(),
+            config: *config,
+            estimate,
+            steps: Steps::new(),
+            end_depth: [0.0; MAX_STEPS],
+            end_base: [0.0; MAX_STEPS],
+            cursor: 0,
+            depth: 0.0,
+            base: 0.0,
+            last_fix_depth: 0.0,
+            last_kind: None,
+            spinning: false,
+            last_seq: None,
+            last_reply: None,
+            stopped: None,
+            stats: SteerStats::default(),
+        };
+        s.issue(&schedule.steps);
+        Ok(s)
+    }
+
+    /// The current estimate.
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// The steps being executed (from the last replan on).
+    pub fn steps(&self) -> &[Step] {
+        &self.steps
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> SteerStats {
+        self.stats
+    }
+
+    /// Why the controller stopped, once it has.
+    pub fn stopped(&self) -> Option<StopReason> {
+        self.stopped
+    }
+
+    /// Makes `steps` the continuation, starting at the robot's progress now.
+    fn issue(&mut self, steps: &[Step]) {
+        self.steps.clear();
+        let (mut depth, mut base) = (self.depth, self.base);
+        for (i, step) in steps.iter().take(MAX_STEPS).enumerate() {
+            match step.op {
+                Op::Rotate { angle_deg } => base += angle_deg,
+                Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => depth += length_mm,
+            }
+            self.end_depth[i] = depth;
+            self.end_base[i] = base;
+            // Cannot fail: at most MAX_STEPS are taken.
+            let _ = self.steps.push(*step);
+        }
+        self.cursor = 0;
+    }
+
+    fn done(&self, i: usize) -> bool {
+        let depth_done = self.depth >= self.end_depth[i] - DONE_SLACK;
+        match self.steps[i].op {
+            Op::Rotate { .. } => {
+                depth_done && libm::fabsf(self.base - self.end_base[i]) <= DONE_SLACK
+            }
+            _ => depth_done,
+        }
+    }
+
+    /// The kind of the insertion in progress: the first insertion not yet done.
+    fn kind_in_progress(&self) -> SegmentKind {
+        for step in self.steps.iter().skip(self.cursor) {
+            match step.op {
+                Op::Insert { .. } => return SegmentKind::Arc,
+                Op::InsertSpin { .. } => return SegmentKind::Line,
+                Op::Rotate { .. } => {}
+            }
+        }
+        self.last_kind.unwrap_or(SegmentKind::Line)
+    }
+
+    /// What remains of the continuation: the step in progress cut to what is left of it.
+    fn remaining(&self) -> Steps {
+        let mut out = Steps::new();
+        for i in self.cursor..self.steps.len() {
+            let mut step = self.steps[i];
+            if i == self.cursor {
+                let left = (self.end_depth[i] - self.depth).max(0.0);
+                match &mut step.op {
+                    Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
+                        *length_mm = left;
+                    }
+                    Op::Rotate { angle_deg } => *angle_deg = self.end_base[i] - self.base,
+                }
+            }
+            let _ = out.push(step);
+        }
+        out
+    }
+
+    fn radius(&self) -> f32 {
+        self.scenario.needle.curvature_radius / self.estimate.factor
+    }
+
+    fn predict(&self, steps: &[Step]) -> Prediction {
+        predict(
+            &self.scenario,
+            &self.estimate.tip,
+            steps,
+            self.radius(),
+            self.estimate.target,
+        )
+    }
+
+    fn reply(&mut self, seq: u32, command: Command, reading: Reading) -> SteerReply {
+        if let Command::Stop(reason) = command {
+            self.stopped = Some(reason);
+        }
+        let reply = SteerReply {
+            seq,
+            command,
+            reading,
+            replanned: false,
+            predicted_error_mm: f32::NAN,
+            predicted_clearance_mm: f32::NAN,
+            evaluations: 0,
+        };
+        self.last_reply = Some(reply.clone());
+        reply
+    }
+
+    /// Applies one reading and says what to do next. Never panics; a reading that cannot be
+    /// trusted is rejected or stops the insertion with the reason.
+    pub fn update(&mut self, m: &TipMeasurement) -> SteerReply {
+        match self.last_seq {
+            Some(last) if m.seq == last => {
+                self.stats.stale += 1;
+                if let Some(r) = &self.last_reply {
+                    let mut r = r.clone();
+                    r.reading = Reading::Repeated;
+                    return r;
+                }
+            }
+            Some(last) if m.seq < last => {
+                self.stats.stale += 1;
+                let command = match self.stopped {
+                    Some(reason) => Command::Stop(reason),
+                    None => Command::Continue,
+                };
+                let mut r = SteerReply {
+                    seq: m.seq,
+                    command,
+                    reading: Reading::Stale,
+                    replanned: false,
+                    predicted_error_mm: f32::NAN,
+                    predicted_clearance_mm: f32::NAN,
+                    evaluations: 0,
+                };
+                if let Some(last) = &self.last_reply {
+                    r.predicted_error_mm = last.predicted_error_mm;
+                    r.predicted_clearance_mm = last.predicted_clearance_mm;
+                }
+                return r;
+            }
+            _ => {}
+        }
+        self.last_seq = Some(m.seq);
+        if let Some(reason) = self.stopped {
+            return self.reply(m.seq, Command::Stop(reason), Reading::NoFix);
+        }
+        self.stats.readings += 1;
+        let progress_ok = m.depth_mm.is_finite()
+            && m.base_deg.is_finite()
+            && m.depth_mm >= self.depth - DONE_SLACK;
+        if !progress_ok {
+            let stop = Command::Stop(StopReason::BadMeasurement);
+            return self.reply(m.seq, stop, Reading::Outlier);
+        }
+        self.predict_motion(m);
+        let reading = self.fuse(m);
+        if self.depth - self.last_fix_depth > self.config.max_gap_mm {
+            return self.reply(m.seq, Command::Stop(StopReason::TrackingLost), reading);
+        }
+        if self.cursor >= self.steps.len() {
+            return self.reply(m.seq, Command::Stop(StopReason::TargetReached), reading);
+        }
+        self.steer(m.seq, reading)
+    }
+
+    /// The kinematic prediction from the robot's progress since the last reading.
+    fn predict_motion(&mut self, m: &TipMeasurement) {
+        let turned = m.base_deg - self.base;
+        if turned != 0.0 {
+            self.estimate.rotated(turned, m.depth_mm);
+        }
+        let pushed = m.depth_mm - self.depth;
+        self.spinning = false;
+        if pushed > 0.0 {
+            let kind = self.kind_in_progress();
+            if kind == SegmentKind::Arc && self.last_kind != Some(SegmentKind::Arc) {
+                self.estimate.new_arc();
+            }
+            let radius = self.scenario.needle.curvature_radius;
+            self.estimate.advanced(kind, pushed, radius);
+            self.last_kind = Some(kind);
+            self.spinning = kind == SegmentKind::Line;
+        }
+        self.depth = self.depth.max(m.depth_mm);
+        self.base = m.base_deg;
+        while self.cursor < self.steps.len() && self.done(self.cursor) {
+            if matches!(self.steps[self.cursor].op, Op::InsertSpin { .. }) {
+                self.estimate.spun(self.depth);
+            }
+            self.cursor += 1;
+        }
+    }
+
+    /// Fuses the reading's fix and target.
+    fn fuse(&mut self, m: &TipMeasurement) -> Reading {
+        if let Some(t) = m.target.filter(finite3) {
+            let _ = self.estimate.fuse_target(v3(t));
+        }
+        let Some(pose) = m.pose else {
+            self.stats.no_fix += 1;
+            return Reading::NoFix;
+        };
+        // A spinning shaft has no bevel direction to measure; only its heading counts.
+        let bevel = pose.bevel.filter(|b| finite3(b) && !self.spinning).map(v3);
+        let usable = finite3(&pose.position) && finite3(&pose.heading);
+        if usable && self.estimate.fuse_position(v3(pose.position)) {
+            let _ = self.estimate.fuse_orientation(v3(pose.heading), bevel);
+            self.last_fix_depth = self.depth;
+            Reading::Fused
+        } else {
+            self.stats.outliers += 1;
+            Reading::Outlier
+        }
+    }
+
+    /// Predicts the rest of the continuation and re-plans it when it misses or is unsafe.
+    fn steer(&mut self, seq: u32, reading: Reading) -> SteerReply {
+        let remaining = self.remaining();
+        let now = self.predict(&remaining);
+        let floor = self.scenario.options.min_clearance;
+        let unsafe_now = !(now.min_clearance > floor);
+        let mut reply = SteerReply {
+            seq,
+            command: Command::Continue,
+            reading,
+            replanned: false,
+            predicted_error_mm: now.target_error,
+            predicted_clearance_mm: now.min_clearance,
+            evaluations: 0,
+        };
+        if now.target_error > self.config.replan_error_mm || unsafe_now {
+            let input = ReplanInput {
+                scenario: &self.scenario,
+                tip: self.estimate.tip,
+                target: self.estimate.target,
+                radius: self.radius(),
+                twist_deg: self.base,
+                iterations: self.config.iterations,
+            };
+            let segments = segments_of(&remaining).unwrap_or_default();
+            let (found, evaluations, _) = replan(&input, &segments);
+            reply.evaluations = evaluations;
+            match found.or_else(|| self.trimmed(&remaining, &now)) {
+                Some(r) => {
+                    self.stats.replans += 1;
+                    reply.replanned = true;
+                    reply.predicted_error_mm = r.prediction.target_error;
+                    reply.predicted_clearance_mm = r.prediction.min_clearance;
+                    self.issue(&r.steps);
+                    reply.command = Command::Replace(r.steps);
+                }
+                None => {
+                    self.stats.replan_failures += 1;
+                    if unsafe_now {
+                        reply.command = Command::Stop(StopReason::NoSafeContinuation);
+                        self.stopped = Some(StopReason::NoSafeContinuation);
+                    }
+                }
+            }
+        }
+        self.last_reply = Some(reply.clone());
+        reply
+    }
+
+    /// Near the end, where no replan can bend the path any more: the last push lengthened or
+    /// shortened so the predicted end comes abreast of the target, if that passes the check and
+    /// comes closer.
+    fn trimmed(&self, remaining: &Steps, now: &Prediction) -> Option<super::replan::Replanned> {
+        let mut steps = remaining.clone();
+        let last = steps.last_mut()?;
+        let along = (self.estimate.target - now.end.p).dot(&now.end.e3());
+        match &mut last.op {
+            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
+                *length_mm = (*length_mm + along).max(0.0);
+            }
+            Op::Rotate { .. } => return None,
+        }
+        let prediction = self.predict(&steps);
+        let floor = self.scenario.options.min_clearance;
+        let better = prediction.target_error + 1e-4 < now.target_error;
+        (better && prediction.min_clearance > floor).then_some(super::replan::Replanned {
+            steps,
+            prediction,
+            evaluations: 0,
+            iterations: 0,
+        })
+    }
+}
