@@ -78,6 +78,8 @@ pub struct BoardFigures {
     pub instructions: Vec<(String, u64)>,
     /// Scenario name and whether the device's plan equals the host's bit for bit.
     pub matches_host: Vec<(String, bool)>,
+    /// Scenario name and the instructions per steering reading of one closed-loop insertion.
+    pub replan_instructions: Vec<(String, crate::replan_bench::ReplanFigures)>,
 }
 
 impl BoardFigures {
@@ -100,6 +102,19 @@ impl BoardFigures {
             "peak_stack_bytes": self.peak_stack_bytes,
             "instructions": map(&self.instructions),
             "matches_host": same,
+            "replan_instructions": self
+                .replan_instructions
+                .iter()
+                .map(|(k, r)| {
+                    let v = json!({
+                        "max": r.max,
+                        "median": r.median,
+                        "readings": r.readings,
+                        "replans": r.replans,
+                    });
+                    (k.clone(), v)
+                })
+                .collect::<Map<_, _>>(),
         })
     }
 
@@ -218,6 +233,12 @@ pub fn measure(
         instructions.push((s.name.clone(), counts[before]));
         matches_host.push((s.name.clone(), encoded(&on_device)? == host));
     }
+    let mut replan_instructions = Vec::new();
+    for s in scenarios {
+        let r = crate::replan_bench::measure(&mut device, &qemu, &s.scenario)
+            .with_context(|| format!("steering {} on {}", s.name, board.name))?;
+        replan_instructions.push((s.name.clone(), r));
+    }
     drop(device);
     let len = footprint
         .stack_top
@@ -235,6 +256,7 @@ pub fn measure(
         peak_stack_bytes: elf::peak_stack(&memory, STACK_PAINT),
         instructions,
         matches_host,
+        replan_instructions,
     })
 }
 
@@ -273,6 +295,19 @@ pub fn table(figures: &[BoardFigures]) -> String {
                 if *same { "equals" } else { "DIFFERS from" }
             ));
         }
+        for (name, r) in &f.replan_instructions {
+            s.push_str(&format!(
+                "  {name} steered: {} readings, {} replans; per reading max {} (≈ {:.1} ms at \
+                 168 MHz), median {} instructions (≈ {:.0} readings/s at 168 MHz, one \
+                 instruction per cycle)\n",
+                r.readings,
+                r.replans,
+                r.max,
+                r.max as f64 / 168e3,
+                r.median,
+                168e6 / r.median.max(1) as f64
+            ));
+        }
     }
     s
 }
@@ -283,7 +318,8 @@ pub struct Args {
     /// Scenario files (default: examples/paper.toml and examples/space.toml).
     files: Vec<PathBuf>,
     /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
-    /// `peak_stack_bytes`, `instructions`, `matches_host`), as a JSON array.
+    /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`), as a JSON
+    /// array.
     #[arg(long)]
     json: bool,
     /// Fail when a board leaves a "must" budget (flash < 256 KiB, RAM < 64 KiB, paper plan

@@ -25,3 +25,4 @@ pub mod elf;
 pub mod firmware_artifacts;
 pub mod profile;
 pub mod qemu;
+pub mod replan_bench;

@@ -6,7 +6,8 @@
 //! result. Received bytes reach the service a whole frame at a time ([`Inbox`]), so the poll that
 //! decodes the last chunk always finds all of it, however the line split it in time. The report marker fires when planning stops. Upload and fetch frames, idle polls and
 //! the time bytes take on the line are not counted; frames the host sends *during* planning
-//! (status queries) would be, so `needle device-bench` sends none. Reply bytes are staged in
+//! (status queries) would be, so `needle device-bench` sends none. Each poll that answers a
+//! steering reading is a region reported on its own: the instructions of one reading. Reply bytes are staged in
 //! [`Outbox`] and sent to the link outside the regions.
 
 use crate::link::Link;
@@ -85,13 +86,16 @@ pub fn run(
         let n = link.read(&mut rx);
         inbox.take(&rx[..n], service);
         let was_planning = service.is_planning();
+        let readings = service.stats().steer_readings;
         marker::begin();
         service.poll(&mut |bytes| outbox.push(bytes, link));
         let planning = service.is_planning();
-        if was_planning || planning {
+        // A steering reading (one estimate update and at most one replan) is its own region.
+        let steered = service.stats().steer_readings != readings;
+        if was_planning || planning || steered {
             marker::end();
         }
-        if was_planning && !planning {
+        if (was_planning && !planning) || steered {
             marker::report();
         }
         outbox.flush(link);

@@ -95,6 +95,8 @@ pub struct Client<T: Transport> {
     pub(crate) max_chunk: usize,
     /// A `Finished` seen for (request id, result length, result CRC).
     pub(crate) finished: Option<(u16, u16, u32)>,
+    /// The request id of the last plan fetched whole (steering runs under it).
+    pub(crate) last_plan: Option<u16>,
     /// A plan request this client gave up on, which the device may still be running.
     pub(crate) abandoned: Option<u16>,
     /// While the device plans: wait this long in silence, asking nothing (see
@@ -130,6 +132,7 @@ impl<T: Transport> Client<T> {
             chunk: MAX_CHUNK,
             max_chunk: MAX_CHUNK,
             finished: None,
+            last_plan: None,
             abandoned: None,
             quiet_planning: None,
             rtt: None,
@@ -142,14 +145,18 @@ impl<T: Transport> Client<T> {
 
     /// Ends everything this client does from now on within `limit` (a whole `needle send`, the
     /// hello included), on top of the per-operation `deadline`.
+    /// A limit too far to represent (`Duration::MAX`) means none.
     pub fn set_deadline(&mut self, limit: Duration) {
-        self.until = Some((Instant::now() + limit, limit));
+        self.until = Instant::now().checked_add(limit).map(|end| (end, limit));
     }
 
     /// Starts the clock of one operation.
     pub(crate) fn begin(&mut self) {
         self.op_start = Instant::now();
-        self.op_end = self.config.deadline.map(|d| (Instant::now() + d, d));
+        self.op_end = self
+            .config
+            .deadline
+            .and_then(|d| Some((Instant::now().checked_add(d)?, d)));
     }
 
     /// The earliest deadline in force, with its length.

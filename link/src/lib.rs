@@ -19,6 +19,7 @@ mod exchange;
 mod fetch;
 mod hello;
 mod plan;
+mod steer;
 pub mod transport;
 mod upload;
 

@@ -51,7 +51,10 @@ impl<T: Transport> Client<T> {
         });
         match result {
             Ok(bytes) => {
-                postcard::from_bytes::<PlanResult>(&bytes).map_err(|_| LinkError::CorruptResult)
+                let result = postcard::from_bytes::<PlanResult>(&bytes)
+                    .map_err(|_| LinkError::CorruptResult)?;
+                self.last_plan = Some(id);
+                Ok(result)
             }
             Err(e) => {
                 // Leave the device free for the next request: one cancel, without waiting (the

@@ -202,7 +202,8 @@ fn a_repeated_reading_is_answered_again_and_an_old_one_ignored() {
     let mut old = m;
     old.seq -= 1;
     assert_eq!(b.steering.update(&old).reading, Reading::Stale);
-    assert_eq!(b.steering.stats().stale, 2);
+    assert_eq!(b.steering.stats().stale, 1);
+    assert_eq!(b.steering.stats().repeated, 1);
     assert_eq!(b.steering.stats().readings, 1);
 }
 

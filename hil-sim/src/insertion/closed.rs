@@ -10,7 +10,7 @@ use super::PerturbError;
 use crate::random::{seeded, Draw, SplitMix64};
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::steer::{
-    Command, Pose, Reading, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
+    Command, Pose, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
     TipMeasurement,
 };
 use planner_core::Scenario;
@@ -37,6 +37,17 @@ impl Controller for Steering {
     }
     fn stats(&mut self) -> Result<SteerStats, Self::Error> {
         Ok(Steering::stats(self))
+    }
+}
+
+/// A device's controller behind the link (hil-sim or the firmware).
+impl<T: needle_link::Transport> Controller for needle_link::Client<T> {
+    type Error = needle_link::LinkError;
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, Self::Error> {
+        self.steer(m)
+    }
+    fn stats(&mut self) -> Result<SteerStats, Self::Error> {
+        self.steer_status().map(|(stats, _)| stats)
     }
 }
 
@@ -148,9 +159,9 @@ struct Tracker {
 }
 
 impl Tracker {
-    /// The readings one world measurement turns into (the reading itself, and maybe a repeat or
-    /// an old one after it).
-    fn readings(&mut self, m: &Measurement) -> Vec<TipMeasurement> {
+    /// The readings one world measurement turns into: the reading itself, and maybe a repeat or
+    /// an old one after it (marked `true`: the tracker's fault, whose answers are not acted on).
+    fn readings(&mut self, m: &Measurement) -> Vec<(TipMeasurement, bool)> {
         self.seq += 1;
         let f = self.faults;
         let mut pose = Some(Pose {
@@ -182,13 +193,13 @@ impl Tracker {
             pose,
             target: pose.map(|_| m.target),
         };
-        let mut out = vec![reading];
+        let mut out = vec![(reading, false)];
         if f.repeat_rate > 0.0 && self.g.unit() < f64::from(f.repeat_rate) {
-            out.push(reading);
+            out.push((reading, true));
         }
         if let Some(old) = self.previous {
             if f.stale_rate > 0.0 && self.g.unit() < f64::from(f.stale_rate) {
-                out.push(old);
+                out.push((old, true));
             }
         }
         self.previous = Some(reading);
@@ -236,7 +247,7 @@ pub fn closed_loop<C: Controller>(
         let mut next: Option<Vec<Step>> = None;
         for step in &steps {
             world.execute(step, |m| {
-                for reading in tracker.readings(m) {
+                for (reading, injected) in tracker.readings(m) {
                     let reply = match controller.update(&reading) {
                         Ok(r) => r,
                         Err(e) => {
@@ -244,8 +255,8 @@ pub fn closed_loop<C: Controller>(
                             return ControlFlow::Break(());
                         }
                     };
-                    if matches!(reply.reading, Reading::Repeated | Reading::Stale) {
-                        continue; // a repeat or an old reading: nothing new to act on
+                    if injected {
+                        continue; // the tracker's repeat or old reading: nothing new to act on
                     }
                     if reply.replanned {
                         replan_evaluations.push(reply.evaluations);

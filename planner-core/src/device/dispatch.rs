@@ -88,6 +88,9 @@ impl Core {
                 }
                 self.send(id, ReplyBody::Cancelled { was_active }, tx);
             }
+            RequestBody::SteerStart { config } => self.steer_start(id, &config, tx),
+            RequestBody::SteerReading(m) => self.steer_reading(id, &m, tx),
+            RequestBody::SteerStatus => self.steer_status(id, tx),
         }
     }
 

@@ -14,6 +14,7 @@
 mod dispatch;
 mod job;
 pub mod receive;
+mod steer;
 mod upload;
 
 use crate::wire::{
@@ -62,6 +63,8 @@ pub struct DeviceStats {
     pub overruns: u32,
     /// Plans run to the end.
     pub plans: u32,
+    /// Steering readings answered.
+    pub steer_readings: u32,
 }
 
 /// Everything but the frame decoder, so a decoded payload (borrowed from the decoder) can be
@@ -73,6 +76,8 @@ struct Core {
     result: [u8; MAX_PLAN_RESULT],
     scratch: [u8; ENCODE_SCRATCH],
     stats: DeviceStats,
+    /// The insertion being steered, under the id of the plan it executes.
+    steering: Option<(u16, crate::steer::Steering)>,
 }
 
 /// The device's request handler.
@@ -113,7 +118,9 @@ impl DeviceService {
                     undecodable: 0,
                     overruns: 0,
                     plans: 0,
+                    steer_readings: 0,
                 },
+                steering: None,
             },
         }
     }
@@ -184,6 +191,7 @@ mod tests {
     fn the_service_fits_its_ram_budget() {
         let size = core::mem::size_of::<DeviceService>();
         std::println!("DeviceService: {size} bytes");
-        assert!(size <= 8 * 1024, "{size} bytes");
+        // 8 KiB before steering; the controller's state (scenario, estimate, steps) is 1.4 KiB.
+        assert!(size <= 9 * 1024, "{size} bytes");
     }
 }

@@ -177,8 +177,12 @@ pub struct SteerStats {
     pub no_fix: u32,
     /// Fixes rejected as outliers.
     pub outliers: u32,
-    /// Stale or repeated sequence numbers.
+    /// Readings older than the last one (ignored).
     pub stale: u32,
+    /// Readings with the last one's sequence number, answered again without applying them: a
+    /// tracker's duplicate, or the link sending a reading again after its answer was lost or
+    /// late (so the count depends on the transport, not only on the insertion).
+    pub repeated: u32,
 }
 
 /// How the controller works: the estimator's noise model, when to re-plan and its budget.

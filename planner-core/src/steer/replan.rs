@@ -133,6 +133,8 @@ pub struct ReplanInput<'a> {
     pub twist_deg: f32,
     /// SQP iterations per attempt.
     pub iterations: u32,
+    /// Clearance kept on top of the scenario's floor for the estimate's uncertainty (mm).
+    pub margin: f32,
 }
 
 /// A continuation that passed the check.
@@ -165,6 +167,7 @@ fn sub_scenario(input: &ReplanInput) -> Scenario {
         }
     }
     s.options.workspace = Workspace::Space;
+    s.options.min_clearance += input.margin;
     s
 }
 
@@ -213,7 +216,7 @@ fn attempt(
         input.radius,
         input.target,
     );
-    let floor = input.scenario.options.min_clearance;
+    let floor = input.scenario.options.min_clearance + input.margin;
     let sound = prediction.target_error <= input.scenario.target.tolerance
         && prediction.min_clearance > floor
         && peak <= input.scenario.driver.max_twist_deg;
@@ -381,6 +384,7 @@ mod tests {
             radius: r,
             twist_deg: 0.0,
             iterations: 10,
+            margin: 0.3,
         };
         let (found, evaluations, iterations) = replan(&input, &remaining);
         let found = found.expect("a continuation");

@@ -198,7 +198,7 @@ impl Steering {
     pub fn update(&mut self, m: &TipMeasurement) -> SteerReply {
         match self.last_seq {
             Some(last) if m.seq == last => {
-                self.stats.stale += 1;
+                self.stats.repeated += 1;
                 if let Some(r) = &self.last_reply {
                     let mut r = r.clone();
                     r.reading = Reading::Repeated;
@@ -305,8 +305,12 @@ impl Steering {
     fn steer(&mut self, seq: u32, reading: Reading) -> SteerReply {
         let remaining = self.remaining();
         let now = self.predict(&remaining);
+        // Two standard deviations of the tip's position estimate are kept clear on top of the
+        // scenario's floor: the true tip may be that far from where the estimate has it.
         let floor = self.scenario.options.min_clearance;
+        let margin = 2.0 * self.estimate.position_sd();
         let unsafe_now = !(now.min_clearance > floor);
+        let too_close = !(now.min_clearance > floor + margin);
         let mut reply = SteerReply {
             seq,
             command: Command::Continue,
@@ -316,7 +320,7 @@ impl Steering {
             predicted_clearance_mm: now.min_clearance,
             evaluations: 0,
         };
-        if now.target_error > self.config.replan_error_mm || unsafe_now {
+        if now.target_error > self.config.replan_error_mm || too_close {
             let input = ReplanInput {
                 scenario: &self.scenario,
                 tip: self.estimate.tip,
@@ -324,6 +328,7 @@ impl Steering {
                 radius: self.radius(),
                 twist_deg: self.base,
                 iterations: self.config.iterations,
+                margin,
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);
@@ -364,7 +369,7 @@ impl Steering {
             Op::Rotate { .. } => return None,
         }
         let prediction = self.predict(&steps);
-        let floor = self.scenario.options.min_clearance;
+        let floor = self.scenario.options.min_clearance + 2.0 * self.estimate.position_sd();
         let better = prediction.target_error + 1e-4 < now.target_error;
         (better && prediction.min_clearance > floor).then_some(super::replan::Replanned {
             steps,

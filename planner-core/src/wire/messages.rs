@@ -7,16 +7,18 @@
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
+use crate::execute::schedule::Steps;
 use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::Form;
 use crate::model::scenario::{
     Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,
 };
+use crate::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
 use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 2;
+pub const PROTOCOL_VERSION: u8 = 3;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -90,6 +92,17 @@ pub enum RequestBody {
     },
     /// Stop request `id` (uploading or planning). Always answered by [`ReplyBody::Cancelled`].
     Cancel,
+    /// Start steering the finished plan `id` (its best form's schedule) with these settings:
+    /// answered by [`ReplyBody::SteerStarted`]. A repeat restarts steering from the entry.
+    SteerStart {
+        /// The controller's settings.
+        config: SteerConfig,
+    },
+    /// A tracker reading with the robot's progress: answered by [`ReplyBody::Steer`]. A reading
+    /// whose sequence number was the last one's is answered again and not applied twice.
+    SteerReading(TipMeasurement),
+    /// The controller's counters and stop: answered by [`ReplyBody::SteerStatus`].
+    SteerStatus,
 }
 
 /// Device to host.
@@ -150,6 +163,20 @@ pub enum ReplyBody {
         /// Whether an upload or a plan was stopped.
         was_active: bool,
     },
+    /// Steering has started: the steps to execute first (the plan's schedule).
+    SteerStarted {
+        /// The motor steps.
+        steps: Steps,
+    },
+    /// The controller's answer to a reading.
+    Steer(SteerReply),
+    /// The controller's counters, and why it stopped once it has.
+    SteerStatus {
+        /// Counters over the insertion.
+        stats: SteerStats,
+        /// The stop, if any.
+        stopped: Option<StopReason>,
+    },
     /// A protocol fault.
     Fault(Fault),
 }
@@ -200,6 +227,12 @@ pub enum Fault {
     BadScenario,
     /// The complete plan request does not match the CRC-32 its chunks announced.
     BadUploadCrc,
+    /// Steering was asked for, but request `id` has no finished plan with a schedule.
+    NoPlan,
+    /// A reading arrived, but steering has not been started.
+    NotSteering,
+    /// The steering settings are not finite and positive.
+    BadSteerConfig,
     /// The device hit an internal error (a firmware bug) and restarts; every request in progress
     /// is lost. Sent with id 0 by the firmware's panic handler.
     Internal,
@@ -288,7 +321,10 @@ impl MaxSize for RequestBody {
         u32::MAX_SIZE,
         max(
             2 * u16::MAX_SIZE + u32::MAX_SIZE + Chunk::MAX_SIZE,
-            2 * u16::MAX_SIZE,
+            max(
+                2 * u16::MAX_SIZE,
+                max(SteerConfig::MAX_SIZE, TipMeasurement::MAX_SIZE),
+            ),
         ),
     );
 }
@@ -318,7 +354,13 @@ impl MaxSize for ReplyBody {
             2 * u16::MAX_SIZE + Chunk::MAX_SIZE,
             max(
                 u16::MAX_SIZE + u32::MAX_SIZE,
-                max(2 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
+                max(
+                    max(2 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
+                    max(
+                        max(Steps::MAX_SIZE, SteerReply::MAX_SIZE),
+                        SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE,
+                    ),
+                ),
             ),
         ),
     );

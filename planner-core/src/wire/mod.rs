@@ -11,6 +11,7 @@ pub mod frame;
 pub mod max_size;
 pub mod messages;
 pub mod obstacles;
+pub mod steer;
 
 pub use frame::{
     encode_frame, encode_payload, frame_crc, Directed, EncodeError, FrameDecoder, FrameError,

@@ -3,12 +3,14 @@
 use super::output::{progress, title_of, write};
 use crate::analysis::parallel;
 use crate::analysis::simulate::closed::{simulate_closed, summarise_steering};
+use crate::analysis::simulate::device::simulate_on_device;
 use crate::analysis::simulate::json::closed_json;
 use crate::analysis::simulate::json::to_json;
 use crate::analysis::simulate::plot::simulate_svg;
 use crate::analysis::simulate::table::closed_table;
 use crate::analysis::simulate::table::{to_table, Header};
 use crate::analysis::simulate::{prepare, simulate, summarise};
+use crate::device::commands::LinkArgs;
 use crate::scenario::{load_scenario_shapes, restrict};
 use anyhow::{Context, Result};
 use hil_sim::insertion::{Perturbation, TrackerFaults};
@@ -52,6 +54,19 @@ pub struct SimulateArgs {
     /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
     #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
     pub fault: Vec<String>,
+    /// With --closed-loop: steer on the device at this TCP address (hil-sim --tcp, QEMU)
+    /// instead of in-process; the host runs the simulated robot, tissue and tracker.
+    #[arg(long, requires = "closed_loop", conflicts_with = "port")]
+    pub tcp: Option<String>,
+    /// With --closed-loop: steer on the device at this serial port instead of in-process.
+    #[arg(long, requires = "closed_loop")]
+    pub port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// Seconds of silence allowed per exchange with the device.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
     /// With --closed-loop: also run the same worlds open loop and print both side by side.
     #[arg(long, requires = "closed_loop")]
     pub compare_open_loop: bool,
@@ -101,17 +116,39 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("--fault: {e}"))?;
         }
         let config = SteerConfig::DEFAULT;
-        let c = simulate_closed(
-            &scenario,
-            &prepared,
-            &p,
-            &faults,
-            &config,
-            a.runs,
-            a.seed,
-            threads,
-            || bar.inc(1),
-        )?;
+        let c = if a.tcp.is_some() || a.port.is_some() {
+            let link = LinkArgs {
+                port: a.port.clone(),
+                baud: a.baud,
+                tcp: a.tcp.clone(),
+                timeout: a.timeout,
+                retries: needle_link::ClientConfig::DEFAULT.retries,
+                deadline: 120.0,
+            };
+            simulate_on_device(
+                &scenario,
+                &prepared,
+                &p,
+                &faults,
+                &config,
+                a.runs,
+                a.seed,
+                &link,
+                || bar.inc(1),
+            )?
+        } else {
+            simulate_closed(
+                &scenario,
+                &prepared,
+                &p,
+                &faults,
+                &config,
+                a.runs,
+                a.seed,
+                threads,
+                || bar.inc(1),
+            )?
+        };
         Some(c)
     } else {
         None

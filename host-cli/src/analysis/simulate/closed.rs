@@ -63,8 +63,10 @@ pub struct SteeringSummary {
     pub outliers: u64,
     /// Readings without a fix.
     pub no_fix: u64,
-    /// Stale or repeated readings.
+    /// Readings older than the last (ignored).
     pub stale: u64,
+    /// Readings answered again (a tracker's duplicate, or a link retry).
+    pub repeated: u64,
 }
 
 /// The steering figures of `runs`.
@@ -83,6 +85,7 @@ pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
         s.outliers += u64::from(r.stats.outliers);
         s.no_fix += u64::from(r.stats.no_fix);
         s.stale += u64::from(r.stats.stale);
+        s.repeated += u64::from(r.stats.repeated);
         if let Some(reason) = r.stop_reason {
             *s.stops.entry(reason.name()).or_default() += 1;
         }

@@ -124,8 +124,11 @@ pub struct ClosedSummaryJson {
     pub outliers: u64,
     /// Readings without a fix.
     pub no_fix: u64,
-    /// Stale or repeated readings.
+    /// Readings older than the last one (ignored).
     pub stale: u64,
+    /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
+    /// reading again; the one count that depends on the transport.
+    pub repeated: u64,
 }
 
 /// `needle simulate --closed-loop --json`.
@@ -194,6 +197,7 @@ pub fn closed_json<'a>(
             outliers: steering.outliers,
             no_fix: steering.no_fix,
             stale: steering.stale,
+            repeated: steering.repeated,
         },
         open_loop_summary: open.map(summary_json),
         runs_detail: detail.then(|| {

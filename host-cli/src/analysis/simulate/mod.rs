@@ -3,6 +3,7 @@
 //! figures, always called so.
 
 pub mod closed;
+pub mod device;
 pub mod json;
 pub mod plot;
 pub mod table;

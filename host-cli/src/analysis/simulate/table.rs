@@ -161,8 +161,8 @@ pub fn closed_table(
     );
     let _ = writeln!(
         out,
-        "tracker: {} outliers rejected, {} readings without a fix, {} stale or repeated",
-        steering.outliers, steering.no_fix, steering.stale
+        "tracker: {} outliers rejected, {} readings without a fix, {} stale, {} repeated",
+        steering.outliers, steering.no_fix, steering.stale, steering.repeated
     );
     let values: Vec<String> = KEYS
         .iter()

@@ -1,0 +1,71 @@
+//! The instructions of closed-loop steering on the device: one simulated insertion (default
+//! perturbation, seed 1) steered by the firmware in QEMU, each reading counted on its own by the
+//! instruction-count plugin (the firmware brackets every poll that answers a reading).
+
+use crate::qemu::Qemu;
+use anyhow::{anyhow, bail, Context, Result};
+use hil_sim::insertion::{closed_loop, Perturbation, Planned, TrackerFaults};
+use needle_link::{Client, Transport};
+use planner_core::steer::SteerConfig;
+use planner_core::Scenario;
+
+/// Instructions per reading over one closed-loop insertion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReplanFigures {
+    /// Readings answered (link resends included).
+    pub readings: usize,
+    /// Readings that replanned.
+    pub replans: u32,
+    /// Most instructions of one reading.
+    pub max: u64,
+    /// Median instructions of a reading.
+    pub median: u64,
+}
+
+/// Steers one insertion of `scenario` on `device` and returns the per-reading figures.
+pub fn measure<T: Transport>(
+    device: &mut Client<T>,
+    qemu: &Qemu,
+    scenario: &Scenario,
+) -> Result<ReplanFigures> {
+    let planned = planner_core::plan_scheduled(scenario)
+        .map_err(|e| anyhow!("the host cannot plan the scenario: {e}"))?;
+    let schedule = planned
+        .schedule
+        .clone()
+        .map_err(|e| anyhow!("no schedule: {e}"))?;
+    let best = planned
+        .report
+        .best()
+        .context("the plan names no best form")?
+        .clone();
+    device
+        .plan(scenario, &mut |_| {})
+        .context("planning")?
+        .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
+    device
+        .steer_start(&SteerConfig::DEFAULT)
+        .context("starting to steer")?;
+    let before = qemu.counts()?.len();
+    let run = closed_loop(
+        scenario,
+        &Planned::of(scenario, &best),
+        &schedule,
+        &Perturbation::default(),
+        &TrackerFaults::default(),
+        device,
+        1,
+    )
+    .map_err(|e| anyhow!("{e}"))?;
+    let mut counts: Vec<u64> = qemu.counts()?.split_off(before);
+    if counts.is_empty() {
+        bail!("the plugin counted no steering reading");
+    }
+    counts.sort_unstable();
+    Ok(ReplanFigures {
+        readings: counts.len(),
+        replans: run.stats.replans,
+        max: counts[counts.len() - 1],
+        median: counts[counts.len() / 2],
+    })
+}

@@ -1,0 +1,84 @@
+//! Steering on the device: the finished plan's schedule handed to the closed-loop controller,
+//! one reading per request. Readings are answered at once (each is one bounded replan), so the
+//! service stays responsive between them.
+
+use super::job::Job;
+use super::Core;
+use crate::steer::{SteerConfig, SteerError, Steering, TipMeasurement};
+use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
+
+impl Core {
+    /// Starts steering plan `id` with `config`.
+    pub(super) fn steer_start(&mut self, id: u16, config: &SteerConfig, tx: &mut dyn FnMut(&[u8])) {
+        match self.steering_for(id, config) {
+            Ok(steering) => {
+                let steps = steering.steps().iter().copied().collect();
+                self.steering = Some((id, steering));
+                self.send(id, ReplyBody::SteerStarted { steps }, tx);
+            }
+            Err(fault) => self.fault(id, fault, tx),
+        }
+    }
+
+    /// The controller for plan `id`, from the stored request and result. Never inlined: the
+    /// decoded result lives on this frame only.
+    #[inline(never)]
+    fn steering_for(&self, id: u16, config: &SteerConfig) -> Result<Steering, Fault> {
+        let Job::Finished {
+            id: plan,
+            total_bytes,
+            len,
+            ..
+        } = self.job
+        else {
+            return Err(Fault::NoPlan);
+        };
+        if plan != id {
+            return Err(Fault::NoPlan);
+        }
+        let request = self
+            .upload
+            .get(..usize::from(total_bytes))
+            .ok_or(Fault::NoPlan)?;
+        let result = self.result.get(..usize::from(len)).ok_or(Fault::NoPlan)?;
+        let scenario = postcard::from_bytes::<PlanRequest>(request)
+            .ok()
+            .and_then(|r| r.into_scenario().ok())
+            .ok_or(Fault::NoPlan)?;
+        let planned = postcard::from_bytes::<PlanResult>(result)
+            .ok()
+            .and_then(|r| r.ok())
+            .ok_or(Fault::NoPlan)?;
+        let schedule = planned.schedule.map_err(|_| Fault::NoPlan)?;
+        Steering::start(&scenario, &schedule, config).map_err(|e| match e {
+            SteerError::BadConfig => Fault::BadSteerConfig,
+            _ => Fault::NoPlan,
+        })
+    }
+
+    /// Answers one reading of the insertion steered under plan `id`.
+    pub(super) fn steer_reading(&mut self, id: u16, m: &TipMeasurement, tx: &mut dyn FnMut(&[u8])) {
+        match &mut self.steering {
+            Some((plan, steering)) if *plan == id => {
+                let reply = steering.update(m);
+                self.stats.steer_readings = self.stats.steer_readings.wrapping_add(1);
+                self.send(id, ReplyBody::Steer(reply), tx);
+            }
+            _ => self.fault(id, Fault::NotSteering, tx),
+        }
+    }
+
+    /// The counters and stop of the insertion steered under plan `id`.
+    pub(super) fn steer_status(&mut self, id: u16, tx: &mut dyn FnMut(&[u8])) {
+        match &self.steering {
+            Some((plan, steering)) if *plan == id => {
+                let body = ReplyBody::SteerStatus {
+                    stats: steering.stats(),
+                    stopped: steering.stopped(),
+                };
+                self.send(id, body, tx);
+            }
+            _ => self.fault(id, Fault::NotSteering, tx),
+        }
+    }
+}
