@@ -63,6 +63,24 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
                 "{name}: {scenario} differs from the host plan"
             );
         }
+        // Issue 10: every steering reading of one closed-loop insertion per scenario, counted.
+        for (scenario, r) in b["replan_instructions"]
+            .as_object()
+            .expect("replan_instructions")
+        {
+            let (max, median) = (r["max"].as_u64().unwrap(), r["median"].as_u64().unwrap());
+            let readings = r["readings"].as_u64().unwrap();
+            println!("{name}: {scenario} steered, {readings} readings, max {max}, median {median}");
+            assert!(
+                readings > 50 && median > 1_000,
+                "{name}: implausible steering counts"
+            );
+            if max >= 5_000_000 {
+                over.push(format!(
+                    "{name}: a {scenario} steering reading took {max} instructions"
+                ));
+            }
+        }
         if flash >= FLASH_BUDGET {
             over.push(format!("{name}: flash {flash} B >= {FLASH_BUDGET} B"));
         }
