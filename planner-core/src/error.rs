@@ -68,9 +68,9 @@ impl Field {
             | Field::WeightControl
             | Field::MinClearance => "0 or more",
             Field::ControlDegree => "1 to the planner's largest degree",
-            Field::InsertSpeed => "more than 0 mm/s",
-            Field::RotateSpeed => "more than 0 deg/s",
-            Field::SpinRate => "more than 0 rev/s",
+            Field::InsertSpeed => "0.001 to 1000 mm/s",
+            Field::RotateSpeed => "0.01 to 100000 deg/s",
+            Field::SpinRate => "0.01 to 1000 rev/s",
             Field::MaxTwist => "at least 360 degrees (a spun line turns the shaft whole turns)",
         }
     }

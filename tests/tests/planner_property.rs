@@ -142,3 +142,20 @@ fn a_tilt_bound_of_a_fraction_of_a_degree_is_kept() {
     };
     soundness::check_plan(&s).unwrap();
 }
+
+/// Found by the planner fuzz target: a driver inserting at 1e-30 mm/s needs more spin turns for
+/// a line than a step holds, and the count overflowed (a wrapped, wrong command in a release
+/// build). The driver's speeds now have physical ranges, refused by validation with the key.
+#[test]
+fn a_driver_too_slow_for_its_spin_is_refused() {
+    use planner_core::{Field, PlanError};
+    let mut s = Scenario::paper();
+    s.driver.insert_speed = 1e-30;
+    assert_eq!(
+        planner_core::plan_scheduled(&s).err(),
+        Some(PlanError::OutOfRange(Field::InsertSpeed))
+    );
+    s.driver.insert_speed = 1e-3;
+    s.driver.spin_rate = 1e3;
+    soundness::check_plan(&s).unwrap();
+}

@@ -12,7 +12,7 @@
 use crate::model::form::{SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::scenario::{Driver, Scenario};
 use crate::report::{FormOutcome, SegmentPlan};
-use crate::PlanError;
+use crate::{Field, PlanError};
 use core::f32::consts::PI;
 use serde::{Deserialize, Serialize};
 
@@ -142,10 +142,15 @@ impl Twist {
     }
 }
 
-/// The smallest even whole number not below `x`.
-fn even_turns(x: f32) -> u32 {
-    let n = libm::ceilf(x).max(2.0) as u32;
-    n + n % 2
+/// The smallest even whole number not below `x`; `None` past what a step holds (a validated
+/// driver never gets there: found by fuzzing with unbounded speeds).
+fn even_turns(x: f32) -> Option<u32> {
+    let n = libm::ceilf(x).max(2.0);
+    if !(n < 4e9) {
+        return None;
+    }
+    let n = n as u32;
+    Some(n + n % 2)
 }
 
 /// The schedule of `outcome`'s path with the scenario's driver.
@@ -233,7 +238,9 @@ fn segment_steps(
             SegmentKind::Arc => push(&mut steps, Op::Insert { length_mm }, push_s)?,
             SegmentKind::Line => {
                 let least = MIN_SPIN_RAD_PER_MM * length_mm / (2.0 * PI);
-                let turns = even_turns((d.spin_rate * push_s).max(least));
+                let turns = even_turns((d.spin_rate * push_s).max(least)).ok_or(
+                    ScheduleError::Driver(PlanError::OutOfRange(Field::SpinRate)),
+                )?;
                 twist.spin();
                 let duration_s = push_s.max(turns as f32 / d.spin_rate);
                 push(&mut steps, Op::InsertSpin { length_mm, turns }, duration_s)?;

@@ -177,6 +177,17 @@ impl Driver {
         positive(Field::InsertSpeed, self.insert_speed)?;
         positive(Field::RotateSpeed, self.rotate_speed)?;
         positive(Field::SpinRate, self.spin_rate)?;
+        // Physical ranges of a needle driver's stages; they also bound a line's spin turns
+        // (at most 1e3 rev/s for 1000 mm at 1e-3 mm/s: 1e9, well within the step's u32).
+        for (field, v, lo, hi) in [
+            (Field::InsertSpeed, self.insert_speed, 1e-3, 1e3),
+            (Field::RotateSpeed, self.rotate_speed, 1e-2, 1e5),
+            (Field::SpinRate, self.spin_rate, 1e-2, 1e3),
+        ] {
+            if !(lo..=hi).contains(&v) {
+                return Err(PlanError::OutOfRange(field));
+            }
+        }
         finite(Field::MaxTwist, &[self.max_twist_deg])?;
         // A line's spin turns the shaft by whole revolutions, so one turn of room is the least.
         if self.max_twist_deg < 360.0 {
