@@ -16,7 +16,12 @@ pub struct Pose {
 
 /// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
 pub fn bend(psi: f32, s: f32) -> (f32, f32) {
-    (s * crate::fmath::sin(psi), -s * crate::fmath::cos(psi))
+    bend_of(crate::fmath::sincos(psi), s)
+}
+
+/// [`bend`] from the heading's (sin, cos), already known.
+fn bend_of((sn, cs): (f32, f32), s: f32) -> (f32, f32) {
+    (s * sn, -s * cs)
 }
 
 /// The heading at which an arc of side `s` has unit bend normal `n`.
@@ -31,22 +36,42 @@ pub fn turn(from: f32, to: f32, s: f32) -> f32 {
 
 /// The pose after a segment of `kind` and length `len` bending to side `s`.
 pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
+    advance_from(p, crate::fmath::sincos(p.psi), kind, len, s, radius).0
+}
+
+/// [`advance`] from the start heading's (sin, cos), already known; also returns the end
+/// heading's (sin, cos). The same operations as computing every sine afresh, so the same bits.
+fn advance_from(
+    p: Pose,
+    sc: (f32, f32),
+    kind: SegmentKind,
+    len: f32,
+    s: f32,
+    radius: f32,
+) -> (Pose, (f32, f32)) {
     match kind {
-        SegmentKind::Line => Pose {
-            x: p.x + len * crate::fmath::cos(p.psi),
-            y: p.y + len * crate::fmath::sin(p.psi),
-            psi: p.psi,
-        },
+        SegmentKind::Line => (
+            Pose {
+                x: p.x + len * sc.1,
+                y: p.y + len * sc.0,
+                psi: p.psi,
+            },
+            sc,
+        ),
         SegmentKind::Arc => {
-            let (nx, ny) = bend(p.psi, s);
+            let (nx, ny) = bend_of(sc, s);
             let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
             let psi = p.psi - s * len / radius;
-            let (mx, my) = bend(psi, s);
-            Pose {
-                x: cx - radius * mx,
-                y: cy - radius * my,
-                psi,
-            }
+            let end_sc = crate::fmath::sincos(psi);
+            let (mx, my) = bend_of(end_sc, s);
+            (
+                Pose {
+                    x: cx - radius * mx,
+                    y: cy - radius * my,
+                    psi,
+                },
+                end_sc,
+            )
         }
     }
 }
@@ -66,21 +91,35 @@ pub struct Drawn {
     centre: (f32, f32),
     /// Where the segment ends.
     pub end: Pose,
+    /// (sin, cos) of the end heading.
+    pub end_sc: (f32, f32),
 }
 
 impl Drawn {
     /// The segment of `kind` and length `len` that starts at `start` and bends to side `s`.
+    #[cfg(test)]
     pub fn new(start: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Drawn {
+        Drawn::new_from(start, crate::fmath::sincos(start.psi), kind, len, s, radius)
+    }
+
+    /// [`Drawn::new`] from the start heading's (sin, cos), already known (a path's pieces are
+    /// drawn one after another: each starts with the heading the previous one ends with).
+    pub fn new_from(
+        start: Pose,
+        sc: (f32, f32),
+        kind: SegmentKind,
+        len: f32,
+        s: f32,
+        radius: f32,
+    ) -> Drawn {
         let (unit, centre) = match kind {
-            SegmentKind::Line => (
-                (crate::fmath::cos(start.psi), crate::fmath::sin(start.psi)),
-                (0.0, 0.0),
-            ),
+            SegmentKind::Line => ((sc.1, sc.0), (0.0, 0.0)),
             SegmentKind::Arc => {
-                let n = bend(start.psi, s);
+                let n = bend_of(sc, s);
                 (n, (start.x + radius * n.0, start.y + radius * n.1))
             }
         };
+        let (end, end_sc) = advance_from(start, sc, kind, len, s, radius);
         Drawn {
             kind,
             start,
@@ -89,7 +128,8 @@ impl Drawn {
             radius,
             unit,
             centre,
-            end: advance(start, kind, len, s, radius),
+            end,
+            end_sc,
         }
     }
 
@@ -146,8 +186,9 @@ pub fn complete(
         }
         (SegmentKind::Line, SegmentKind::Arc) => {
             let s = sides.1;
-            let (nx, ny) = bend(p.psi, s);
-            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
+            let sc = crate::fmath::sincos(p.psi);
+            let (nx, ny) = bend_of(sc, s);
+            let (dx, dy) = (sc.1, sc.0);
             let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
             let wd = wx * dx + wy * dy;
             let disc = wd * wd - (wx * wx + wy * wy) + r * r;

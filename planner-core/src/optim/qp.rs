@@ -34,6 +34,9 @@ pub struct Qp {
     pub rhs: [f32; MAX_ROWS],
     /// Number of inequality rows.
     pub m: usize,
+    /// The KKT system's buffer, reused by every solve (every entry a solve reads it writes
+    /// first): zeroing kilobytes per solve cost more on the device than some solves.
+    kkt: [[f32; KKT]; KKT],
 }
 
 /// A QP solution.
@@ -68,6 +71,7 @@ impl Qp {
             rows: [[0.0; MAX_VARS]; MAX_ROWS],
             rhs: [0.0; MAX_ROWS],
             m: 0,
+            kkt: [[0.0; KKT]; KKT],
         }
     }
 
@@ -102,24 +106,23 @@ impl Qp {
         true
     }
 
-    fn dot(&self, a: &Vars, b: &Vars) -> f32 {
-        let mut s = 0.0;
-        for k in 0..self.n {
-            s += a[k] * b[k];
-        }
-        s
-    }
-
     /// Solves the QP from p = 0.
-    pub fn solve(&self) -> Result<QpSolution, QpError> {
+    pub fn solve(&mut self) -> Result<QpSolution, QpError> {
         let n = self.n;
+        let dot = |a: &Vars, b: &Vars| {
+            let mut s = 0.0;
+            for k in 0..n {
+                s += a[k] * b[k];
+            }
+            s
+        };
         let mut p = [0.0f32; MAX_VARS];
         let mut working = [0usize; MAX_VARS];
         let mut w_len = 0usize;
         let mut in_working = [false; MAX_ROWS];
         let mut stationary = false;
         // Reused each iteration: every entry of the leading dim × dim block is written below.
-        let mut k = [[0.0f32; KKT]; KKT];
+        let k = &mut self.kkt;
         let mut rhs = [0.0f32; KKT];
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
@@ -151,7 +154,7 @@ impl Qp {
                     k[j][n + r] = -a[j];
                 }
             }
-            let sol = solve(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
+            let sol = solve(k, &mut rhs, dim).ok_or(QpError::Singular)?;
             let d = &sol[..n];
 
             let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
@@ -196,17 +199,17 @@ impl Qp {
             let mut blocking = None;
             let mut dv = [0.0f32; MAX_VARS];
             dv[..n].copy_from_slice(d);
-            let d_norm = crate::fmath::sqrt(self.dot(&dv, &dv));
+            let d_norm = crate::fmath::sqrt(dot(&dv, &dv));
             for i in 0..self.m {
                 if in_working[i] {
                     continue;
                 }
-                let ad = self.dot(&self.rows[i], &dv);
+                let ad = dot(&self.rows[i], &dv);
                 // Rounding makes a just-released or parallel row look blocking by a hair; only a
                 // row that the step really crosses may block (this prevents cycling).
-                let row_norm = crate::fmath::sqrt(self.dot(&self.rows[i], &self.rows[i]));
+                let row_norm = crate::fmath::sqrt(dot(&self.rows[i], &self.rows[i]));
                 if ad < -1e-5 * row_norm * d_norm {
-                    let slack = self.rhs[i] - self.dot(&self.rows[i], &p);
+                    let slack = self.rhs[i] - dot(&self.rows[i], &p);
                     let t = (slack / ad).max(0.0);
                     if t < alpha {
                         alpha = t;

@@ -166,12 +166,16 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     if !restore(p, &mut x, &mut evals) {
         return None;
     }
-    let mut cur = p.value(&x);
+    // Two buffers: the current point and the line search's trial point (an accepted trial
+    // becomes current by flipping `ci`, not by copying).
+    let start = p.value(&x);
+    let mut vals = [start.clone(), start];
+    let mut ci = 0usize;
     evals += 1;
-    if !cur.admissible(p) {
+    if !vals[0].admissible(p) {
         return None;
     }
-    let mut cur_d = p.derivatives(&cur);
+    let mut cur_d = p.derivatives(&vals[0]);
     let n = p.n;
     let gamma = p.scenario.weights.length * p.radius + 1.0;
     let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
@@ -184,6 +188,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     let mut qp = Qp::new(n, h, cur_d.grad);
     while iterations < MAX_ITERATIONS {
         iterations += 1;
+        let cur = &vals[ci];
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
         // can be dependent (a singular working set): the QP is then retried with fewer of them,
         // since the line search keeps every clearance anyway.
@@ -222,34 +227,41 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         }
         // Backtracking line search on the restored objective.
         let mut t = 1.0f32;
-        let mut next: Option<Value> = None;
+        let mut accepted = false;
+        let (first, second) = vals.split_at_mut(1);
+        let (cur, trial) = if ci == 0 {
+            (&first[0], &mut second[0])
+        } else {
+            (&second[0], &mut first[0])
+        };
         for _ in 0..MAX_BACKTRACKS {
             let mut xt = cur.x;
             for k in 0..n {
                 xt[k] = (cur.x[k] + t * sol.p[k]).clamp(p.lower[k], p.upper[k]);
             }
             if restore(p, &mut xt, &mut evals) {
-                let e = p.value(&xt);
+                p.value_into(&xt, trial);
                 evals += 1;
-                if e.admissible(p) && e.objective <= cur.objective + 1e-4 * t * slope {
-                    next = Some(e);
+                if trial.admissible(p) && trial.objective <= cur.objective + 1e-4 * t * slope {
+                    accepted = true;
                     break;
                 }
             }
             t *= 0.5;
         }
-        let Some(next) = next else {
+        if !accepted {
             // No decrease along a descent direction: stationary to f32 resolution.
             status = SolveStatus::Converged;
             break;
-        };
+        }
+        let next: &Value = trial;
         let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = clear_rows[..n_clear]
             .iter()
             .map(|&(o, row)| (o, sol.mult[row]))
             .collect();
         let tilt_mult = if p.plane { 0.0 } else { sol.mult[tilt_row] };
         let g_old = lagrangian_grad(p, &cur.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
-        p.derivatives_into(&next, &mut cur_d);
+        p.derivatives_into(next, &mut cur_d);
         let g_new = lagrangian_grad(p, &next.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
         let mut s = [0.0f32; MAX_VARS];
         let mut y = [0.0f32; MAX_VARS];
@@ -258,10 +270,11 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
             y[k] = g_new[k] - g_old[k];
         }
         bfgs_update(&mut h, &s, &y, n);
-        cur = next;
+        ci = 1 - ci;
     }
+    let [a, b] = vals;
     Some(LocalSolution {
-        eval: cur,
+        eval: if ci == 0 { a } else { b },
         status,
         iterations,
         evaluations: evals,

@@ -138,6 +138,8 @@ fn sweep_pieces(
     let fixed = w.control * p.form.len() as f32;
     // Scores a seed; returns its smallest clearance (negative when it touches an obstacle, minus
     // infinity when it was not scored); near misses make the sweep look again, more finely.
+    // The (sin, cos) of the last heading emitted: every completion of a probe shares it.
+    let mut last_heading: Option<(u32, (f32, f32))> = None;
     let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
         let mut length = 0.0;
         for (piece, len) in pieces.iter().zip(piece_lengths) {
@@ -148,12 +150,20 @@ fn sweep_pieces(
             }
             length += len;
         }
+        let sc = match last_heading {
+            Some((bits, sc)) if bits == heading.to_bits() => sc,
+            _ => {
+                let sc = crate::fmath::sincos(heading);
+                last_heading = Some((heading.to_bits(), sc));
+                sc
+            }
+        };
         // D >= 0, so a1 L + a4 N bounds F from below.
-        if !plane.within_tilt(p, heading) || w.length * length + fixed >= sink.bound() {
+        if !plane.within_tilt(p, sc) || w.length * length + fixed >= sink.bound() {
             return f32::NEG_INFINITY;
         }
         *scored += 1;
-        let (risk, min_clearance) = plane.clearances(p, heading, pieces, piece_lengths);
+        let (risk, min_clearance) = plane.clearances(p, heading, sc, pieces, piece_lengths);
         let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
         let objective = w.length * length + risk_term + fixed;
         let variables = || {
@@ -373,9 +383,8 @@ impl SeedPlane {
     }
 
     /// Whether the in-plane `heading` lies inside the tilt cone.
-    fn within_tilt(&self, p: &Problem, heading: f32) -> bool {
-        self.axis.0 * crate::fmath::cos(heading) + self.axis.1 * crate::fmath::sin(heading)
-            >= p.cos_max_tilt
+    fn within_tilt(&self, p: &Problem, (sn, cs): (f32, f32)) -> bool {
+        self.axis.0 * cs + self.axis.1 * sn >= p.cos_max_tilt
     }
 
     /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite once
@@ -385,6 +394,7 @@ impl SeedPlane {
         &self,
         p: &Problem,
         heading: f32,
+        heading_sc: (f32, f32),
         pieces: &Pieces,
         lengths: &[f32; MAX_CONTROL_DEGREE],
     ) -> (f32, f32) {
@@ -394,9 +404,11 @@ impl SeedPlane {
             y: 0.0,
             psi: heading,
         };
+        let mut sc = heading_sc;
         for (piece, &len) in pieces.iter().zip(lengths) {
-            let d = Drawn::new(at, piece.kind, len, piece.side, p.radius);
+            let d = Drawn::new_from(at, sc, piece.kind, len, piece.side, p.radius);
             at = d.end;
+            sc = d.end_sc;
             // As many as there are pieces.
             let _ = drawn.push(d);
         }

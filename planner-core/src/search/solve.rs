@@ -153,6 +153,7 @@ fn solve_group(
 /// Starts for `form` made from the best paths of the forms one segment shorter: the missing
 /// segment is inserted with zero length, so a form never reports a worse path than a sub-form
 /// it contains. Each start comes with its plane-mode side assignment.
+#[inline(never)]
 fn extension_starts(
     scenario: &Scenario,
     form: Form,
@@ -264,6 +265,7 @@ fn wrap_degrees(rad: f32) -> f32 {
 }
 
 /// The outcome of a refined path, with the numbers measured by the independent check.
+#[inline(never)] // The check's buffers need not share the stack with the search's.
 fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
     let x = &sol.eval.x;
     let (t1, t2) = p.angles(x);
