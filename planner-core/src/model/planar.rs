@@ -141,7 +141,7 @@ impl Drawn {
         match self.kind {
             SegmentKind::Line => {
                 let (dx, dy) = self.unit;
-                let t = ((q.0 - p.x) * dx + (q.1 - p.y) * dy).clamp(0.0, self.len);
+                let t = crate::fmath::clamp((q.0 - p.x) * dx + (q.1 - p.y) * dy, 0.0, self.len);
                 sq(q.0 - p.x - t * dx, q.1 - p.y - t * dy)
             }
             SegmentKind::Arc => {
@@ -154,7 +154,7 @@ impl Drawn {
                     off * off
                 } else {
                     let end = &self.end;
-                    sq(q.0 - p.x, q.1 - p.y).min(sq(q.0 - end.x, q.1 - end.y))
+                    crate::fmath::min(sq(q.0 - p.x, q.1 - p.y), sq(q.0 - end.x, q.1 - end.y))
                 }
             }
         }
@@ -221,7 +221,7 @@ pub fn complete(
                 return;
             }
             let a = (3.0 * r * r + d * d) / (2.0 * d);
-            let h = crate::fmath::sqrt((4.0 * r * r - a * a).max(0.0));
+            let h = crate::fmath::sqrt(crate::fmath::max(4.0 * r * r - a * a, 0.0));
             let (ex, ey) = (ux / d, uy / d);
             for sign in [-1.0f32, 1.0] {
                 let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);

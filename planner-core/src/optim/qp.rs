@@ -101,7 +101,7 @@ impl Qp {
             return false;
         }
         self.rows[self.m] = *a;
-        self.rhs[self.m] = b.min(0.0);
+        self.rhs[self.m] = crate::fmath::min(b, 0.0);
         self.m += 1;
         true
     }
@@ -124,6 +124,11 @@ impl Qp {
         // Reused each iteration: every entry of the leading dim × dim block is written below.
         let k = &mut self.kkt;
         let mut rhs = [0.0f32; KKT];
+        // The rows do not change during a solve: their norms are taken once.
+        let mut row_norms = [0.0f32; MAX_ROWS];
+        for (norm, row) in row_norms.iter_mut().zip(&self.rows).take(self.m) {
+            *norm = crate::fmath::sqrt(dot(row, row));
+        }
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
             let dim = n + self.m_eq + w_len;
@@ -154,11 +159,19 @@ impl Qp {
                     k[j][n + r] = -a[j];
                 }
             }
-            let sol = solve(k, &mut rhs, dim).ok_or(QpError::Singular)?;
+            if !solve(k, &mut rhs, dim) {
+                return Err(QpError::Singular);
+            }
+            let sol = &rhs;
             let d = &sol[..n];
 
-            let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
-            let scale = p.iter().take(n).fold(1.0f32, |m, v| m.max(libm::fabsf(*v)));
+            let step_norm = d
+                .iter()
+                .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
+            let scale = p
+                .iter()
+                .take(n)
+                .fold(1.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
             // After a full, unblocked step p minimises over the working set; what the KKT solve
             // returns as a further step is rounding noise.
             if stationary || step_norm <= 1e-7 * scale {
@@ -207,10 +220,10 @@ impl Qp {
                 let ad = dot(&self.rows[i], &dv);
                 // Rounding makes a just-released or parallel row look blocking by a hair; only a
                 // row that the step really crosses may block (this prevents cycling).
-                let row_norm = crate::fmath::sqrt(dot(&self.rows[i], &self.rows[i]));
+                let row_norm = row_norms[i];
                 if ad < -1e-5 * row_norm * d_norm {
                     let slack = self.rhs[i] - dot(&self.rows[i], &p);
-                    let t = (slack / ad).max(0.0);
+                    let t = crate::fmath::max(slack / ad, 0.0);
                     if t < alpha {
                         alpha = t;
                         blocking = Some(i);

@@ -88,10 +88,10 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
         let big = delta
             .iter()
             .take(p.n)
-            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+            .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
         let shrink = if big > TRUST { TRUST / big } else { 1.0 };
         for k in 0..p.n {
-            x[k] = (x[k] + shrink * delta[k]).clamp(p.lower[k], p.upper[k]);
+            x[k] = crate::fmath::clamp(x[k] + shrink * delta[k], p.lower[k], p.upper[k]);
         }
     }
     false
@@ -121,9 +121,9 @@ fn min_norm_step(
         row[i] += 1e-7 * trace + 1e-12;
     }
     let mut y = [r[0], r[1], r[2]];
-    let Some(y) = linalg::solve(&mut a, &mut y, m) else {
+    if !linalg::solve(&mut a, &mut y, m) {
         return false;
-    };
+    }
     for k in 0..MAX_VARS {
         delta[k] = 0.0;
         if k < p.n && free[k] {
@@ -158,9 +158,23 @@ fn lagrangian_grad(
     g
 }
 
+/// Distance (largest change of any variable) within which an iterate counts as in the basin of a
+/// known local solution.
+pub const BASIN: f32 = 0.03;
+
+/// Whether `x` (objective `f`) lies within [`BASIN`] of a known local solution that is no worse:
+/// a descent from there ends at that solution (to rounding), so it need not be followed.
+fn in_known_basin(known: &[(Vars, f32)], x: &Vars, f: f32, n: usize) -> bool {
+    known
+        .iter()
+        .any(|(k, kf)| f >= *kf && (0..n).all(|j| libm::fabsf(x[j] - k[j]) < BASIN))
+}
+
 /// Runs the SQP from `x0` (restored onto the target first). `None` when the start cannot be made
-/// feasible.
-pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
+/// feasible. `known` holds local solutions already found for this problem (variables,
+/// objective): a run that enters the basin of one of them stops there (status `Converged`, its
+/// objective no better than the known one's).
+pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolution> {
     let mut evals = 0u32;
     let mut x = *x0;
     if !restore(p, &mut x, &mut evals) {
@@ -189,6 +203,11 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
     while iterations < MAX_ITERATIONS {
         iterations += 1;
         let cur = &vals[ci];
+        if in_known_basin(known, &cur.x, cur.objective, n) {
+            status = SolveStatus::Converged;
+            step_norm = 0.0;
+            break;
+        }
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
         // can be dependent (a singular working set): the QP is then retried with fewer of them,
         // since the line search keeps every clearance anyway.
@@ -219,7 +238,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         step_norm = 0.0f32;
         for k in 0..n {
             slope += cur_d.grad[k] * sol.p[k];
-            step_norm = step_norm.max(libm::fabsf(sol.p[k]));
+            step_norm = crate::fmath::max(step_norm, libm::fabsf(sol.p[k]));
         }
         if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
             status = SolveStatus::Converged;
@@ -237,7 +256,7 @@ pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
         for _ in 0..MAX_BACKTRACKS {
             let mut xt = cur.x;
             for k in 0..n {
-                xt[k] = (cur.x[k] + t * sol.p[k]).clamp(p.lower[k], p.upper[k]);
+                xt[k] = crate::fmath::clamp(cur.x[k] + t * sol.p[k], p.lower[k], p.upper[k]);
             }
             if restore(p, &mut xt, &mut evals) {
                 p.value_into(&xt, trial);
@@ -363,9 +382,9 @@ pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivativ
     for k in 0..p.n {
         let mut unit = [0.0; MAX_VARS];
         unit[k] = 1.0;
-        qp.push_row(&unit, (p.lower[k] - x[k]).max(-TRUST));
+        qp.push_row(&unit, crate::fmath::max(p.lower[k] - x[k], -TRUST));
         unit[k] = -1.0;
-        qp.push_row(&unit, -(p.upper[k] - x[k]).min(TRUST));
+        qp.push_row(&unit, -crate::fmath::min(p.upper[k] - x[k], TRUST));
     }
     let tilt = qp.m;
     if !p.plane {

@@ -74,7 +74,7 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
         for _ in 0..4 {
             let mut xt = cur.x;
             for k in 0..n {
-                xt[k] = (cur.x[k] + t * step.p[k]).clamp(p.lower[k], p.upper[k]);
+                xt[k] = crate::fmath::clamp(cur.x[k] + t * step.p[k], p.lower[k], p.upper[k]);
             }
             if restore(p, &mut xt, evals) {
                 let v = p.value(&xt);

@@ -138,6 +138,9 @@ fn sweep_pieces(
     let fixed = w.control * p.form.len() as f32;
     // Scores a seed; returns its smallest clearance (negative when it touches an obstacle, minus
     // infinity when it was not scored); near misses make the sweep look again, more finely.
+    // The sink's bound as it stands (it changes only when a seed is offered): a probe whose
+    // free pieces plus the straight distance left to the target reach it cannot emit a seed.
+    let bound = core::cell::Cell::new(sink.bound());
     // The (sin, cos) of the last heading emitted: every completion of a probe shares it.
     let mut last_heading: Option<(u32, (f32, f32))> = None;
     let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
@@ -180,6 +183,7 @@ fn sweep_pieces(
         if min_clearance > p.min_clearance && objective.is_finite() {
             if let Some(x) = variables() {
                 sink.offer(objective, &x);
+                bound.set(sink.bound());
             }
         } else if min_clearance > p.min_clearance - NEAR_MISS {
             sink.near_miss(min_clearance, &variables);
@@ -237,6 +241,15 @@ fn sweep_pieces(
             lengths[i] = caps[i] * cell[i];
             pose = advance(pose, pieces[i].kind, lengths[i], pieces[i].side, r);
         }
+        // The last two pieces are at least as long as the straight line to the target (less a
+        // margin far above the rounding of the completions), and D >= 0: when that bounds F at or
+        // above the sink's bound, every completion would be refused.
+        let free_length: f32 = lengths[..free].iter().sum();
+        let (dx, dy) = (dist - pose.x, -pose.y);
+        let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
+        if w.length * (free_length + rest) + fixed >= bound.get() {
+            return f32::NEG_INFINITY;
+        }
         let (a, b) = (pieces[n - 2], pieces[n - 1]);
         let mut nearest = f32::NEG_INFINITY;
         complete(
@@ -248,7 +261,7 @@ fn sweep_pieces(
             &mut |la, lb| {
                 lengths[n - 2] = la;
                 lengths[n - 1] = lb;
-                nearest = nearest.max(emit(heading, &lengths));
+                nearest = crate::fmath::max(nearest, emit(heading, &lengths));
             },
         );
         nearest
@@ -268,6 +281,10 @@ fn sweep_pieces(
         let Some(heading) = grid_heading(hi) else {
             continue;
         };
+        // Outside the tilt cone every seed is refused, and no probe of it is refined.
+        if !plane.within_tilt(p, crate::fmath::sincos(heading)) {
+            continue;
+        }
         // The bound is one line in the grid's space: it gets a finer grid of lengths.
         let (steps, combos) = if hi < headings {
             (steps, combos)
@@ -416,11 +433,11 @@ impl SeedPlane {
         let mut inv_sum = 0.0f32;
         let mut blocked = false;
         for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
-            let nearest = drawn
-                .iter()
-                .fold(f32::INFINITY, |m, d| m.min(d.distance_squared((x, y))));
+            let nearest = drawn.iter().fold(f32::INFINITY, |m, d| {
+                crate::fmath::min(m, d.distance_squared((x, y)))
+            });
             let d = crate::fmath::sqrt(nearest + h2) - ob.radius;
-            min_clearance = min_clearance.min(d);
+            min_clearance = crate::fmath::min(min_clearance, d);
             if d > p.min_clearance {
                 inv_sum += 1.0 / d;
             } else if d > p.min_clearance - NEAR_MISS {
@@ -447,7 +464,7 @@ impl SeedPlane {
             return None;
         }
         let mut x = [0.0f32; MAX_VARS];
-        let theta2 = crate::fmath::asin(heading.dot(&b1).clamp(-1.0, 1.0));
+        let theta2 = crate::fmath::asin(crate::fmath::clamp(heading.dot(&b1), -1.0, 1.0));
         let theta1 = crate::fmath::atan2(-heading.dot(&b2), heading.dot(&b3));
         x[0] = theta1;
         if !p.plane {
