@@ -89,6 +89,8 @@ pub struct Drawn {
     unit: (f32, f32),
     /// Arc: the circle's centre.
     centre: (f32, f32),
+    /// Arc: the unit radius from the centre to its end.
+    end_radial: (f32, f32),
     /// Where the segment ends.
     pub end: Pose,
     /// (sin, cos) of the end heading.
@@ -120,7 +122,9 @@ impl Drawn {
             }
         };
         let (end, end_sc) = advance_from(start, sc, kind, len, s, radius);
+        let (bx, by) = bend_of(end_sc, s);
         Drawn {
+            end_radial: (-bx, -by),
             kind,
             start,
             len,
@@ -147,9 +151,23 @@ impl Drawn {
             SegmentKind::Arc => {
                 let (nx, ny) = self.unit;
                 let (vx, vy) = (q.0 - self.centre.0, q.1 - self.centre.1);
-                // The radius to the start is -n; along the arc it turns clockwise for s = +1.
-                let ccw = crate::fmath::atan2(-nx * vy + ny * vx, -nx * vx - ny * vy);
-                if crate::fmath::wrap_positive(-self.side * ccw) * self.radius <= self.len {
+                // The radius to the start is u = -n; along the arc it turns clockwise for s = +1.
+                // `ahead(a, b)`: the sine of the angle from a to b in the turning direction
+                // (times their lengths). q's radius lies on the arc when its angle from u, in the
+                // turning direction, is at most the arc's (sign tests, no arc tangent).
+                let side = self.side;
+                let ahead = |a: (f32, f32), b: (f32, f32)| -side * (a.0 * b.1 - a.1 * b.0);
+                let v = (vx, vy);
+                let e = self.end_radial;
+                let from_start = ahead((-nx, -ny), v);
+                let on_arc = if self.len >= core::f32::consts::TAU * self.radius {
+                    true
+                } else if self.len <= core::f32::consts::PI * self.radius {
+                    from_start >= 0.0 && ahead(v, e) >= 0.0
+                } else {
+                    !(from_start < 0.0 && ahead(e, v) > 0.0)
+                };
+                if on_arc {
                     let off = crate::fmath::sqrt(sq(vx, vy)) - self.radius;
                     off * off
                 } else {

@@ -120,7 +120,6 @@ impl Qp {
         let mut working = [0usize; MAX_VARS];
         let mut w_len = 0usize;
         let mut in_working = [false; MAX_ROWS];
-        let mut stationary = false;
         // Reused each iteration: every entry of the leading dim × dim block is written below.
         let k = &mut self.kkt;
         let mut rhs = [0.0f32; KKT];
@@ -172,77 +171,73 @@ impl Qp {
                 .iter()
                 .take(n)
                 .fold(1.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
-            // After a full, unblocked step p minimises over the working set; what the KKT solve
-            // returns as a further step is rounding noise.
-            if stationary || step_norm <= 1e-7 * scale {
-                stationary = false;
-                // Stationary on the working set: check the inequality multipliers.
-                let mut worst: Option<(usize, f32)> = None;
-                for w in 0..w_len {
-                    let mu = sol[n + self.m_eq + w];
-                    if mu < 0.0 && worst.is_none_or(|(_, m)| mu < m) {
-                        worst = Some((w, mu));
+            if step_norm > 1e-7 * scale {
+                // Longest step along d that keeps every inequality.
+                let mut alpha = 1.0f32;
+                let mut blocking = None;
+                let mut dv = [0.0f32; MAX_VARS];
+                dv[..n].copy_from_slice(d);
+                let d_norm = crate::fmath::sqrt(dot(&dv, &dv));
+                for i in 0..self.m {
+                    if in_working[i] {
+                        continue;
                     }
-                }
-                match worst {
-                    None => {
-                        let mut out = QpSolution {
-                            p,
-                            eq_mult: [0.0; MAX_EQ],
-                            mult: [0.0; MAX_ROWS],
-                        };
-                        out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
-                        for w in 0..w_len {
-                            out.mult[working[w]] = sol[n + self.m_eq + w];
+                    let ad = dot(&self.rows[i], &dv);
+                    // Rounding makes a just-released or parallel row look blocking by a hair; only
+                    // a row that the step really crosses may block (this prevents cycling).
+                    let row_norm = row_norms[i];
+                    if ad < -1e-5 * row_norm * d_norm {
+                        let slack = self.rhs[i] - dot(&self.rows[i], &p);
+                        let t = crate::fmath::max(slack / ad, 0.0);
+                        if t < alpha {
+                            alpha = t;
+                            blocking = Some(i);
                         }
-                        return Ok(out);
-                    }
-                    Some((w, _)) => {
-                        in_working[working[w]] = false;
-                        for i in w..w_len - 1 {
-                            working[i] = working[i + 1];
-                        }
-                        w_len -= 1;
                     }
                 }
-                continue;
-            }
-            // Longest step along d that keeps every inequality.
-            let mut alpha = 1.0f32;
-            let mut blocking = None;
-            let mut dv = [0.0f32; MAX_VARS];
-            dv[..n].copy_from_slice(d);
-            let d_norm = crate::fmath::sqrt(dot(&dv, &dv));
-            for i in 0..self.m {
-                if in_working[i] {
-                    continue;
+                for j in 0..n {
+                    p[j] += alpha * dv[j];
                 }
-                let ad = dot(&self.rows[i], &dv);
-                // Rounding makes a just-released or parallel row look blocking by a hair; only a
-                // row that the step really crosses may block (this prevents cycling).
-                let row_norm = row_norms[i];
-                if ad < -1e-5 * row_norm * d_norm {
-                    let slack = self.rhs[i] - dot(&self.rows[i], &p);
-                    let t = crate::fmath::max(slack / ad, 0.0);
-                    if t < alpha {
-                        alpha = t;
-                        blocking = Some(i);
+                if let Some(i) = blocking {
+                    if w_len < n {
+                        working[w_len] = i;
+                        w_len += 1;
+                        in_working[i] = true;
+                        continue;
                     }
-                }
-            }
-            for j in 0..n {
-                p[j] += alpha * dv[j];
-            }
-            if blocking.is_none() {
-                stationary = true;
-            }
-            if let Some(i) = blocking {
-                if w_len < n {
-                    working[w_len] = i;
-                    w_len += 1;
-                    in_working[i] = true;
-                } else {
                     return Err(QpError::Singular);
+                }
+                // A full, unblocked step: p now minimises over the working set, and the
+                // multipliers of this solve are the minimiser's (the KKT system is linear in p),
+                // so no second solve is needed to read them.
+            }
+            // Stationary on the working set: check the inequality multipliers.
+            let mut worst: Option<(usize, f32)> = None;
+            for w in 0..w_len {
+                let mu = sol[n + self.m_eq + w];
+                if mu < 0.0 && worst.is_none_or(|(_, m)| mu < m) {
+                    worst = Some((w, mu));
+                }
+            }
+            match worst {
+                None => {
+                    let mut out = QpSolution {
+                        p,
+                        eq_mult: [0.0; MAX_EQ],
+                        mult: [0.0; MAX_ROWS],
+                    };
+                    out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
+                    for w in 0..w_len {
+                        out.mult[working[w]] = sol[n + self.m_eq + w];
+                    }
+                    return Ok(out);
+                }
+                Some((w, _)) => {
+                    in_working[working[w]] = false;
+                    for i in w..w_len - 1 {
+                        working[i] = working[i + 1];
+                    }
+                    w_len -= 1;
                 }
             }
         }
