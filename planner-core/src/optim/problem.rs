@@ -47,6 +47,8 @@ pub struct Problem<'a> {
     pub cos_max_tilt: f32,
     /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
     pub basis: Matrix3<f32>,
+    /// End-point tolerance of the optimiser ([`crate::optim::sqp::equality_tolerance`]).
+    pub equality_tolerance: f32,
     entry: V3,
     target: V3,
 }
@@ -120,6 +122,7 @@ impl<'a> Problem<'a> {
             min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
             cos_max_tilt: crate::fmath::cos(tilt),
             basis: entry_basis(scenario.entry.direction),
+            equality_tolerance: crate::optim::sqp::equality_tolerance_of(scenario),
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
         }

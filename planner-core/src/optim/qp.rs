@@ -28,8 +28,11 @@ pub struct Qp {
     pub eq: [Vars; MAX_EQ],
     /// Number of equality rows.
     pub m_eq: usize,
-    /// Inequality rows aᵢ.
+    /// Inequality rows aᵢ (not written for an axis row).
     pub rows: [Vars; MAX_ROWS],
+    /// Row i is ±(unit vector k) when `axis[i]` is ±(k + 1) (a bound: its products are one
+    /// element, exactly the dot product's value), a general row when 0.
+    axis: [i8; MAX_ROWS],
     /// Right-hand sides bᵢ (≤ 0).
     pub rhs: [f32; MAX_ROWS],
     /// Number of inequality rows.
@@ -69,6 +72,7 @@ impl Qp {
             eq: [[0.0; MAX_VARS]; MAX_EQ],
             m_eq: 0,
             rows: [[0.0; MAX_VARS]; MAX_ROWS],
+            axis: [0; MAX_ROWS],
             rhs: [0.0; MAX_ROWS],
             m: 0,
             kkt: [[0.0; KKT]; KKT],
@@ -101,6 +105,21 @@ impl Qp {
             return false;
         }
         self.rows[self.m] = *a;
+        self.axis[self.m] = 0;
+        self.rhs[self.m] = crate::fmath::min(b, 0.0);
+        self.m += 1;
+        true
+    }
+
+    /// Adds the row `sign` · (unit vector `k`) ≥ b (`sign` +1 or -1; b clamped to ≤ 0), the
+    /// same constraint as [`Qp::push_row`] of that vector at a fraction of the work; returns
+    /// false when full.
+    pub fn push_axis(&mut self, k: usize, sign: f32, b: f32) -> bool {
+        if self.m >= MAX_ROWS || k >= MAX_VARS {
+            return false;
+        }
+        let code = (k + 1) as i8;
+        self.axis[self.m] = if sign < 0.0 { -code } else { code };
         self.rhs[self.m] = crate::fmath::min(b, 0.0);
         self.m += 1;
         true
@@ -116,6 +135,14 @@ impl Qp {
             }
             s
         };
+        let axis = self.axis;
+        // aᵢ · v: for an axis row the one product that is not zero (the sum of the others' ±0
+        // does not change it).
+        let row_dot = |i: usize, v: &Vars| match axis[i] {
+            0 => dot(&self.rows[i], v),
+            a if a > 0 => v[(a - 1) as usize],
+            a => -v[(-a - 1) as usize],
+        };
         let mut p = [0.0f32; MAX_VARS];
         let mut working = [0usize; MAX_VARS];
         let mut w_len = 0usize;
@@ -125,8 +152,12 @@ impl Qp {
         let mut rhs = [0.0f32; KKT];
         // The rows do not change during a solve: their norms are taken once.
         let mut row_norms = [0.0f32; MAX_ROWS];
-        for (norm, row) in row_norms.iter_mut().zip(&self.rows).take(self.m) {
-            *norm = crate::fmath::sqrt(dot(row, row));
+        for (i, norm) in row_norms.iter_mut().enumerate().take(self.m) {
+            *norm = if axis[i] == 0 {
+                crate::fmath::sqrt(dot(&self.rows[i], &self.rows[i]))
+            } else {
+                1.0
+            };
         }
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
@@ -148,14 +179,29 @@ impl Qp {
                 rhs[i] = -(hp + self.g[i]);
             }
             for r in 0..self.m_eq + w_len {
-                let a = if r < self.m_eq {
-                    &self.eq[r]
+                let code = if r < self.m_eq {
+                    0
                 } else {
-                    &self.rows[working[r - self.m_eq]]
+                    axis[working[r - self.m_eq]]
                 };
-                for j in 0..n {
-                    k[n + r][j] = a[j];
-                    k[j][n + r] = -a[j];
+                if code == 0 {
+                    let a = if r < self.m_eq {
+                        &self.eq[r]
+                    } else {
+                        &self.rows[working[r - self.m_eq]]
+                    };
+                    for j in 0..n {
+                        k[n + r][j] = a[j];
+                        k[j][n + r] = -a[j];
+                    }
+                } else {
+                    let at = (code.unsigned_abs() - 1) as usize;
+                    let one = if code > 0 { 1.0f32 } else { -1.0 };
+                    for j in 0..n {
+                        let a = if j == at { one } else { 0.0 };
+                        k[n + r][j] = a;
+                        k[j][n + r] = -a;
+                    }
                 }
             }
             if !solve(k, &mut rhs, dim) {
@@ -182,12 +228,12 @@ impl Qp {
                     if in_working[i] {
                         continue;
                     }
-                    let ad = dot(&self.rows[i], &dv);
+                    let ad = row_dot(i, &dv);
                     // Rounding makes a just-released or parallel row look blocking by a hair; only
                     // a row that the step really crosses may block (this prevents cycling).
                     let row_norm = row_norms[i];
                     if ad < -1e-5 * row_norm * d_norm {
-                        let slack = self.rhs[i] - dot(&self.rows[i], &p);
+                        let slack = self.rhs[i] - row_dot(i, &p);
                         let t = crate::fmath::max(slack / ad, 0.0);
                         if t < alpha {
                             alpha = t;

@@ -45,9 +45,14 @@ pub struct LocalSolution {
 /// but never finer than f32 resolves at these coordinates (a finer one cannot be met and would
 /// fail restorations that in fact reached the target).
 pub fn equality_tolerance(p: &Problem) -> f32 {
-    (p.scenario.target.tolerance * 0.01)
+    p.equality_tolerance
+}
+
+/// [`equality_tolerance`] worked out for `scenario` (once per problem: every restoration needs it).
+pub(crate) fn equality_tolerance_of(scenario: &crate::model::scenario::Scenario) -> f32 {
+    (scenario.target.tolerance * 0.01)
         .min(1e-3)
-        .max(p.scenario.resolution())
+        .max(scenario.resolution())
 }
 
 /// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that
@@ -380,11 +385,8 @@ pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivativ
         qp.push_eq(&d.jac[r]);
     }
     for k in 0..p.n {
-        let mut unit = [0.0; MAX_VARS];
-        unit[k] = 1.0;
-        qp.push_row(&unit, crate::fmath::max(p.lower[k] - x[k], -TRUST));
-        unit[k] = -1.0;
-        qp.push_row(&unit, -crate::fmath::min(p.upper[k] - x[k], TRUST));
+        qp.push_axis(k, 1.0, crate::fmath::max(p.lower[k] - x[k], -TRUST));
+        qp.push_axis(k, -1.0, -crate::fmath::min(p.upper[k] - x[k], TRUST));
     }
     let tilt = qp.m;
     if !p.plane {
