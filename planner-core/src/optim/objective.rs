@@ -75,12 +75,12 @@ impl Problem<'_> {
         }
     }
 
-    /// [`Problem::value`] written into `out` (a line search reuses one buffer: on the device,
-    /// moving a `Value` costs more than many of the operations that make it). The clearances of
-    /// obstacles past the scenario's are left as they were.
-    pub fn value_into(&self, x: &Vars, out: &mut Value) {
+    /// [`Problem::value`] written into `out` when `out.geo` already holds the path of `x` (a
+    /// line search reuses one buffer, and the restoration has just drawn the path: on the
+    /// device, moving a `Value` costs more than many of the operations that make it). The
+    /// clearances of obstacles past the scenario's are left as they were.
+    pub fn value_of_drawn(&self, x: &Vars, out: &mut Value) {
         out.x = *x;
-        out.geo = self.geometry(x);
         let (objective, min_clearance) = self.objective_of(
             &out.geo,
             false,

@@ -236,7 +236,20 @@ impl<'a> Problem<'a> {
         (0..=seg).any(|i| self.bevel_var(i) == Some(k))
     }
 
-    /// End-point residual and its Jacobian only (for restoration).
+    /// The end-point residual of the path `geo` (the rows of [`Problem::end_rows`] without their
+    /// Jacobian: a restoration that has reached the target needs no more).
+    pub fn end_residual(&self, geo: &PathGeometry) -> [f32; 3] {
+        let diff = geo.end() - self.target;
+        let mut residual = [0.0; 3];
+        let rows = self.constraint_rows();
+        for (r, axis) in rows.iter().enumerate().take(self.m_eq) {
+            residual[r] = diff.dot(axis);
+        }
+        residual
+    }
+
+    /// End-point residual and its Jacobian only.
+    #[cfg(test)]
     pub fn end_constraint(&self, x: &Vars) -> ([f32; 3], [Vars; 3]) {
         let geo = self.geometry(x);
         self.end_rows(&geo, &self.screws(x, &geo))

@@ -58,9 +58,23 @@ pub(crate) fn equality_tolerance_of(scenario: &crate::model::scenario::Scenario)
 /// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that
 /// keep the bounds. Returns whether the end is within the tolerance; `evals` counts kinematics.
 pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
+    let mut geo = p.geometry(x);
+    restore_with(p, x, evals, &mut geo)
+}
+
+/// [`restore`], leaving in `geo` the path of the last `x` (the restored one on success: a line
+/// search evaluates it next and need not draw it again).
+pub fn restore_with(
+    p: &Problem,
+    x: &mut Vars,
+    evals: &mut u32,
+    geo: &mut crate::model::kinematics::PathGeometry,
+) -> bool {
     let tol = equality_tolerance(p);
     for _ in 0..=MAX_RESTORE {
-        let (r, jac) = p.end_constraint(x);
+        *geo = p.geometry(x);
+        let geo = &*geo;
+        let r = p.end_residual(geo);
         *evals += 1;
         let norm = crate::fmath::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if !norm.is_finite() {
@@ -69,6 +83,8 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
         if norm <= tol {
             return true;
         }
+        // Not there yet: the Jacobian of the same rows.
+        let (_, jac) = p.end_rows(geo, &p.screws(x, geo));
         // Variables pinned at a bound that the step would push further out are held fixed.
         let mut free = [true; MAX_VARS];
         let mut delta = [0.0f32; MAX_VARS];
@@ -221,10 +237,10 @@ pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolut
         let mut solved = None;
         for attempt in 0..2 {
             if attempt == 1 {
-                h = model_hessian(p, &cur, &cur_d);
+                h = model_hessian(p, cur, &cur_d);
             }
             for clear_limit in [QP_CLEARANCES, 1, 0] {
-                let rows = tangent_qp(&mut qp, p, &cur, &cur_d, &h, clear_limit);
+                let rows = tangent_qp(&mut qp, p, cur, &cur_d, &h, clear_limit);
                 if let Ok(sol) = qp.solve() {
                     solved = Some((sol, rows));
                     break;
@@ -263,8 +279,8 @@ pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolut
             for k in 0..n {
                 xt[k] = crate::fmath::clamp(cur.x[k] + t * sol.p[k], p.lower[k], p.upper[k]);
             }
-            if restore(p, &mut xt, &mut evals) {
-                p.value_into(&xt, trial);
+            if restore_with(p, &mut xt, &mut evals, &mut trial.geo) {
+                p.value_of_drawn(&xt, trial);
                 evals += 1;
                 if trial.admissible(p) && trial.objective <= cur.objective + 1e-4 * t * slope {
                     accepted = true;
