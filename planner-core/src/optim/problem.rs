@@ -199,6 +199,13 @@ impl<'a> Problem<'a> {
         )
     }
 
+    /// [`Problem::geometry`] written into `geo`, a path of this problem.
+    pub fn geometry_into(&self, x: &Vars, geo: &mut PathGeometry) {
+        let (t1, t2) = self.angles(x);
+        let first = insertion_frame(self.entry, &self.basis, t1, t2);
+        geo.rebuild(first, &self.lengths(x), &self.bevels(x));
+    }
+
     /// The screw of every variable, for points downstream of all of them.
     pub(super) fn screws(&self, x: &Vars, geo: &PathGeometry) -> [Screw; MAX_VARS] {
         let mut s = [Screw::ZERO; MAX_VARS];

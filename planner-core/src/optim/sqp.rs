@@ -72,7 +72,7 @@ pub fn restore_with(
 ) -> bool {
     let tol = equality_tolerance(p);
     for _ in 0..=MAX_RESTORE {
-        *geo = p.geometry(x);
+        p.geometry_into(x, geo);
         let geo = &*geo;
         let r = p.end_residual(geo);
         *evals += 1;
