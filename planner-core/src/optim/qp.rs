@@ -79,11 +79,11 @@ impl Qp {
         }
     }
 
-    /// Empties the QP and gives it a new objective, keeping the buffers (rows past the new count
-    /// are never read): an SQP iteration reuses one QP instead of building kilobytes afresh.
-    pub fn reset(&mut self, n: usize, h: &[Vars; MAX_VARS], g: &Vars) {
+    /// Empties the QP and gives it a new gradient, keeping the buffers (rows past the new count
+    /// are never read) and the Hessian (the SQP's quasi-Newton matrix lives in the QP): an SQP
+    /// iteration reuses one QP instead of building or copying kilobytes afresh.
+    pub fn reset_rows(&mut self, n: usize, g: &Vars) {
         self.n = n;
-        self.h = *h;
         self.g = *g;
         self.m_eq = 0;
         self.m = 0;

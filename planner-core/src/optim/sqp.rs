@@ -237,10 +237,10 @@ pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolut
         let mut solved = None;
         for attempt in 0..2 {
             if attempt == 1 {
-                h = model_hessian(p, cur, &cur_d);
+                qp.h = model_hessian(p, cur, &cur_d);
             }
             for clear_limit in [QP_CLEARANCES, 1, 0] {
-                let rows = tangent_qp(&mut qp, p, cur, &cur_d, &h, clear_limit);
+                let rows = tangent_qp(&mut qp, p, cur, &cur_d, clear_limit);
                 if let Ok(sol) = qp.solve() {
                     solved = Some((sol, rows));
                     break;
@@ -309,7 +309,7 @@ pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolut
             s[k] = next.x[k] - cur.x[k];
             y[k] = g_new[k] - g_old[k];
         }
-        bfgs_update(&mut h, &s, &y, n);
+        bfgs_update(&mut qp.h, &s, &y, n);
         ci = 1 - ci;
     }
     let [a, b] = vals;
@@ -364,16 +364,15 @@ struct QpRows {
 }
 
 /// The QP of the tangent step at `cur`: bounds within the trust box, the tilt cone (3-D) and the
-/// `clear_limit` nearest clearances, linearised.
+/// `clear_limit` nearest clearances, linearised; the Hessian is the one in `qp`.
 fn tangent_qp(
     qp: &mut Qp,
     p: &Problem,
     cur: &Value,
     cur_d: &Derivatives,
-    h: &[Vars; MAX_VARS],
     clear_limit: usize,
 ) -> QpRows {
-    qp.reset(p.n, h, &cur_d.grad);
+    qp.reset_rows(p.n, &cur_d.grad);
     let mut rows = QpRows {
         clearances: [(0, 0); QP_CLEARANCES],
         n_clear: 0,
