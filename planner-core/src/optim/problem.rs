@@ -47,7 +47,9 @@ pub struct Problem<'a> {
     pub cos_max_tilt: f32,
     /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
     pub basis: Matrix3<f32>,
-    /// End-point tolerance of the optimiser ([`crate::optim::sqp::equality_tolerance`]).
+    /// End-point tolerance the optimiser solves to (mm): a hundredth of the scenario's, at most
+    /// 1 um, but never finer than f32 resolves at these coordinates (worked out once: every
+    /// restoration needs it).
     pub equality_tolerance: f32,
     entry: V3,
     target: V3,
@@ -122,7 +124,9 @@ impl<'a> Problem<'a> {
             min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
             cos_max_tilt: crate::fmath::cos(tilt),
             basis: entry_basis(scenario.entry.direction),
-            equality_tolerance: crate::optim::sqp::equality_tolerance_of(scenario),
+            equality_tolerance: (scenario.target.tolerance * 0.01)
+                .min(1e-3)
+                .max(scenario.resolution()),
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
         }

@@ -48,13 +48,6 @@ pub fn equality_tolerance(p: &Problem) -> f32 {
     p.equality_tolerance
 }
 
-/// [`equality_tolerance`] worked out for `scenario` (once per problem: every restoration needs it).
-pub(crate) fn equality_tolerance_of(scenario: &crate::model::scenario::Scenario) -> f32 {
-    (scenario.target.tolerance * 0.01)
-        .min(1e-3)
-        .max(scenario.resolution())
-}
-
 /// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that
 /// keep the bounds. Returns whether the end is within the tolerance; `evals` counts kinematics.
 pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
