@@ -17,6 +17,41 @@ const PIO2_1: f32 = 1.570_312_5;
 const PIO2_2: f32 = 4.837_513e-4;
 const PIO2_3: f32 = 7.549_79e-8;
 
+/// The greater of `x` and `y`, the other one if either is NaN: the operations of `libm`'s
+/// `fmaxf` (what `f32::max` calls on the Cortex-M4F, whose FPU has no max instruction), inline.
+#[inline(always)]
+pub fn max(x: f32, y: f32) -> f32 {
+    if x.is_nan() || x < y {
+        y
+    } else {
+        x
+    }
+}
+
+/// The lesser of `x` and `y`, the other one if either is NaN (`libm`'s `fminf`, inline).
+#[inline(always)]
+pub fn min(x: f32, y: f32) -> f32 {
+    if y.is_nan() || x < y {
+        x
+    } else {
+        y
+    }
+}
+
+/// `x` limited to `[lo, hi]`: the comparisons of `f32::clamp`, without its panic when a bound is
+/// NaN or `lo > hi` (that panic also pulled float formatting into the firmware: 17 KiB).
+#[inline(always)]
+pub fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    let mut x = x;
+    if x < lo {
+        x = lo;
+    }
+    if x > hi {
+        x = hi;
+    }
+    x
+}
+
 /// sin and cos of `x` (radians). NaN and infinities give NaN.
 pub fn sincos(x: f32) -> (f32, f32) {
     if !x.is_finite() {
@@ -161,13 +196,13 @@ pub fn wrap_positive(a: f32) -> f32 {
 
 /// asin of `x` in [-1, 1] (clamped).
 pub fn asin(x: f32) -> f32 {
-    let x = x.clamp(-1.0, 1.0);
+    let x = clamp(x, -1.0, 1.0);
     atan2(x, sqrt((1.0 - x) * (1.0 + x)))
 }
 
 /// acos of `x` in [-1, 1] (clamped).
 pub fn acos(x: f32) -> f32 {
-    let x = x.clamp(-1.0, 1.0);
+    let x = clamp(x, -1.0, 1.0);
     atan2(sqrt((1.0 - x) * (1.0 + x)), x)
 }
 

@@ -182,6 +182,25 @@ impl PathGeometry {
         }
     }
 
+    /// [`PathGeometry::build`] in place, over a path of the same form (a restoration redraws one
+    /// path many times; frames past the form's length are never read).
+    pub fn rebuild(
+        &mut self,
+        first: Frame,
+        lengths: &[f32; MAX_CONTROL_DEGREE],
+        bevels: &[f32; MAX_CONTROL_DEGREE],
+    ) {
+        self.lengths = *lengths;
+        let mut f = first;
+        for i in 0..self.form.len() {
+            f = f.rolled(bevels[i]);
+            self.starts[i] = f;
+            f = f.advanced(self.form.kind(i), lengths[i], self.radius);
+            self.ends[i] = f;
+        }
+        self.starts[self.form.len()] = f;
+    }
+
     /// The tip at the end of the path.
     pub fn end(&self) -> V3 {
         self.starts[self.form.len()].p

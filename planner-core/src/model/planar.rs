@@ -16,7 +16,12 @@ pub struct Pose {
 
 /// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
 pub fn bend(psi: f32, s: f32) -> (f32, f32) {
-    (s * crate::fmath::sin(psi), -s * crate::fmath::cos(psi))
+    bend_of(crate::fmath::sincos(psi), s)
+}
+
+/// [`bend`] from the heading's (sin, cos), already known.
+fn bend_of((sn, cs): (f32, f32), s: f32) -> (f32, f32) {
+    (s * sn, -s * cs)
 }
 
 /// The heading at which an arc of side `s` has unit bend normal `n`.
@@ -31,22 +36,42 @@ pub fn turn(from: f32, to: f32, s: f32) -> f32 {
 
 /// The pose after a segment of `kind` and length `len` bending to side `s`.
 pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
+    advance_from(p, crate::fmath::sincos(p.psi), kind, len, s, radius).0
+}
+
+/// [`advance`] from the start heading's (sin, cos), already known; also returns the end
+/// heading's (sin, cos). The same operations as computing every sine afresh, so the same bits.
+fn advance_from(
+    p: Pose,
+    sc: (f32, f32),
+    kind: SegmentKind,
+    len: f32,
+    s: f32,
+    radius: f32,
+) -> (Pose, (f32, f32)) {
     match kind {
-        SegmentKind::Line => Pose {
-            x: p.x + len * crate::fmath::cos(p.psi),
-            y: p.y + len * crate::fmath::sin(p.psi),
-            psi: p.psi,
-        },
+        SegmentKind::Line => (
+            Pose {
+                x: p.x + len * sc.1,
+                y: p.y + len * sc.0,
+                psi: p.psi,
+            },
+            sc,
+        ),
         SegmentKind::Arc => {
-            let (nx, ny) = bend(p.psi, s);
+            let (nx, ny) = bend_of(sc, s);
             let (cx, cy) = (p.x + radius * nx, p.y + radius * ny);
             let psi = p.psi - s * len / radius;
-            let (mx, my) = bend(psi, s);
-            Pose {
-                x: cx - radius * mx,
-                y: cy - radius * my,
-                psi,
-            }
+            let end_sc = crate::fmath::sincos(psi);
+            let (mx, my) = bend_of(end_sc, s);
+            (
+                Pose {
+                    x: cx - radius * mx,
+                    y: cy - radius * my,
+                    psi,
+                },
+                end_sc,
+            )
         }
     }
 }
@@ -64,24 +89,42 @@ pub struct Drawn {
     unit: (f32, f32),
     /// Arc: the circle's centre.
     centre: (f32, f32),
+    /// Arc: the unit radius from the centre to its end.
+    end_radial: (f32, f32),
     /// Where the segment ends.
     pub end: Pose,
+    /// (sin, cos) of the end heading.
+    pub end_sc: (f32, f32),
 }
 
 impl Drawn {
     /// The segment of `kind` and length `len` that starts at `start` and bends to side `s`.
+    #[cfg(test)]
     pub fn new(start: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Drawn {
+        Drawn::new_from(start, crate::fmath::sincos(start.psi), kind, len, s, radius)
+    }
+
+    /// [`Drawn::new`] from the start heading's (sin, cos), already known (a path's pieces are
+    /// drawn one after another: each starts with the heading the previous one ends with).
+    pub fn new_from(
+        start: Pose,
+        sc: (f32, f32),
+        kind: SegmentKind,
+        len: f32,
+        s: f32,
+        radius: f32,
+    ) -> Drawn {
         let (unit, centre) = match kind {
-            SegmentKind::Line => (
-                (crate::fmath::cos(start.psi), crate::fmath::sin(start.psi)),
-                (0.0, 0.0),
-            ),
+            SegmentKind::Line => ((sc.1, sc.0), (0.0, 0.0)),
             SegmentKind::Arc => {
-                let n = bend(start.psi, s);
+                let n = bend_of(sc, s);
                 (n, (start.x + radius * n.0, start.y + radius * n.1))
             }
         };
+        let (end, end_sc) = advance_from(start, sc, kind, len, s, radius);
+        let (bx, by) = bend_of(end_sc, s);
         Drawn {
+            end_radial: (-bx, -by),
             kind,
             start,
             len,
@@ -89,7 +132,8 @@ impl Drawn {
             radius,
             unit,
             centre,
-            end: advance(start, kind, len, s, radius),
+            end,
+            end_sc,
         }
     }
 
@@ -101,20 +145,34 @@ impl Drawn {
         match self.kind {
             SegmentKind::Line => {
                 let (dx, dy) = self.unit;
-                let t = ((q.0 - p.x) * dx + (q.1 - p.y) * dy).clamp(0.0, self.len);
+                let t = crate::fmath::clamp((q.0 - p.x) * dx + (q.1 - p.y) * dy, 0.0, self.len);
                 sq(q.0 - p.x - t * dx, q.1 - p.y - t * dy)
             }
             SegmentKind::Arc => {
                 let (nx, ny) = self.unit;
                 let (vx, vy) = (q.0 - self.centre.0, q.1 - self.centre.1);
-                // The radius to the start is -n; along the arc it turns clockwise for s = +1.
-                let ccw = crate::fmath::atan2(-nx * vy + ny * vx, -nx * vx - ny * vy);
-                if crate::fmath::wrap_positive(-self.side * ccw) * self.radius <= self.len {
+                // The radius to the start is u = -n; along the arc it turns clockwise for s = +1.
+                // `ahead(a, b)`: the sine of the angle from a to b in the turning direction
+                // (times their lengths). q's radius lies on the arc when its angle from u, in the
+                // turning direction, is at most the arc's (sign tests, no arc tangent).
+                let side = self.side;
+                let ahead = |a: (f32, f32), b: (f32, f32)| -side * (a.0 * b.1 - a.1 * b.0);
+                let v = (vx, vy);
+                let e = self.end_radial;
+                let from_start = ahead((-nx, -ny), v);
+                let on_arc = if self.len >= core::f32::consts::TAU * self.radius {
+                    true
+                } else if self.len <= core::f32::consts::PI * self.radius {
+                    from_start >= 0.0 && ahead(v, e) >= 0.0
+                } else {
+                    !(from_start < 0.0 && ahead(e, v) > 0.0)
+                };
+                if on_arc {
                     let off = crate::fmath::sqrt(sq(vx, vy)) - self.radius;
                     off * off
                 } else {
                     let end = &self.end;
-                    sq(q.0 - p.x, q.1 - p.y).min(sq(q.0 - end.x, q.1 - end.y))
+                    crate::fmath::min(sq(q.0 - p.x, q.1 - p.y), sq(q.0 - end.x, q.1 - end.y))
                 }
             }
         }
@@ -146,8 +204,9 @@ pub fn complete(
         }
         (SegmentKind::Line, SegmentKind::Arc) => {
             let s = sides.1;
-            let (nx, ny) = bend(p.psi, s);
-            let (dx, dy) = (crate::fmath::cos(p.psi), crate::fmath::sin(p.psi));
+            let sc = crate::fmath::sincos(p.psi);
+            let (nx, ny) = bend_of(sc, s);
+            let (dx, dy) = (sc.1, sc.0);
             let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
             let wd = wx * dx + wy * dy;
             let disc = wd * wd - (wx * wx + wy * wy) + r * r;
@@ -180,7 +239,7 @@ pub fn complete(
                 return;
             }
             let a = (3.0 * r * r + d * d) / (2.0 * d);
-            let h = crate::fmath::sqrt((4.0 * r * r - a * a).max(0.0));
+            let h = crate::fmath::sqrt(crate::fmath::max(4.0 * r * r - a * a, 0.0));
             let (ex, ey) = (ux / d, uy / d);
             for sign in [-1.0f32, 1.0] {
                 let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);

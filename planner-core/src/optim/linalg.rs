@@ -2,13 +2,9 @@
 //! pivoting on fixed arrays (Nocedal & Wright, Algorithm 16.3's KKT systems, and the restoration's
 //! small normal equations).
 
-/// Solves the leading `dim`-square system of `a x = b` (both overwritten); `None` when a pivot
-/// vanishes.
-pub(crate) fn solve<const N: usize>(
-    a: &mut [[f32; N]; N],
-    b: &mut [f32; N],
-    dim: usize,
-) -> Option<[f32; N]> {
+/// Solves the leading `dim`-square system of `a x = b` (both overwritten; `b` becomes x);
+/// false when a pivot vanishes or x is not finite.
+pub(crate) fn solve<const N: usize>(a: &mut [[f32; N]; N], b: &mut [f32; N], dim: usize) -> bool {
     // Scaled partial pivoting: the N rows mix scales (Hessian entries in the 10^5 next to unit
     // bound rows), so a pivot is judged against its own row's size, not the matrix's.
     let mut inv_scale = [0.0f32; N];
@@ -16,9 +12,9 @@ pub(crate) fn solve<const N: usize>(
         let size = row
             .iter()
             .take(dim)
-            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+            .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
         if !(size > 0.0) {
-            return None;
+            return false;
         }
         *s = 1.0 / size;
     }
@@ -33,7 +29,7 @@ pub(crate) fn solve<const N: usize>(
             }
         }
         if !(best > 1e-6) {
-            return None;
+            return false;
         }
         if piv != col {
             // Only columns from `col` on are read again (the rest is eliminated).
@@ -55,17 +51,13 @@ pub(crate) fn solve<const N: usize>(
             }
         }
     }
-    let mut x = [0.0f32; N];
+    // Back substitution in place: x[c] for c > r is already in b[c].
     for r in (0..dim).rev() {
         let mut s = b[r];
         for c in r + 1..dim {
-            s -= a[r][c] * x[c];
+            s -= a[r][c] * b[c];
         }
-        x[r] = s / a[r][r];
+        b[r] = s / a[r][r];
     }
-    if x[..dim].iter().all(|v| v.is_finite()) {
-        Some(x)
-    } else {
-        None
-    }
+    b[..dim].iter().all(|v| v.is_finite())
 }

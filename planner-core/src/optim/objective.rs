@@ -56,17 +56,15 @@ impl Problem<'_> {
     /// first one the path touches (the value is then inadmissible and only `min_clearance` is
     /// meaningful): a sweep over many seeds needs no more.
     pub fn value_or_blocked(&self, x: &Vars, stop_when_blocked: bool) -> Value {
-        let geo = self.geometry(x);
         let mut clearance = [f32::INFINITY; MAX_OBSTACLES];
         let mut nearest_segment = [0u8; MAX_OBSTACLES];
-        let (risk, min_clearance) = self.scan(&geo, stop_when_blocked, |o, d, seg| {
-            clearance[o] = d;
-            nearest_segment[o] = seg;
-        });
-        let w = &self.scenario.weights;
-        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
-        let objective =
-            w.length * geo.total_length() + risk_term + w.control * self.form.len() as f32;
+        let geo = self.geometry(x);
+        let (objective, min_clearance) = self.objective_of(
+            &geo,
+            stop_when_blocked,
+            &mut clearance,
+            &mut nearest_segment,
+        );
         Value {
             x: *x,
             geo,
@@ -75,6 +73,41 @@ impl Problem<'_> {
             nearest_segment,
             min_clearance,
         }
+    }
+
+    /// [`Problem::value`] written into `out` when `out.geo` already holds the path of `x` (a
+    /// line search reuses one buffer, and the restoration has just drawn the path: on the
+    /// device, moving a `Value` costs more than many of the operations that make it). The
+    /// clearances of obstacles past the scenario's are left as they were.
+    pub fn value_of_drawn(&self, x: &Vars, out: &mut Value) {
+        out.x = *x;
+        let (objective, min_clearance) = self.objective_of(
+            &out.geo,
+            false,
+            &mut out.clearance,
+            &mut out.nearest_segment,
+        );
+        out.objective = objective;
+        out.min_clearance = min_clearance;
+    }
+
+    /// The objective and smallest clearance of the path `geo`, every clearance recorded.
+    fn objective_of(
+        &self,
+        geo: &PathGeometry,
+        stop_when_blocked: bool,
+        clearance: &mut [f32; MAX_OBSTACLES],
+        nearest_segment: &mut [u8; MAX_OBSTACLES],
+    ) -> (f32, f32) {
+        let (risk, min_clearance) = self.scan(geo, stop_when_blocked, |o, d, seg| {
+            clearance[o] = d;
+            nearest_segment[o] = seg;
+        });
+        let w = &self.scenario.weights;
+        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+        let objective =
+            w.length * geo.total_length() + risk_term + w.control * self.form.len() as f32;
+        (objective, min_clearance)
     }
 
     /// Clearance of every obstacle (`record(obstacle, clearance, nearest segment)`); returns D

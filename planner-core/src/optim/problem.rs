@@ -56,6 +56,10 @@ pub struct Problem<'a> {
     /// A continuation's fixed start (the tip in tissue): no insertion angles, and a bevel
     /// variable before every arc, the first one included (the rotation done where the tip is).
     pub start: Option<Frame>,
+    /// End-point tolerance the optimiser solves to (mm): a hundredth of the scenario's, at most
+    /// 1 um, but never finer than f32 resolves at these coordinates (worked out once: every
+    /// restoration needs it).
+    pub equality_tolerance: f32,
     entry: V3,
     target: V3,
 }
@@ -137,6 +141,9 @@ impl<'a> Problem<'a> {
             vers_max_tilt: versine(tilt),
             basis: entry_basis(scenario.entry.direction),
             start: None,
+            equality_tolerance: (scenario.target.tolerance * 0.01)
+                .min(1e-3)
+                .max(scenario.resolution()),
             entry: v3(scenario.entry.position),
             target: v3(scenario.target.position),
         }
@@ -266,6 +273,13 @@ impl<'a> Problem<'a> {
         )
     }
 
+    /// [`Problem::geometry`] written into `geo`, a path of this problem.
+    pub fn geometry_into(&self, x: &Vars, geo: &mut PathGeometry) {
+        let (t1, t2) = self.angles(x);
+        let first = insertion_frame(self.entry, &self.basis, t1, t2);
+        geo.rebuild(first, &self.lengths(x), &self.bevels(x));
+    }
+
     /// The screw of every variable, for points downstream of all of them.
     pub(super) fn screws(&self, x: &Vars, geo: &PathGeometry) -> [Screw; MAX_VARS] {
         let mut s = [Screw::ZERO; MAX_VARS];
@@ -305,7 +319,20 @@ impl<'a> Problem<'a> {
         (0..=seg).any(|i| self.bevel_var(i) == Some(k))
     }
 
-    /// End-point residual and its Jacobian only (for restoration).
+    /// The end-point residual of the path `geo` (the rows of [`Problem::end_rows`] without their
+    /// Jacobian: a restoration that has reached the target needs no more).
+    pub fn end_residual(&self, geo: &PathGeometry) -> [f32; 3] {
+        let diff = geo.end() - self.target;
+        let mut residual = [0.0; 3];
+        let rows = self.constraint_rows();
+        for (r, axis) in rows.iter().enumerate().take(self.m_eq) {
+            residual[r] = diff.dot(axis);
+        }
+        residual
+    }
+
+    /// End-point residual and its Jacobian only.
+    #[cfg(test)]
     pub fn end_constraint(&self, x: &Vars) -> ([f32; 3], [Vars; 3]) {
         let geo = self.geometry(x);
         self.end_rows(&geo, &self.screws(x, &geo))

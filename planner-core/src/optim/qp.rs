@@ -28,12 +28,18 @@ pub struct Qp {
     pub eq: [Vars; MAX_EQ],
     /// Number of equality rows.
     pub m_eq: usize,
-    /// Inequality rows aᵢ.
+    /// Inequality rows aᵢ (not written for an axis row).
     pub rows: [Vars; MAX_ROWS],
+    /// Row i is ±(unit vector k) when `axis[i]` is ±(k + 1) (a bound: its products are one
+    /// element, exactly the dot product's value), a general row when 0.
+    axis: [i8; MAX_ROWS],
     /// Right-hand sides bᵢ (≤ 0).
     pub rhs: [f32; MAX_ROWS],
     /// Number of inequality rows.
     pub m: usize,
+    /// The KKT system's buffer, reused by every solve (every entry a solve reads it writes
+    /// first): zeroing kilobytes per solve cost more on the device than some solves.
+    kkt: [[f32; KKT]; KKT],
 }
 
 /// A QP solution.
@@ -66,16 +72,18 @@ impl Qp {
             eq: [[0.0; MAX_VARS]; MAX_EQ],
             m_eq: 0,
             rows: [[0.0; MAX_VARS]; MAX_ROWS],
+            axis: [0; MAX_ROWS],
             rhs: [0.0; MAX_ROWS],
             m: 0,
+            kkt: [[0.0; KKT]; KKT],
         }
     }
 
-    /// Empties the QP and gives it a new objective, keeping the buffers (rows past the new count
-    /// are never read): an SQP iteration reuses one QP instead of building kilobytes afresh.
-    pub fn reset(&mut self, n: usize, h: &[Vars; MAX_VARS], g: &Vars) {
+    /// Empties the QP and gives it a new gradient, keeping the buffers (rows past the new count
+    /// are never read) and the Hessian (the SQP's quasi-Newton matrix lives in the QP): an SQP
+    /// iteration reuses one QP instead of building or copying kilobytes afresh.
+    pub fn reset_rows(&mut self, n: usize, g: &Vars) {
         self.n = n;
-        self.h = *h;
         self.g = *g;
         self.m_eq = 0;
         self.m = 0;
@@ -97,30 +105,60 @@ impl Qp {
             return false;
         }
         self.rows[self.m] = *a;
-        self.rhs[self.m] = b.min(0.0);
+        self.axis[self.m] = 0;
+        self.rhs[self.m] = crate::fmath::min(b, 0.0);
         self.m += 1;
         true
     }
 
-    fn dot(&self, a: &Vars, b: &Vars) -> f32 {
-        let mut s = 0.0;
-        for k in 0..self.n {
-            s += a[k] * b[k];
+    /// Adds the row `sign` · (unit vector `k`) ≥ b (`sign` +1 or -1; b clamped to ≤ 0), the
+    /// same constraint as [`Qp::push_row`] of that vector at a fraction of the work; returns
+    /// false when full.
+    pub fn push_axis(&mut self, k: usize, sign: f32, b: f32) -> bool {
+        if self.m >= MAX_ROWS || k >= MAX_VARS {
+            return false;
         }
-        s
+        let code = (k + 1) as i8;
+        self.axis[self.m] = if sign < 0.0 { -code } else { code };
+        self.rhs[self.m] = crate::fmath::min(b, 0.0);
+        self.m += 1;
+        true
     }
 
     /// Solves the QP from p = 0.
-    pub fn solve(&self) -> Result<QpSolution, QpError> {
+    pub fn solve(&mut self) -> Result<QpSolution, QpError> {
         let n = self.n;
+        let dot = |a: &Vars, b: &Vars| {
+            let mut s = 0.0;
+            for k in 0..n {
+                s += a[k] * b[k];
+            }
+            s
+        };
+        let axis = self.axis;
+        // aᵢ · v: for an axis row the one product that is not zero (the sum of the others' ±0
+        // does not change it).
+        let row_dot = |i: usize, v: &Vars| match axis[i] {
+            0 => dot(&self.rows[i], v),
+            a if a > 0 => v[(a - 1) as usize],
+            a => -v[(-a - 1) as usize],
+        };
         let mut p = [0.0f32; MAX_VARS];
         let mut working = [0usize; MAX_VARS];
         let mut w_len = 0usize;
         let mut in_working = [false; MAX_ROWS];
-        let mut stationary = false;
         // Reused each iteration: every entry of the leading dim × dim block is written below.
-        let mut k = [[0.0f32; KKT]; KKT];
+        let k = &mut self.kkt;
         let mut rhs = [0.0f32; KKT];
+        // The rows do not change during a solve: their norms are taken once.
+        let mut row_norms = [0.0f32; MAX_ROWS];
+        for (i, norm) in row_norms.iter_mut().enumerate().take(self.m) {
+            *norm = if axis[i] == 0 {
+                crate::fmath::sqrt(dot(&self.rows[i], &self.rows[i]))
+            } else {
+                1.0
+            };
+        }
         for _ in 0..4 * MAX_ROWS {
             // KKT system: [H  -Aᵀ; A 0] [d; μ] = [-(Hp + g); 0]
             let dim = n + self.m_eq + w_len;
@@ -141,92 +179,111 @@ impl Qp {
                 rhs[i] = -(hp + self.g[i]);
             }
             for r in 0..self.m_eq + w_len {
-                let a = if r < self.m_eq {
-                    &self.eq[r]
+                let code = if r < self.m_eq {
+                    0
                 } else {
-                    &self.rows[working[r - self.m_eq]]
+                    axis[working[r - self.m_eq]]
                 };
-                for j in 0..n {
-                    k[n + r][j] = a[j];
-                    k[j][n + r] = -a[j];
+                if code == 0 {
+                    let a = if r < self.m_eq {
+                        &self.eq[r]
+                    } else {
+                        &self.rows[working[r - self.m_eq]]
+                    };
+                    for j in 0..n {
+                        k[n + r][j] = a[j];
+                        k[j][n + r] = -a[j];
+                    }
+                } else {
+                    let at = (code.unsigned_abs() - 1) as usize;
+                    let one = if code > 0 { 1.0f32 } else { -1.0 };
+                    for j in 0..n {
+                        let a = if j == at { one } else { 0.0 };
+                        k[n + r][j] = a;
+                        k[j][n + r] = -a;
+                    }
                 }
             }
-            let sol = solve(&mut k, &mut rhs, dim).ok_or(QpError::Singular)?;
+            if !solve(k, &mut rhs, dim) {
+                return Err(QpError::Singular);
+            }
+            let sol = &rhs;
             let d = &sol[..n];
 
-            let step_norm = d.iter().fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
-            let scale = p.iter().take(n).fold(1.0f32, |m, v| m.max(libm::fabsf(*v)));
-            // After a full, unblocked step p minimises over the working set; what the KKT solve
-            // returns as a further step is rounding noise.
-            if stationary || step_norm <= 1e-7 * scale {
-                stationary = false;
-                // Stationary on the working set: check the inequality multipliers.
-                let mut worst: Option<(usize, f32)> = None;
-                for w in 0..w_len {
-                    let mu = sol[n + self.m_eq + w];
-                    if mu < 0.0 && worst.is_none_or(|(_, m)| mu < m) {
-                        worst = Some((w, mu));
+            let step_norm = d
+                .iter()
+                .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
+            let scale = p
+                .iter()
+                .take(n)
+                .fold(1.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
+            if step_norm > 1e-7 * scale {
+                // Longest step along d that keeps every inequality.
+                let mut alpha = 1.0f32;
+                let mut blocking = None;
+                let mut dv = [0.0f32; MAX_VARS];
+                dv[..n].copy_from_slice(d);
+                let d_norm = crate::fmath::sqrt(dot(&dv, &dv));
+                for i in 0..self.m {
+                    if in_working[i] {
+                        continue;
                     }
-                }
-                match worst {
-                    None => {
-                        let mut out = QpSolution {
-                            p,
-                            eq_mult: [0.0; MAX_EQ],
-                            mult: [0.0; MAX_ROWS],
-                        };
-                        out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
-                        for w in 0..w_len {
-                            out.mult[working[w]] = sol[n + self.m_eq + w];
+                    let ad = row_dot(i, &dv);
+                    // Rounding makes a just-released or parallel row look blocking by a hair; only
+                    // a row that the step really crosses may block (this prevents cycling).
+                    let row_norm = row_norms[i];
+                    if ad < -1e-5 * row_norm * d_norm {
+                        let slack = self.rhs[i] - row_dot(i, &p);
+                        let t = crate::fmath::max(slack / ad, 0.0);
+                        if t < alpha {
+                            alpha = t;
+                            blocking = Some(i);
                         }
-                        return Ok(out);
-                    }
-                    Some((w, _)) => {
-                        in_working[working[w]] = false;
-                        for i in w..w_len - 1 {
-                            working[i] = working[i + 1];
-                        }
-                        w_len -= 1;
                     }
                 }
-                continue;
-            }
-            // Longest step along d that keeps every inequality.
-            let mut alpha = 1.0f32;
-            let mut blocking = None;
-            let mut dv = [0.0f32; MAX_VARS];
-            dv[..n].copy_from_slice(d);
-            let d_norm = crate::fmath::sqrt(self.dot(&dv, &dv));
-            for i in 0..self.m {
-                if in_working[i] {
-                    continue;
+                for j in 0..n {
+                    p[j] += alpha * dv[j];
                 }
-                let ad = self.dot(&self.rows[i], &dv);
-                // Rounding makes a just-released or parallel row look blocking by a hair; only a
-                // row that the step really crosses may block (this prevents cycling).
-                let row_norm = crate::fmath::sqrt(self.dot(&self.rows[i], &self.rows[i]));
-                if ad < -1e-5 * row_norm * d_norm {
-                    let slack = self.rhs[i] - self.dot(&self.rows[i], &p);
-                    let t = (slack / ad).max(0.0);
-                    if t < alpha {
-                        alpha = t;
-                        blocking = Some(i);
+                if let Some(i) = blocking {
+                    if w_len < n {
+                        working[w_len] = i;
+                        w_len += 1;
+                        in_working[i] = true;
+                        continue;
                     }
-                }
-            }
-            for j in 0..n {
-                p[j] += alpha * dv[j];
-            }
-            if blocking.is_none() {
-                stationary = true;
-            }
-            if let Some(i) = blocking {
-                if w_len < n {
-                    working[w_len] = i;
-                    w_len += 1;
-                    in_working[i] = true;
-                } else {
                     return Err(QpError::Singular);
+                }
+                // A full, unblocked step: p now minimises over the working set, and the
+                // multipliers of this solve are the minimiser's (the KKT system is linear in p),
+                // so no second solve is needed to read them.
+            }
+            // Stationary on the working set: check the inequality multipliers.
+            let mut worst: Option<(usize, f32)> = None;
+            for w in 0..w_len {
+                let mu = sol[n + self.m_eq + w];
+                if mu < 0.0 && worst.is_none_or(|(_, m)| mu < m) {
+                    worst = Some((w, mu));
+                }
+            }
+            match worst {
+                None => {
+                    let mut out = QpSolution {
+                        p,
+                        eq_mult: [0.0; MAX_EQ],
+                        mult: [0.0; MAX_ROWS],
+                    };
+                    out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
+                    for w in 0..w_len {
+                        out.mult[working[w]] = sol[n + self.m_eq + w];
+                    }
+                    return Ok(out);
+                }
+                Some((w, _)) => {
+                    in_working[working[w]] = false;
+                    for i in w..w_len - 1 {
+                        working[i] = working[i + 1];
+                    }
+                    w_len -= 1;
                 }
             }
         }

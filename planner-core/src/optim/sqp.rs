@@ -45,17 +45,29 @@ pub struct LocalSolution {
 /// but never finer than f32 resolves at these coordinates (a finer one cannot be met and would
 /// fail restorations that in fact reached the target).
 pub fn equality_tolerance(p: &Problem) -> f32 {
-    (p.scenario.target.tolerance * 0.01)
-        .min(1e-3)
-        .max(p.scenario.resolution())
+    p.equality_tolerance
 }
 
 /// Moves `x` onto the target manifold (end point = target) by min-norm Gauss–Newton steps that
 /// keep the bounds. Returns whether the end is within the tolerance; `evals` counts kinematics.
 pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
+    let mut geo = p.geometry(x);
+    restore_with(p, x, evals, &mut geo)
+}
+
+/// [`restore`], leaving in `geo` the path of the last `x` (the restored one on success: a line
+/// search evaluates it next and need not draw it again).
+pub fn restore_with(
+    p: &Problem,
+    x: &mut Vars,
+    evals: &mut u32,
+    geo: &mut crate::model::kinematics::PathGeometry,
+) -> bool {
     let tol = equality_tolerance(p);
     for _ in 0..=MAX_RESTORE {
-        let (r, jac) = p.end_constraint(x);
+        p.geometry_into(x, geo);
+        let geo = &*geo;
+        let r = p.end_residual(geo);
         *evals += 1;
         let norm = crate::fmath::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if !norm.is_finite() {
@@ -64,6 +76,8 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
         if norm <= tol {
             return true;
         }
+        // Not there yet: the Jacobian of the same rows.
+        let (_, jac) = p.end_rows(geo, &p.screws(x, geo));
         // Variables pinned at a bound that the step would push further out are held fixed.
         let mut free = [true; MAX_VARS];
         let mut delta = [0.0f32; MAX_VARS];
@@ -88,10 +102,10 @@ pub fn restore(p: &Problem, x: &mut Vars, evals: &mut u32) -> bool {
         let big = delta
             .iter()
             .take(p.n)
-            .fold(0.0f32, |m, v| m.max(libm::fabsf(*v)));
+            .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
         let shrink = if big > TRUST { TRUST / big } else { 1.0 };
         for k in 0..p.n {
-            x[k] = (x[k] + shrink * delta[k]).clamp(p.lower[k], p.upper[k]);
+            x[k] = crate::fmath::clamp(x[k] + shrink * delta[k], p.lower[k], p.upper[k]);
         }
     }
     false
@@ -121,9 +135,9 @@ fn min_norm_step(
         row[i] += 1e-7 * trace + 1e-12;
     }
     let mut y = [r[0], r[1], r[2]];
-    let Some(y) = linalg::solve(&mut a, &mut y, m) else {
+    if !linalg::solve(&mut a, &mut y, m) {
         return false;
-    };
+    }
     for k in 0..MAX_VARS {
         delta[k] = 0.0;
         if k < p.n && free[k] {
@@ -158,26 +172,49 @@ fn lagrangian_grad(
     g
 }
 
+/// Distance (largest change of any variable) within which an iterate counts as in the basin of a
+/// known local solution.
+pub const BASIN: f32 = 0.03;
+
+/// Whether `x` (objective `f`) lies within [`BASIN`] of a known local solution that is no worse:
+/// a descent from there ends at that solution (to rounding), so it need not be followed.
+fn in_known_basin(known: &[(Vars, f32)], x: &Vars, f: f32, n: usize) -> bool {
+    known
+        .iter()
+        .any(|(k, kf)| f >= *kf && (0..n).all(|j| libm::fabsf(x[j] - k[j]) < BASIN))
+}
+
 /// Runs the SQP from `x0` (restored onto the target first). `None` when the start cannot be made
-/// feasible.
-pub fn solve(p: &Problem, x0: &Vars) -> Option<LocalSolution> {
-    solve_within(p, x0, MAX_ITERATIONS)
+/// feasible. `known` holds local solutions already found for this problem (variables,
+/// objective): a run that enters the basin of one of them stops there (status `Converged`, its
+/// objective no better than the known one's).
+pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolution> {
+    solve_within(p, x0, known, MAX_ITERATIONS)
 }
 
 /// [`solve`] with at most `max_iterations` iterations (a replan's fixed budget).
-pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<LocalSolution> {
+pub fn solve_within(
+    p: &Problem,
+    x0: &Vars,
+    known: &[(Vars, f32)],
+    max_iterations: u32,
+) -> Option<LocalSolution> {
     let max_iterations = max_iterations.min(MAX_ITERATIONS);
     let mut evals = 0u32;
     let mut x = *x0;
     if !restore(p, &mut x, &mut evals) {
         return None;
     }
-    let mut cur = p.value(&x);
+    // Two buffers: the current point and the line search's trial point (an accepted trial
+    // becomes current by flipping `ci`, not by copying).
+    let start = p.value(&x);
+    let mut vals = [start.clone(), start];
+    let mut ci = 0usize;
     evals += 1;
-    if !cur.admissible(p) {
+    if !vals[0].admissible(p) {
         return None;
     }
-    let mut cur_d = p.derivatives(&cur);
+    let mut cur_d = p.derivatives(&vals[0]);
     let n = p.n;
     let gamma = p.scenario.weights.length * p.radius + 1.0;
     let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
@@ -190,6 +227,12 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
     let mut qp = Qp::new(n, h, cur_d.grad);
     while iterations < max_iterations {
         iterations += 1;
+        let cur = &vals[ci];
+        if in_known_basin(known, &cur.x, cur.objective, n) {
+            status = SolveStatus::Converged;
+            step_norm = 0.0;
+            break;
+        }
         // The QP of the tangent step. In a passage between obstacles the linearised clearances
         // can be dependent (a singular working set): the QP is then retried with fewer of them,
         // since the line search keeps every clearance anyway.
@@ -198,10 +241,10 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
         let mut solved = None;
         for attempt in 0..2 {
             if attempt == 1 {
-                h = model_hessian(p, &cur, &cur_d);
+                qp.h = model_hessian(p, cur, &cur_d);
             }
             for clear_limit in [QP_CLEARANCES, 1, 0] {
-                let rows = tangent_qp(&mut qp, p, &cur, &cur_d, &h, clear_limit);
+                let rows = tangent_qp(&mut qp, p, cur, &cur_d, clear_limit);
                 if let Ok(sol) = qp.solve() {
                     solved = Some((sol, rows));
                     break;
@@ -220,7 +263,7 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
         step_norm = 0.0f32;
         for k in 0..n {
             slope += cur_d.grad[k] * sol.p[k];
-            step_norm = step_norm.max(libm::fabsf(sol.p[k]));
+            step_norm = crate::fmath::max(step_norm, libm::fabsf(sol.p[k]));
         }
         if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
             status = SolveStatus::Converged;
@@ -228,27 +271,34 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
         }
         // Backtracking line search on the restored objective.
         let mut t = 1.0f32;
-        let mut next: Option<Value> = None;
+        let mut accepted = false;
+        let (first, second) = vals.split_at_mut(1);
+        let (cur, trial) = if ci == 0 {
+            (&first[0], &mut second[0])
+        } else {
+            (&second[0], &mut first[0])
+        };
         for _ in 0..MAX_BACKTRACKS {
             let mut xt = cur.x;
             for k in 0..n {
-                xt[k] = (cur.x[k] + t * sol.p[k]).clamp(p.lower[k], p.upper[k]);
+                xt[k] = crate::fmath::clamp(cur.x[k] + t * sol.p[k], p.lower[k], p.upper[k]);
             }
-            if restore(p, &mut xt, &mut evals) {
-                let e = p.value(&xt);
+            if restore_with(p, &mut xt, &mut evals, &mut trial.geo) {
+                p.value_of_drawn(&xt, trial);
                 evals += 1;
-                if e.admissible(p) && e.objective <= cur.objective + 1e-4 * t * slope {
-                    next = Some(e);
+                if trial.admissible(p) && trial.objective <= cur.objective + 1e-4 * t * slope {
+                    accepted = true;
                     break;
                 }
             }
             t *= 0.5;
         }
-        let Some(next) = next else {
+        if !accepted {
             // No decrease along a descent direction: stationary to f32 resolution.
             status = SolveStatus::Converged;
             break;
-        };
+        }
+        let next: &Value = trial;
         let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = clear_rows[..n_clear]
             .iter()
             .map(|&(o, row)| (o, sol.mult[row]))
@@ -259,7 +309,7 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
             0.0
         };
         let g_old = lagrangian_grad(p, &cur.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
-        p.derivatives_into(&next, &mut cur_d);
+        p.derivatives_into(next, &mut cur_d);
         let g_new = lagrangian_grad(p, &next.x, &cur_d, &sol.eq_mult, &clear, tilt_mult);
         let mut s = [0.0f32; MAX_VARS];
         let mut y = [0.0f32; MAX_VARS];
@@ -267,11 +317,12 @@ pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<Local
             s[k] = next.x[k] - cur.x[k];
             y[k] = g_new[k] - g_old[k];
         }
-        bfgs_update(&mut h, &s, &y, n);
-        cur = next;
+        bfgs_update(&mut qp.h, &s, &y, n);
+        ci = 1 - ci;
     }
+    let [a, b] = vals;
     Some(LocalSolution {
-        eval: cur,
+        eval: if ci == 0 { a } else { b },
         status,
         iterations,
         evaluations: evals,
@@ -321,16 +372,15 @@ struct QpRows {
 }
 
 /// The QP of the tangent step at `cur`: bounds within the trust box, the tilt cone (3-D) and the
-/// `clear_limit` nearest clearances, linearised.
+/// `clear_limit` nearest clearances, linearised; the Hessian is the one in `qp`.
 fn tangent_qp(
     qp: &mut Qp,
     p: &Problem,
     cur: &Value,
     cur_d: &Derivatives,
-    h: &[Vars; MAX_VARS],
     clear_limit: usize,
 ) -> QpRows {
-    qp.reset(p.n, h, &cur_d.grad);
+    qp.reset_rows(p.n, &cur_d.grad);
     let mut rows = QpRows {
         clearances: [(0, 0); QP_CLEARANCES],
         n_clear: 0,
@@ -358,11 +408,8 @@ pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivativ
         qp.push_eq(&d.jac[r]);
     }
     for k in 0..p.n {
-        let mut unit = [0.0; MAX_VARS];
-        unit[k] = 1.0;
-        qp.push_row(&unit, (p.lower[k] - x[k]).max(-TRUST));
-        unit[k] = -1.0;
-        qp.push_row(&unit, -(p.upper[k] - x[k]).min(TRUST));
+        qp.push_axis(k, 1.0, crate::fmath::max(p.lower[k] - x[k], -TRUST));
+        qp.push_axis(k, -1.0, -crate::fmath::min(p.upper[k] - x[k], TRUST));
     }
     let tilt = qp.m;
     if p.has_tilt() {

@@ -25,6 +25,7 @@ fn violation(p: &Problem, clearance: &[f32]) -> f32 {
 
 /// From `x0` (on the target or near it), a point on the target that keeps every clearance and
 /// bound, with its value, if the steps find one. `evals` counts evaluations.
+#[inline(never)] // Its buffers need not share the stack with the SQP's.
 pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
     let mut x = *x0;
     if !restore(p, &mut x, evals) {
@@ -73,7 +74,7 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
         for _ in 0..4 {
             let mut xt = cur.x;
             for k in 0..n {
-                xt[k] = (cur.x[k] + t * step.p[k]).clamp(p.lower[k], p.upper[k]);
+                xt[k] = crate::fmath::clamp(cur.x[k] + t * step.p[k], p.lower[k], p.upper[k]);
             }
             if restore(p, &mut xt, evals) {
                 let v = p.value(&xt);

@@ -2,5 +2,6 @@
 //! obstacles they cut, and the best seeds refined by the SQP into the form's outcome.
 
 pub(crate) mod escape;
+pub(crate) mod plane;
 pub(crate) mod seeds;
 pub(crate) mod solve;

@@ -10,10 +10,10 @@
 //! its spacing. Seeds are handed on as problem variables.
 
 use crate::model::form::SegmentKind;
-use crate::model::kinematics::{insertion_frame, V3};
-use crate::model::planar::{advance, complete, heading_of_bend, turn, Drawn, Pose};
-use crate::model::scenario::MAX_OBSTACLES;
-use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::model::planar::{advance, complete, heading_of_bend, turn, Pose};
+use crate::optim::problem::{Problem, Vars};
+pub use crate::search::plane::NEAR_MISS;
+use crate::search::plane::{pieces, Pieces, Planar, SeedPlane};
 use crate::MAX_CONTROL_DEGREE;
 
 /// Widest heading from the chord swept (radians, about 86 degrees).
@@ -26,67 +26,6 @@ pub fn grid(len: usize) -> (usize, usize) {
         3 => (32, 12),
         _ => (14, 6),
     }
-}
-
-/// A planar path: heading (radians from the chord, towards `m`), then segments.
-#[derive(Clone, Copy, Debug)]
-struct Planar {
-    heading: f32,
-    lengths: [f32; MAX_CONTROL_DEGREE],
-}
-
-/// Side (+1 right, -1 left) of each segment for arc-side bits `sides` (bit set: left).
-fn segment_sides(p: &Problem, sides: u8) -> [f32; MAX_CONTROL_DEGREE] {
-    let mut out = [1.0; MAX_CONTROL_DEGREE];
-    let mut arc = 0;
-    for (i, o) in out.iter_mut().enumerate().take(p.form.len()) {
-        if p.form.kind(i) == SegmentKind::Arc {
-            if sides & (1 << arc) != 0 {
-                *o = -1.0;
-            }
-            arc += 1;
-        }
-    }
-    out
-}
-
-/// A run of segments swept as one: consecutive arcs bending to the same side lie on one circle,
-/// so they are swept as a single arc of up to `count` times the longest arc and written out as
-/// `count` equal pieces. Without this, paths whose turn exceeds one arc's bound (the long loops
-/// around obstacles that block every short path) would have no seeds at all.
-#[derive(Clone, Copy, Debug)]
-struct Piece {
-    kind: SegmentKind,
-    side: f32,
-    /// The segments it covers (bit i: segment i).
-    segments: u8,
-    count: u8,
-}
-
-type Pieces = heapless::Vec<Piece, MAX_CONTROL_DEGREE>;
-
-/// The form of `p` with sides `side`, without the segments in `skipped` (they get length zero),
-/// runs of same-side arcs merged.
-fn pieces(p: &Problem, side: &[f32; MAX_CONTROL_DEGREE], skipped: u8) -> Pieces {
-    let mut out = Pieces::new();
-    for i in (0..p.form.len()).filter(|i| skipped & (1 << i) == 0) {
-        let kind = p.form.kind(i);
-        if let Some(last) = out.last_mut() {
-            if kind == SegmentKind::Arc && last.kind == SegmentKind::Arc && last.side == side[i] {
-                last.segments |= 1 << i;
-                last.count += 1;
-                continue;
-            }
-        }
-        // At most one piece per segment.
-        let _ = out.push(Piece {
-            kind,
-            side: side[i],
-            segments: 1 << i,
-            count: 1,
-        });
-    }
-    out
 }
 
 /// Where a sweep's seeds go.
@@ -138,6 +77,11 @@ fn sweep_pieces(
     let fixed = w.control * p.form.len() as f32;
     // Scores a seed; returns its smallest clearance (negative when it touches an obstacle, minus
     // infinity when it was not scored); near misses make the sweep look again, more finely.
+    // The sink's bound as it stands (it changes only when a seed is offered): a probe whose
+    // free pieces plus the straight distance left to the target reach it cannot emit a seed.
+    let bound = core::cell::Cell::new(sink.bound());
+    // The (sin, cos) of the last heading emitted: every completion of a probe shares it.
+    let mut last_heading: Option<(u32, (f32, f32))> = None;
     let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
         let mut length = 0.0;
         for (piece, len) in pieces.iter().zip(piece_lengths) {
@@ -148,12 +92,20 @@ fn sweep_pieces(
             }
             length += len;
         }
+        let sc = match last_heading {
+            Some((bits, sc)) if bits == heading.to_bits() => sc,
+            _ => {
+                let sc = crate::fmath::sincos(heading);
+                last_heading = Some((heading.to_bits(), sc));
+                sc
+            }
+        };
         // D >= 0, so a1 L + a4 N bounds F from below.
-        if !plane.within_tilt(p, heading) || w.length * length + fixed >= sink.bound() {
+        if !plane.within_tilt(p, sc) || w.length * length + fixed >= sink.bound() {
             return f32::NEG_INFINITY;
         }
         *scored += 1;
-        let (risk, min_clearance) = plane.clearances(p, heading, pieces, piece_lengths);
+        let (risk, min_clearance) = plane.clearances(p, heading, sc, pieces, piece_lengths);
         let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
         let objective = w.length * length + risk_term + fixed;
         let variables = || {
@@ -170,6 +122,7 @@ fn sweep_pieces(
         if min_clearance > p.min_clearance && objective.is_finite() {
             if let Some(x) = variables() {
                 sink.offer(objective, &x);
+                bound.set(sink.bound());
             }
         } else if min_clearance > p.min_clearance - NEAR_MISS {
             sink.near_miss(min_clearance, &variables);
@@ -227,6 +180,15 @@ fn sweep_pieces(
             lengths[i] = caps[i] * cell[i];
             pose = advance(pose, pieces[i].kind, lengths[i], pieces[i].side, r);
         }
+        // The last two pieces are at least as long as the straight line to the target (less a
+        // margin far above the rounding of the completions), and D >= 0: when that bounds F at or
+        // above the sink's bound, every completion would be refused.
+        let free_length: f32 = lengths[..free].iter().sum();
+        let (dx, dy) = (dist - pose.x, -pose.y);
+        let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
+        if w.length * (free_length + rest) + fixed >= bound.get() {
+            return f32::NEG_INFINITY;
+        }
         let (a, b) = (pieces[n - 2], pieces[n - 1]);
         let mut nearest = f32::NEG_INFINITY;
         complete(
@@ -238,7 +200,7 @@ fn sweep_pieces(
             &mut |la, lb| {
                 lengths[n - 2] = la;
                 lengths[n - 1] = lb;
-                nearest = nearest.max(emit(heading, &lengths));
+                nearest = crate::fmath::max(nearest, emit(heading, &lengths));
             },
         );
         nearest
@@ -258,6 +220,10 @@ fn sweep_pieces(
         let Some(heading) = grid_heading(hi) else {
             continue;
         };
+        // Outside the tilt cone every seed is refused, and no probe of it is refined.
+        if !plane.within_tilt(p, crate::fmath::sincos(heading)) {
+            continue;
+        }
         // The bound is one line in the grid's space: it gets a finer grid of lengths.
         let (steps, combos) = if hi < headings {
             (steps, combos)
@@ -296,182 +262,7 @@ fn sweep_pieces(
     }
 }
 
-/// Clearance shortfall (mm) under which a probe's cell is searched again more finely, and a seed
-/// counts as a near miss.
-pub const NEAR_MISS: f32 = 4.0;
 /// How much finer the lengths are gridded on the tilt-bound headings.
 const BOUND_FINER: usize = 4;
 /// Subdivisions per dimension of a refined cell.
 const REFINE: usize = 4;
-
-/// The plane of a sweep and the arcs' sides.
-struct SeedPlane {
-    /// Unit vector from the entry to the target.
-    chord: V3,
-    /// In-plane unit normal to the chord (positive headings turn towards it).
-    m: V3,
-    normal: V3,
-    /// Entry to target (mm).
-    dist: f32,
-    sides: [f32; MAX_CONTROL_DEGREE],
-    /// The in-plane headings on the tilt bound (just inside), if the plane crosses it.
-    tilt_bound_headings: Option<[f32; 2]>,
-    /// Components of the nominal insertion axis along the chord and `m`.
-    axis: (f32, f32),
-    /// Each obstacle's centre in plane coordinates and its squared height over the plane.
-    obstacles: [(f32, f32, f32); MAX_OBSTACLES],
-}
-
-impl SeedPlane {
-    /// The plane through the entry and the target turned by `psi` about the chord.
-    fn new(p: &Problem, psi: f32, sides: u8) -> Self {
-        let e = p.scenario.entry.position;
-        let t = p.scenario.target.position;
-        let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
-        let dist = crate::fmath::sqrt(d.dot(&d));
-        let chord = d / dist;
-        let b1: V3 = p.basis.column(0).into();
-        let b2: V3 = p.basis.column(1).into();
-        let b3: V3 = p.basis.column(2).into();
-        let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
-            b1
-        } else {
-            b2
-        };
-        let a = pick - chord * pick.dot(&chord);
-        let a = a / crate::fmath::sqrt(a.dot(&a));
-        let normal = a * crate::fmath::cos(psi) + chord.cross(&a) * crate::fmath::sin(psi);
-        let m = normal.cross(&chord);
-        // heading . b3 = A cos h + B sin h = R cos(h - phi) meets cos(max tilt) at phi +- w.
-        let (ca, cb) = (chord.dot(&b3), m.dot(&b3));
-        let reach = crate::fmath::sqrt(ca * ca + cb * cb);
-        let tilt_bound_headings = (reach > p.cos_max_tilt).then(|| {
-            let phi = crate::fmath::atan2(cb, ca);
-            let w = crate::fmath::acos(p.cos_max_tilt / reach) * (1.0 - 1e-4);
-            [phi - w, phi + w]
-        });
-        let mut obstacles = [(0.0, 0.0, 0.0); MAX_OBSTACLES];
-        for (o, ob) in obstacles.iter_mut().zip(&p.scenario.obstacles) {
-            let c = V3::new(
-                ob.center[0] - e[0],
-                ob.center[1] - e[1],
-                ob.center[2] - e[2],
-            );
-            let h = c.dot(&normal);
-            *o = (c.dot(&chord), c.dot(&m), h * h);
-        }
-        SeedPlane {
-            chord,
-            m,
-            normal,
-            dist,
-            sides: segment_sides(p, sides),
-            tilt_bound_headings,
-            axis: (ca, cb),
-            obstacles,
-        }
-    }
-
-    /// Whether the in-plane `heading` lies inside the tilt cone.
-    fn within_tilt(&self, p: &Problem, heading: f32) -> bool {
-        self.axis.0 * crate::fmath::cos(heading) + self.axis.1 * crate::fmath::sin(heading)
-            >= p.cos_max_tilt
-    }
-
-    /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite once
-    /// an obstacle is within the clearance floor, and the scan stops at the first obstacle cut
-    /// deeper than a near miss).
-    fn clearances(
-        &self,
-        p: &Problem,
-        heading: f32,
-        pieces: &Pieces,
-        lengths: &[f32; MAX_CONTROL_DEGREE],
-    ) -> (f32, f32) {
-        let mut drawn: heapless::Vec<Drawn, MAX_CONTROL_DEGREE> = heapless::Vec::new();
-        let mut at = Pose {
-            x: 0.0,
-            y: 0.0,
-            psi: heading,
-        };
-        for (piece, &len) in pieces.iter().zip(lengths) {
-            let d = Drawn::new(at, piece.kind, len, piece.side, p.radius);
-            at = d.end;
-            // As many as there are pieces.
-            let _ = drawn.push(d);
-        }
-        let mut min_clearance = f32::INFINITY;
-        let mut inv_sum = 0.0f32;
-        let mut blocked = false;
-        for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
-            let nearest = drawn
-                .iter()
-                .fold(f32::INFINITY, |m, d| m.min(d.distance_squared((x, y))));
-            let d = crate::fmath::sqrt(nearest + h2) - ob.radius;
-            min_clearance = min_clearance.min(d);
-            if d > p.min_clearance {
-                inv_sum += 1.0 / d;
-            } else if d > p.min_clearance - NEAR_MISS {
-                blocked = true;
-            } else {
-                return (f32::INFINITY, min_clearance);
-            }
-        }
-        if blocked {
-            return (f32::INFINITY, min_clearance);
-        }
-        (inv_sum * p.risk_scale(), min_clearance)
-    }
-
-    /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
-    fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
-        let heading =
-            self.chord * crate::fmath::cos(path.heading) + self.m * crate::fmath::sin(path.heading);
-        let basis = &p.basis;
-        let b1: V3 = basis.column(0).into();
-        let b2: V3 = basis.column(1).into();
-        let b3: V3 = basis.column(2).into();
-        if heading.dot(&b3) < p.cos_max_tilt {
-            return None;
-        }
-        let mut x = [0.0f32; MAX_VARS];
-        let theta2 = crate::fmath::asin(heading.dot(&b1).clamp(-1.0, 1.0));
-        let theta1 = crate::fmath::atan2(-heading.dot(&b2), heading.dot(&b3));
-        x[0] = theta1;
-        if !p.plane {
-            x[1] = theta2;
-        }
-        for i in 0..p.form.len() {
-            let k = p.length_var(i);
-            let u = path.lengths[i] / p.radius;
-            if !(u >= 0.0 && u <= p.upper[k]) {
-                return None;
-            }
-            x[k] = u;
-        }
-        if !p.plane {
-            // Roll the bevel so that e1 is the plane normal (the bevel faces the right of the
-            // heading), then flip by pi whenever the next arc bends to the other side.
-            let f0 = insertion_frame(V3::zeros(), basis, theta1, theta2);
-            let base = crate::fmath::atan2(self.normal.dot(&f0.e2()), self.normal.dot(&f0.e1()));
-            let mut facing_left = false;
-            let mut first = true;
-            for i in 0..p.form.len() {
-                if p.form.kind(i) != SegmentKind::Arc {
-                    continue;
-                }
-                let left = self.sides[i] < 0.0;
-                let mut roll = if first { base } else { 0.0 };
-                if left != facing_left {
-                    roll += core::f32::consts::PI;
-                    facing_left = left;
-                }
-                first = false;
-                if let Some(k) = p.bevel_var(i) {
-                    x[k] = roll;
-                }
-            }
-        }
-        Some(x)
-    }
-}

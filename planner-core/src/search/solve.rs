@@ -112,6 +112,7 @@ fn solve_group(
     psi: f32,
     sides: u8,
     extra: &[Vars],
+    known: &mut Basins,
     effort: &mut Effort,
 ) -> Option<LocalSolution> {
     let mut list = Shortlist::new(p.n);
@@ -136,9 +137,7 @@ fn solve_group(
     }
     let mut best: Option<LocalSolution> = None;
     for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
-        if let Some(sol) = sqp::solve(p, x) {
-            effort.iterations += sol.iterations;
-            effort.evaluations += sol.evaluations;
+        if let Some(sol) = refine(p, x, known, effort) {
             if best
                 .as_ref()
                 .is_none_or(|b| sol.eval.objective < b.eval.objective)
@@ -150,9 +149,39 @@ fn solve_group(
     best
 }
 
+/// Local solutions found so far for one problem (variables, objective), distinct.
+type Basins = heapless::Vec<(Vars, f32), KNOWN_BASINS>;
+
+/// Largest final step of a solve whose end marks a basin.
+const STATIONARY: f32 = 1e-3;
+
+/// Local solutions remembered per problem (beyond, new ones are not remembered).
+const KNOWN_BASINS: usize = 12;
+
+/// The SQP from `x`, stopped early in the basin of a solution in `known`; a new solution is
+/// remembered there.
+fn refine(p: &Problem, x: &Vars, known: &mut Basins, effort: &mut Effort) -> Option<LocalSolution> {
+    let sol = sqp::solve(p, x, known)?;
+    effort.iterations += sol.iterations;
+    effort.evaluations += sol.evaluations;
+    let (x, f) = (&sol.eval.x, sol.eval.objective);
+    // Only a solve that ended stationary marks a basin: one stopped by its budget may lie on a
+    // slope that a later start would descend further.
+    let stationary = sol.status == SolveStatus::Converged && sol.step_norm < STATIONARY;
+    let fresh = known
+        .iter()
+        .all(|(k, _)| (0..p.n).any(|j| libm::fabsf(x[j] - k[j]) >= sqp::BASIN));
+    if stationary && fresh {
+        // Full: the solution is simply not remembered.
+        let _ = known.push((*x, f));
+    }
+    Some(sol)
+}
+
 /// Starts for `form` made from the best paths of the forms one segment shorter: the missing
 /// segment is inserted with zero length, so a form never reports a worse path than a sub-form
 /// it contains. Each start comes with its plane-mode side assignment.
+#[inline(never)]
 fn extension_starts(
     scenario: &Scenario,
     form: Form,
@@ -227,23 +256,22 @@ pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> 
                     let _ = extra.push(*x);
                 }
             }
-            let sol = solve_group(&p, 0.0, sides as u8, &extra, &mut effort);
+            let mut known = Basins::new();
+            let sol = solve_group(&p, 0.0, sides as u8, &extra, &mut known, &mut effort);
             consider(p, sol, &mut best);
         }
     } else {
+        // Every seed plane poses the same problem: its solutions are shared.
+        let mut known = Basins::new();
         for k in 0..SPACE_PLANES {
             let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
             let p = Problem::new(scenario, form, 0);
-            let sol = solve_group(&p, psi, 0, &[], &mut effort);
+            let sol = solve_group(&p, psi, 0, &[], &mut known, &mut effort);
             consider(p, sol, &mut best);
         }
         for (_, x) in extensions.iter() {
             let p = Problem::new(scenario, form, 0);
-            let sol = sqp::solve(&p, x);
-            if let Some(s) = &sol {
-                effort.iterations += s.iterations;
-                effort.evaluations += s.evaluations;
-            }
+            let sol = refine(&p, x, &mut known, &mut effort);
             consider(p, sol, &mut best);
         }
     }
@@ -264,6 +292,7 @@ fn wrap_degrees(rad: f32) -> f32 {
 }
 
 /// The outcome of a refined path, with the numbers measured by the independent check.
+#[inline(never)] // The check's buffers need not share the stack with the search's.
 fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
     let x = &sol.eval.x;
     let (t1, t2) = p.angles(x);
@@ -273,7 +302,8 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
     let insertion = Insertion {
         theta1_deg: t1.to_degrees(),
         theta2_deg: t2.to_degrees(),
-        tilt_deg: crate::fmath::acos(heading.dot(&nominal).clamp(-1.0, 1.0)).to_degrees(),
+        tilt_deg: crate::fmath::acos(crate::fmath::clamp(heading.dot(&nominal), -1.0, 1.0))
+            .to_degrees(),
         direction: [heading.x, heading.y, heading.z],
     };
     let lengths = p.lengths(x);
