@@ -204,7 +204,7 @@ impl Estimate {
             return;
         }
         let step = |f: &Frame, k: f32| {
-            let k = k.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
+            let k = crate::fmath::clamp(k, FACTOR_RANGE.0, FACTOR_RANGE.1);
             f.advanced(kind, length, radius / k)
         };
         let next = step(&self.tip, self.factor);
@@ -310,7 +310,7 @@ impl Estimate {
             p: tip.p,
             r: rotation,
         };
-        self.factor = factor.clamp(FACTOR_RANGE.0, FACTOR_RANGE.1);
+        self.factor = crate::fmath::clamp(factor, FACTOR_RANGE.0, FACTOR_RANGE.1);
         let ikh = Cov::identity() - k * h;
         // Joseph form keeps the covariance symmetric and positive in f32.
         let mut rk = SMatrix::<f32, 3, 3>::zeros();

@@ -45,7 +45,8 @@ pub fn predict(
     let end = execute_from(*tip, steps, radius, |start, kind, length| {
         for ob in &scenario.obstacles {
             let d = if plane {
-                let pieces = libm::ceilf(length / PLANE_SPACING).clamp(1.0, 4096.0) as u32;
+                let pieces =
+                    crate::fmath::clamp(libm::ceilf(length / PLANE_SPACING), 1.0, 4096.0) as u32;
                 let mut least = f32::INFINITY;
                 for k in 0..=pieces {
                     let q = start.point_at(kind, length * k as f32 / pieces as f32, radius);
@@ -183,7 +184,7 @@ fn attempt(
     let mut x0: Vars = [0.0; MAX_VARS];
     for (i, seg) in start.iter().enumerate().take(form.len()) {
         let k = p.length_var(i);
-        x0[k] = (seg.length / input.radius).clamp(p.lower[k], p.upper[k]);
+        x0[k] = crate::fmath::clamp(seg.length / input.radius, p.lower[k], p.upper[k]);
         if let Some(b) = p.bevel_var(i) {
             x0[b] = seg.bevel_deg.to_radians();
         }
