@@ -50,8 +50,8 @@ pub fn simulate_closed(
     results.into_iter().collect()
 }
 
-/// The closed loop's own figures over the runs.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The closed loop's own figures over the runs (their keys in `--json`'s `summary`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SteeringSummary {
     /// New continuations commanded, over all runs.
     pub replans: u64,
@@ -65,7 +65,8 @@ pub struct SteeringSummary {
     pub no_fix: u64,
     /// Readings older than the last (ignored).
     pub stale: u64,
-    /// Readings answered again (a tracker's duplicate, or a link retry).
+    /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
+    /// reading again; the one count that depends on the transport.
     pub repeated: u64,
 }
 

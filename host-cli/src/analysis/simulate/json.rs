@@ -5,7 +5,6 @@ use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
 use hil_sim::insertion::{ClosedRun, Perturbation, Run};
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// The whole output.
 #[derive(Serialize)]
@@ -114,21 +113,10 @@ pub struct ClosedSummaryJson {
     /// Target error, path deviation, collisions and clearance of the steered runs.
     #[serde(flatten)]
     pub figures: SummaryJson,
-    /// New continuations commanded, over all runs.
-    pub replans: u64,
-    /// Replans that found nothing passing the check (the last continuation kept or a stop).
-    pub replan_failures: u64,
-    /// Runs stopped before the target, by reason (every reason listed).
-    pub stops: BTreeMap<&'static str, usize>,
-    /// Tracker fixes rejected as outliers.
-    pub outliers: u64,
-    /// Readings without a fix.
-    pub no_fix: u64,
-    /// Readings older than the last one (ignored).
-    pub stale: u64,
-    /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
-    /// reading again; the one count that depends on the transport.
-    pub repeated: u64,
+    /// `replans`, `replan_failures`, `stops` (every reason listed), `outliers`, `no_fix`,
+    /// `stale`, `repeated`.
+    #[serde(flatten)]
+    pub steering: SteeringSummary,
 }
 
 /// `needle simulate --closed-loop --json`.
@@ -191,13 +179,7 @@ pub fn closed_json<'a>(
         perturbation: *p,
         summary: ClosedSummaryJson {
             figures: summary_json(summary),
-            replans: steering.replans,
-            replan_failures: steering.replan_failures,
-            stops: steering.stops.clone(),
-            outliers: steering.outliers,
-            no_fix: steering.no_fix,
-            stale: steering.stale,
-            repeated: steering.repeated,
+            steering: steering.clone(),
         },
         open_loop_summary: open.map(summary_json),
         runs_detail: detail.then(|| {

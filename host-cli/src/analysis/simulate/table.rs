@@ -18,11 +18,16 @@ pub struct Header<'a> {
 }
 
 fn row(out: &mut String, what: &str, s: &Spread) {
-    let _ = writeln!(
-        out,
-        "{what:<28}{:>9.3}{:>9.3}{:>9.3}{:>9.3}",
-        s.mean, s.rms, s.p95, s.max
-    );
+    pair(out, what, s, None);
+}
+
+/// The perturbation every run drew from, `KEY=VALUE` for every key.
+fn perturbation_line(out: &mut String, p: &Perturbation) {
+    let values: Vec<String> = KEYS
+        .iter()
+        .map(|k| format!("{k}={}", p.get(k).unwrap_or(f32::NAN)))
+        .collect();
+    let _ = writeln!(out, "perturbation: {}", values.join(" "));
 }
 
 /// The table of a simulation.
@@ -55,14 +60,11 @@ pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
         "collisions: {} of {} runs; smallest clearance {clear}",
         s.collisions, h.runs
     );
-    let values: Vec<String> = KEYS
-        .iter()
-        .map(|k| format!("{k}={}", p.get(k).unwrap_or(f32::NAN)))
-        .collect();
-    let _ = writeln!(out, "perturbation: {}", values.join(" "));
+    perturbation_line(&mut out, p);
     out
 }
 
+/// A row of spreads, with the open loop's beside it when given.
 fn pair(out: &mut String, what: &str, closed: &Spread, open: Option<&Spread>) {
     let _ = write!(
         out,
@@ -164,10 +166,6 @@ pub fn closed_table(
         "tracker: {} outliers rejected, {} readings without a fix, {} stale, {} repeated",
         steering.outliers, steering.no_fix, steering.stale, steering.repeated
     );
-    let values: Vec<String> = KEYS
-        .iter()
-        .map(|k| format!("{k}={}", p.get(k).unwrap_or(f32::NAN)))
-        .collect();
-    let _ = writeln!(out, "perturbation: {}", values.join(" "));
+    perturbation_line(&mut out, p);
     out
 }
