@@ -46,8 +46,9 @@ use cortex_m as _;
 #[entry]
 fn main() -> ! {
     // cortex-m-rt turns these into `&'static mut`: the service and the byte buffers live in .bss,
-    // not on the stack, and there is no allocator.
-    static mut SERVICE: DeviceService = DeviceService::with_identity(IDENTITY);
+    // not on the stack, and there is no allocator. The service starts as `new()`, which is all
+    // zero bytes: initialised `with_identity` it would be copied from an 8 KiB image in flash.
+    static mut SERVICE: DeviceService = DeviceService::new();
     static mut INBOX: pump::Inbox = pump::Inbox::new();
     static mut OUTBOX: pump::Outbox = pump::Outbox::new();
 
@@ -57,5 +58,6 @@ fn main() -> ! {
         board::NAME
     );
     let mut board = board::init();
+    SERVICE.set_identity(IDENTITY);
     pump::run(&mut board, SERVICE, INBOX, OUTBOX)
 }

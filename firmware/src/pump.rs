@@ -45,7 +45,9 @@ impl Inbox {
 /// Reply bytes staged between polls (a plan reply fits; a larger burst is flushed early).
 pub struct Outbox(Vec<u8, OUTBOX_BYTES>);
 
-const OUTBOX_BYTES: usize = 2048;
+// Holds every reply of a measured poll (a status, a steering answer: under 200 bytes); a longer
+// reply (a result chunk) is flushed as it fills, outside any measured region.
+const OUTBOX_BYTES: usize = 1024;
 
 impl Outbox {
     /// An empty outbox.

@@ -60,9 +60,22 @@ impl PlanSession {
         Ok(ScheduledPlan::new(&self.scenario, report))
     }
 
+    /// Builds the best planned form's motor schedule from the forms planned so far, planning
+    /// none: what a device answers once [`PlanSession::step`] has returned `None`. Leaving the
+    /// solver out keeps its frames off the stack under the device's result encoding.
+    pub fn scheduled_so_far(mut self) -> Result<ScheduledPlan, PlanError> {
+        let report = self.report_so_far()?;
+        Ok(ScheduledPlan::new(&self.scenario, report))
+    }
+
     /// Plans what is left and moves the outcomes into the report of the best feasible form.
     fn conclude(&mut self) -> Result<PlanReport, PlanError> {
         while self.step().is_some() {}
+        self.report_so_far()
+    }
+
+    /// Moves the outcomes planned so far into the report of the best feasible one.
+    fn report_so_far(&mut self) -> Result<PlanReport, PlanError> {
         let mut best: Option<usize> = None;
         for (i, o) in self.outcomes.iter().enumerate() {
             let better = match best {

@@ -2,7 +2,7 @@
 //! part of the service that answers it.
 
 use super::upload::Upload;
-use super::{Core, Job};
+use super::{Core, DeviceIdentity, Job};
 use crate::wire::{
     DeviceInfo, Fault, FrameError, Header, ReplyBody, Request, RequestBody, MAX_CHUNK,
     MAX_PLAN_REQUEST, PROTOCOL_VERSION,
@@ -10,7 +10,9 @@ use crate::wire::{
 use crate::{FORM_COUNT, MAX_CONTROL_DEGREE, MAX_OBSTACLES};
 
 impl Core {
-    /// Answers one received frame (or reports why it cannot be used).
+    /// Answers one received frame (or reports why it cannot be used). Never inlined: its
+    /// decoded request and reply (3 KiB) would otherwise sit under every planning step's stack.
+    #[inline(never)]
     pub(super) fn handle_frame(
         &mut self,
         event: Result<&[u8], FrameError>,
@@ -95,11 +97,12 @@ impl Core {
     }
 
     fn info(&self) -> DeviceInfo {
+        let identity = self.identity.unwrap_or(DeviceIdentity::CORE);
         DeviceInfo {
             protocol: PROTOCOL_VERSION,
-            name: truncated(self.identity.name),
-            firmware: truncated(self.identity.firmware),
-            build: truncated(self.identity.build),
+            name: truncated(identity.name),
+            firmware: truncated(identity.firmware),
+            build: truncated(identity.build),
             max_obstacles: MAX_OBSTACLES as u16,
             max_control_degree: MAX_CONTROL_DEGREE as u8,
             form_count: FORM_COUNT as u8,

@@ -67,7 +67,10 @@ impl Core {
         }
     }
 
-    /// Plans one form of the active plan; false if there is none.
+    /// Plans one form of the active plan; false if there is none. Never inlined, like
+    /// `handle_frame`: the solver's frames and a frame's decoded request then never share the
+    /// stack.
+    #[inline(never)]
     pub(super) fn step(&mut self, tx: &mut dyn FnMut(&[u8])) -> bool {
         let Job::Planning {
             id,
@@ -104,7 +107,8 @@ impl Core {
     #[inline(never)]
     fn finish(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
         if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle) {
-            let result = session.finish_scheduled();
+            // Called once `step` found no form left.
+            let result = session.scheduled_so_far();
             self.stats.plans += 1;
             self.store_result(id, up, &result, tx);
         }

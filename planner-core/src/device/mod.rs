@@ -70,14 +70,16 @@ pub struct DeviceStats {
 /// Everything but the frame decoder, so a decoded payload (borrowed from the decoder) can be
 /// handled while the rest of the state changes.
 struct Core {
-    identity: DeviceIdentity,
+    /// `None` introduces the service as [`DeviceIdentity::CORE`]; an option so that
+    /// [`DeviceService::new`] has no pointer in it (see there).
+    identity: Option<DeviceIdentity>,
     job: Job,
     upload: [u8; MAX_PLAN_REQUEST],
     result: [u8; MAX_PLAN_RESULT],
     scratch: [u8; ENCODE_SCRATCH],
     stats: DeviceStats,
     /// The insertion being steered, under the id of the plan it executes.
-    steering: Option<(u16, crate::steer::Steering)>,
+    steering: steer::Steered,
 }
 
 /// The device's request handler.
@@ -94,13 +96,36 @@ impl Default for DeviceService {
 }
 
 impl DeviceService {
-    /// A service with empty buffers and no request in progress.
+    /// A service with empty buffers and no request in progress, introducing itself as
+    /// [`DeviceIdentity::CORE`] until [`DeviceService::set_identity`] is called.
+    ///
+    /// Its value is zero bytes only, so a `static` initialised with it lives in `.bss`: a
+    /// `static` of [`DeviceService::with_identity`] holds string pointers and is copied at boot
+    /// from an image of the whole service (8 KiB) in flash.
+    ///
+    /// ```
+    /// use planner_core::device::{DeviceIdentity, DeviceService};
+    ///
+    /// static IDENTITY: DeviceIdentity = DeviceIdentity { name: "bench", firmware: "1", build: "" };
+    /// let mut service = DeviceService::new();
+    /// service.set_identity(IDENTITY);
+    /// assert!(!service.is_planning());
+    /// ```
     pub const fn new() -> Self {
-        Self::with_identity(DeviceIdentity::CORE)
+        Self::introduced_as(None)
     }
 
     /// A service that introduces itself as `identity`.
     pub const fn with_identity(identity: DeviceIdentity) -> Self {
+        Self::introduced_as(Some(identity))
+    }
+
+    /// From now on, introduce the service as `identity`.
+    pub fn set_identity(&mut self, identity: DeviceIdentity) {
+        self.core.identity = Some(identity);
+    }
+
+    const fn introduced_as(identity: Option<DeviceIdentity>) -> Self {
         DeviceService {
             inbox: Inbox::new(),
             decoder: FrameDecoder::for_requests(),
@@ -120,7 +145,7 @@ impl DeviceService {
                     plans: 0,
                     steer_readings: 0,
                 },
-                steering: None,
+                steering: steer::Steered::Off,
             },
         }
     }

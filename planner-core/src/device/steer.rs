@@ -7,13 +7,27 @@ use super::Core;
 use crate::steer::{SteerConfig, SteerError, Steering, TipMeasurement};
 use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
+/// The insertion being steered, if any.
+// An enum with an explicit tag rather than an `Option`: the option's `None` hid in a niche of the
+// controller as a byte 2, and that one byte put the whole service (8 KiB) in `.data`, copied from
+// flash at boot, instead of `.bss` (see `DeviceService::new`).
+// No heap to box the controller in (like `Job`).
+#[allow(clippy::large_enum_variant)]
+#[repr(u8)]
+pub(super) enum Steered {
+    /// Nothing is steered.
+    Off,
+    /// Plan `plan` is steered by `steering`.
+    On { plan: u16, steering: Steering },
+}
+
 impl Core {
     /// Starts steering plan `id` with `config`.
     pub(super) fn steer_start(&mut self, id: u16, config: &SteerConfig, tx: &mut dyn FnMut(&[u8])) {
         match self.steering_for(id, config) {
             Ok(steering) => {
                 let steps = steering.steps().iter().copied().collect();
-                self.steering = Some((id, steering));
+                self.steering = Steered::On { plan: id, steering };
                 self.send(id, ReplyBody::SteerStarted { steps }, tx);
             }
             Err(fault) => self.fault(id, fault, tx),
@@ -59,7 +73,7 @@ impl Core {
     /// Answers one reading of the insertion steered under plan `id`.
     pub(super) fn steer_reading(&mut self, id: u16, m: &TipMeasurement, tx: &mut dyn FnMut(&[u8])) {
         match &mut self.steering {
-            Some((plan, steering)) if *plan == id => {
+            Steered::On { plan, steering } if *plan == id => {
                 let reply = steering.update(m);
                 self.stats.steer_readings = self.stats.steer_readings.wrapping_add(1);
                 self.send(id, ReplyBody::Steer(reply), tx);
@@ -71,7 +85,7 @@ impl Core {
     /// The counters and stop of the insertion steered under plan `id`.
     pub(super) fn steer_status(&mut self, id: u16, tx: &mut dyn FnMut(&[u8])) {
         match &self.steering {
-            Some((plan, steering)) if *plan == id => {
+            Steered::On { plan, steering } if *plan == id => {
                 let body = ReplyBody::SteerStatus {
                     stats: steering.stats(),
                     stopped: steering.stopped(),

@@ -12,6 +12,9 @@ use crate::optim::problem::{Vars, MAX_VARS};
 /// Inequality rows the QP can hold: two bounds per variable, the tilt cone and clearances.
 pub const MAX_ROWS: usize = 2 * MAX_VARS + 1 + 12;
 
+/// General (not axis) inequality rows the QP can hold: the tilt cone and the clearances.
+const MAX_GENERAL: usize = MAX_ROWS - 2 * MAX_VARS;
+
 const MAX_EQ: usize = 3;
 const KKT: usize = MAX_VARS + MAX_EQ + MAX_VARS;
 
@@ -28,10 +31,13 @@ pub struct Qp {
     pub eq: [Vars; MAX_EQ],
     /// Number of equality rows.
     pub m_eq: usize,
-    /// Inequality rows aᵢ (not written for an axis row).
-    pub rows: [Vars; MAX_ROWS],
+    /// The general inequality rows aᵢ, in the order pushed; axis rows take no room (800 B less
+    /// stack under every SQP step on the device).
+    general: [Vars; MAX_GENERAL],
+    /// Number of general rows.
+    m_general: usize,
     /// Row i is ±(unit vector k) when `axis[i]` is ±(k + 1) (a bound: its products are one
-    /// element, exactly the dot product's value), a general row when 0.
+    /// element, exactly the dot product's value), general row `axis[i] - i8::MIN` otherwise.
     axis: [i8; MAX_ROWS],
     /// Right-hand sides bᵢ (≤ 0).
     pub rhs: [f32; MAX_ROWS],
@@ -62,6 +68,21 @@ pub enum QpError {
     Budget,
 }
 
+/// The `axis` code of general row `index`: below every axis code (±1 ..= ±MAX_VARS).
+const fn general_code(index: usize) -> i8 {
+    (i8::MIN as isize + index as isize) as i8
+}
+
+fn is_general(code: i8) -> bool {
+    code < -(MAX_VARS as i8)
+}
+
+fn general_index(code: i8) -> usize {
+    (i16::from(code) - i16::from(i8::MIN)) as usize
+}
+
+const _: () = assert!(MAX_GENERAL + MAX_VARS < 128);
+
 impl Qp {
     /// An empty QP over `n` variables with Hessian `h` and gradient `g`.
     pub fn new(n: usize, h: [Vars; MAX_VARS], g: Vars) -> Qp {
@@ -71,7 +92,8 @@ impl Qp {
             g,
             eq: [[0.0; MAX_VARS]; MAX_EQ],
             m_eq: 0,
-            rows: [[0.0; MAX_VARS]; MAX_ROWS],
+            general: [[0.0; MAX_VARS]; MAX_GENERAL],
+            m_general: 0,
             axis: [0; MAX_ROWS],
             rhs: [0.0; MAX_ROWS],
             m: 0,
@@ -87,6 +109,7 @@ impl Qp {
         self.g = *g;
         self.m_eq = 0;
         self.m = 0;
+        self.m_general = 0;
     }
 
     /// Adds an equality row; returns false when full.
@@ -101,11 +124,12 @@ impl Qp {
 
     /// Adds an inequality row aᵀp ≥ b (b is clamped to ≤ 0); returns false when full.
     pub fn push_row(&mut self, a: &Vars, b: f32) -> bool {
-        if self.m >= MAX_ROWS {
+        if self.m >= MAX_ROWS || self.m_general >= MAX_GENERAL {
             return false;
         }
-        self.rows[self.m] = *a;
-        self.axis[self.m] = 0;
+        self.general[self.m_general] = *a;
+        self.axis[self.m] = general_code(self.m_general);
+        self.m_general += 1;
         self.rhs[self.m] = crate::fmath::min(b, 0.0);
         self.m += 1;
         true
@@ -139,7 +163,7 @@ impl Qp {
         // aᵢ · v: for an axis row the one product that is not zero (the sum of the others' ±0
         // does not change it).
         let row_dot = |i: usize, v: &Vars| match axis[i] {
-            0 => dot(&self.rows[i], v),
+            a if is_general(a) => dot(&self.general[general_index(a)], v),
             a if a > 0 => v[(a - 1) as usize],
             a => -v[(-a - 1) as usize],
         };
@@ -153,8 +177,9 @@ impl Qp {
         // The rows do not change during a solve: their norms are taken once.
         let mut row_norms = [0.0f32; MAX_ROWS];
         for (i, norm) in row_norms.iter_mut().enumerate().take(self.m) {
-            *norm = if axis[i] == 0 {
-                crate::fmath::sqrt(dot(&self.rows[i], &self.rows[i]))
+            *norm = if is_general(axis[i]) {
+                let a = &self.general[general_index(axis[i])];
+                crate::fmath::sqrt(dot(a, a))
             } else {
                 1.0
             };
@@ -180,15 +205,15 @@ impl Qp {
             }
             for r in 0..self.m_eq + w_len {
                 let code = if r < self.m_eq {
-                    0
+                    general_code(0)
                 } else {
                     axis[working[r - self.m_eq]]
                 };
-                if code == 0 {
+                if is_general(code) {
                     let a = if r < self.m_eq {
                         &self.eq[r]
                     } else {
-                        &self.rows[working[r - self.m_eq]]
+                        &self.general[general_index(code)]
                     };
                     for j in 0..n {
                         k[n + r][j] = a[j];

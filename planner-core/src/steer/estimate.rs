@@ -9,6 +9,7 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
+use super::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{rotate, Frame, V3};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -221,7 +222,7 @@ impl Estimate {
             let down = Estimate::minus(&next, self.factor, &step(&fm, km), km);
             phi.set_column(j, &((up - down) / (2.0 * h)));
         }
-        self.cov = phi * self.cov * phi.transpose();
+        self.cov = sandwich(&phi, &self.cov);
         // Process noise: the advance along the heading, the heading's walk on lines.
         let along = next.e3();
         let q_len = self.noise.insertion_error_mm * self.noise.insertion_error_mm / 100.0 * length;
@@ -289,7 +290,7 @@ impl Estimate {
 
     /// The Kalman update of three rows `h` with innovation `y` and noise variances `r`.
     fn fuse_rows(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: [f32; 3]) -> bool {
-        let mut s = h * self.cov * h.transpose();
+        let mut s = sandwich(h, &self.cov);
         for k in 0..3 {
             s[(k, k)] += r[k];
         }
@@ -300,8 +301,8 @@ impl Estimate {
         if !d2.is_finite() || d2 > GATE {
             return false;
         }
-        let k = self.cov * h.transpose() * s_inv;
-        let d = k * y;
+        let k = mul(&mul(&self.cov, &h.transpose()), &s_inv);
+        let d = mul(&k, &SMatrix::<f32, 3, 1>::from(y));
         let (tip, factor) = Estimate::plus(&self.tip, self.factor, &d);
         let Some(rotation) = orthonormal(&tip.r) else {
             return false;
@@ -311,13 +312,13 @@ impl Estimate {
             r: rotation,
         };
         self.factor = crate::fmath::clamp(factor, FACTOR_RANGE.0, FACTOR_RANGE.1);
-        let ikh = Cov::identity() - k * h;
+        let ikh = Cov::identity() - mul(&k, h);
         // Joseph form keeps the covariance symmetric and positive in f32.
         let mut rk = SMatrix::<f32, 3, 3>::zeros();
         for i in 0..3 {
             rk[(i, i)] = r[i];
         }
-        let cov = ikh * self.cov * ikh.transpose() + k * rk * k.transpose();
+        let cov = sandwich(&ikh, &self.cov) + sandwich(&k, &rk);
         self.cov = (cov + cov.transpose()) * 0.5;
         true
     }

@@ -28,6 +28,7 @@
 //! ```
 
 pub mod estimate;
+mod matmul;
 pub mod replan;
 mod state;
 

@@ -141,7 +141,9 @@ pub enum FrameError {
 
 /// Accumulates line bytes and yields checked payloads. Fixed buffer of `N` bytes.
 pub struct FrameDecoder<const N: usize> {
-    direction: u8,
+    // A flag rather than the direction byte, so a request decoder is all zero bytes and a
+    // `static` holding one lives in `.bss` (no initial image in flash).
+    expects_replies: bool,
     buf: [u8; N],
     len: usize,
     skip: Skip,
@@ -159,17 +161,17 @@ impl<const N: usize> FrameDecoder<N> {
     /// An empty decoder of requests (the device's side). There is no `new`: a decoder that
     /// expects the wrong direction rejects every frame as damaged, so the side is always named.
     pub const fn for_requests() -> Self {
-        Self::expecting(<Request as Directed>::DIRECTION)
+        Self::expecting(false)
     }
 
     /// An empty decoder of replies (the host's side).
     pub const fn for_replies() -> Self {
-        Self::expecting(<Reply as Directed>::DIRECTION)
+        Self::expecting(true)
     }
 
-    const fn expecting(direction: u8) -> Self {
+    const fn expecting(expects_replies: bool) -> Self {
         FrameDecoder {
-            direction,
+            expects_replies,
             buf: [0; N],
             len: 0,
             skip: Skip::No,
@@ -215,7 +217,12 @@ impl<const N: usize> FrameDecoder<N> {
         let body = n - CRC_LEN;
         let mut crc_bytes = [0u8; CRC_LEN];
         crc_bytes.copy_from_slice(&self.buf[body..n]);
-        if frame_crc(self.direction, &self.buf[..body]) != u32::from_le_bytes(crc_bytes) {
+        let direction = if self.expects_replies {
+            <Reply as Directed>::DIRECTION
+        } else {
+            <Request as Directed>::DIRECTION
+        };
+        if frame_crc(direction, &self.buf[..body]) != u32::from_le_bytes(crc_bytes) {
             return Some(Err(FrameError::BadCrc));
         }
         Some(Ok(&self.buf[..body]))

@@ -1,0 +1,60 @@
+//! Matrix products for the estimator, kept out of line.
+//!
+//! nalgebra unrolls a fixed-size product completely: the Kalman update alone took 9 KiB of the
+//! firmware's flash (issue 12's budget is 128 KiB). These loops take the sizes at run time, so one
+//! copy serves every shape, and they sum in nalgebra's order (`k` ascending, from the first
+//! product), so the results are the same bit for bit.
+
+use nalgebra::SMatrix;
+
+/// `a * b`.
+pub(super) fn mul<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f32, R, K>,
+    b: &SMatrix<f32, K, C>,
+) -> SMatrix<f32, R, C> {
+    let mut out = SMatrix::<f32, R, C>::zeros();
+    mul_into(a.as_slice(), R, K, b.as_slice(), C, out.as_mut_slice());
+    out
+}
+
+/// `a * b * aᵀ`, as nalgebra evaluates it (left to right).
+pub(super) fn sandwich<const R: usize, const K: usize>(
+    a: &SMatrix<f32, R, K>,
+    b: &SMatrix<f32, K, K>,
+) -> SMatrix<f32, R, R> {
+    mul(&mul(a, b), &a.transpose())
+}
+
+/// Column-major `out (rows × cols) = a (rows × inner) · b (inner × cols)`.
+#[inline(never)]
+fn mul_into(a: &[f32], rows: usize, inner: usize, b: &[f32], cols: usize, out: &mut [f32]) {
+    for (j, out_col) in out.chunks_exact_mut(rows).take(cols).enumerate() {
+        let b_col = &b[j * inner..(j + 1) * inner];
+        for (i, o) in out_col.iter_mut().enumerate() {
+            let mut s = a[i] * b_col[0];
+            for (k, bk) in b_col.iter().enumerate().skip(1) {
+                s += a[k * rows + i] * *bk;
+            }
+            *o = s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The same bits as nalgebra's own product, on values whose sums round.
+    #[test]
+    fn products_equal_nalgebra_bit_for_bit() {
+        let a = SMatrix::<f32, 3, 7>::from_fn(|i, j| ((i * 7 + j) as f32 * 0.37).sin() * 1e3);
+        let b = SMatrix::<f32, 7, 7>::from_fn(|i, j| ((i * 7 + j) as f32 * 1.91).cos() / 3.0);
+        assert_eq!(mul(&a, &b).as_slice(), (a * b).as_slice());
+        assert_eq!(
+            sandwich(&a, &b).as_slice(),
+            (a * b * a.transpose()).as_slice()
+        );
+        let c = SMatrix::<f32, 7, 3>::from_fn(|i, j| (i as f32 - j as f32 * 2.5) * 0.1);
+        assert_eq!(mul(&b, &c).as_slice(), (b * c).as_slice());
+    }
+}
