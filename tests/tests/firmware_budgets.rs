@@ -1,6 +1,8 @@
 //! The firmware's cost, measured by `needle device-bench` in QEMU for both boards, against the
-//! "must" budgets: flash < 256 KiB, RAM (static + peak stack) < 64 KiB, and fewer than 50 million
-//! instructions to plan the paper's scenario; and every device plan equal to the host's.
+//! "must" budgets: flash ≤ 128 KiB and RAM (static + peak stack) ≤ 32 KiB with the closed-loop
+//! controller in (issue 12; issue 4's were 256 and 64 KiB), fewer than 50 million instructions to
+//! plan the paper's scenario (issue 12's 15 M is not met yet), a steering reading under 5 M; and
+//! every device plan equal to the host's.
 
 mod firmware_support;
 
@@ -8,8 +10,8 @@ use firmware_support::emulator_ready;
 use needle_e2e::needle;
 use serde_json::Value;
 
-const FLASH_BUDGET: u64 = 256 * 1024;
-const RAM_BUDGET: u64 = 64 * 1024;
+const FLASH_BUDGET: u64 = 128 * 1024;
+const RAM_BUDGET: u64 = 32 * 1024;
 const PAPER_INSTRUCTIONS_BUDGET: u64 = 50_000_000;
 
 #[test]
@@ -81,11 +83,11 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
                 ));
             }
         }
-        if flash >= FLASH_BUDGET {
-            over.push(format!("{name}: flash {flash} B >= {FLASH_BUDGET} B"));
+        if flash > FLASH_BUDGET {
+            over.push(format!("{name}: flash {flash} B > {FLASH_BUDGET} B"));
         }
-        if ram + stack >= RAM_BUDGET {
-            over.push(format!("{name}: RAM {} B >= {RAM_BUDGET} B", ram + stack));
+        if ram + stack > RAM_BUDGET {
+            over.push(format!("{name}: RAM {} B > {RAM_BUDGET} B", ram + stack));
         }
         if paper >= PAPER_INSTRUCTIONS_BUDGET {
             over.push(format!(
