@@ -10,7 +10,7 @@ use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
-use crate::model::scenario::{Scenario, Workspace};
+use crate::model::scenario::{Scenario, Workspace, MAX_OBSTACLES};
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
 use crate::optim::sqp::solve_within;
 use crate::report::{SegmentPlan, Segments};
@@ -43,22 +43,29 @@ pub fn predict(
     let plane = scenario.options.workspace == Workspace::PlaneYz;
     let mut min_clearance = f32::INFINITY;
     let end = execute_from(*tip, steps, radius, |start, kind, length| {
-        for ob in &scenario.obstacles {
-            let d = if plane {
-                let pieces =
-                    crate::fmath::clamp(libm::ceilf(length / PLANE_SPACING), 1.0, 4096.0) as u32;
-                let mut least = f32::INFINITY;
-                for k in 0..=pieces {
-                    let q = start.point_at(kind, length * k as f32 / pieces as f32, radius);
+        if plane && !scenario.obstacles.is_empty() {
+            // Each sample point serves every obstacle (drawing the points was most of a
+            // reading's cost when done per obstacle; the same points, so the same bits).
+            let pieces =
+                crate::fmath::clamp(libm::ceilf(length / PLANE_SPACING), 1.0, 4096.0) as u32;
+            let mut least = [f32::INFINITY; MAX_OBSTACLES];
+            for k in 0..=pieces {
+                let q = start.point_at(kind, length * k as f32 / pieces as f32, radius);
+                for (l, ob) in least.iter_mut().zip(&scenario.obstacles) {
                     let (dy, dz) = (q.y - ob.center[1], q.z - ob.center[2]);
-                    least = least.min(crate::fmath::sqrt(dy * dy + dz * dz));
+                    *l = crate::fmath::min(*l, crate::fmath::sqrt(dy * dy + dz * dz));
                 }
-                least - ob.radius - 0.5 * length / pieces as f32
-            } else {
+            }
+            for (l, ob) in least.iter().zip(&scenario.obstacles) {
+                let d = l - ob.radius - 0.5 * length / pieces as f32;
+                min_clearance = crate::fmath::min(min_clearance, d);
+            }
+        } else if !plane {
+            for ob in &scenario.obstacles {
                 let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
-                closest(start, kind, length, radius, &c).distance - ob.radius
-            };
-            min_clearance = min_clearance.min(d);
+                let d = closest(start, kind, length, radius, &c).distance - ob.radius;
+                min_clearance = crate::fmath::min(min_clearance, d);
+            }
         }
     });
     let miss = end.p - target;
