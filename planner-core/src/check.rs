@@ -118,7 +118,11 @@ pub fn check(
     let cos_max = crate::fmath::cos(scenario.entry.max_tilt_deg.to_radians());
     let tilt_ok = tilt >= cos_max - 1e-6;
     let within_bounds = lengths_ok && tilt_ok;
-    let clearance_floor = scenario.options.min_clearance.max(0.0);
+    // A clearance passes only by more than the scenario's resolution (four f32 units in the last
+    // place of its coordinates): this check's own rounding must not pass a path that exact
+    // arithmetic puts short of the minimum (found by fuzzing: a path kept the minimum in f32 and
+    // fell 8e-6 mm short of it in f64). The optimiser keeps twice that margin.
+    let clearance_floor = scenario.options.min_clearance.max(0.0) + scenario.resolution();
     let feasible = target_error.is_finite()
         && target_error <= scenario.target.tolerance
         && min_clearance > clearance_floor

@@ -159,3 +159,50 @@ fn a_driver_too_slow_for_its_spin_is_refused() {
     s.driver.spin_rate = 1e3;
     soundness::check_plan(&s).unwrap();
 }
+
+/// Found by the planner fuzz target: LRRL kept the minimum clearance (4.3137255 mm) in the
+/// planner's f32 arithmetic and its own check, but fell 8e-6 mm short of it measured in f64. The
+/// check now passes a clearance only by more than the scenario's resolution, and the optimiser
+/// keeps twice that (docs/protocol.md, fuzzing).
+#[test]
+fn a_minimum_clearance_is_kept_in_exact_arithmetic() {
+    use planner_core::model::scenario::{Driver, Entry, Needle, Target, Weights};
+    let mut s = Scenario::paper();
+    s.needle = Needle {
+        curvature_radius: 63.7,
+        max_arc_deg: 16.398626,
+        max_line_length: 258.45892,
+    };
+    s.entry = Entry {
+        position: [14.509804, 14.509804, 14.509804],
+        direction: [-0.7254902, 0.7254902, 0.7254902],
+        max_tilt_deg: 77.64706,
+    };
+    s.target = Target {
+        position: [43.52941, 60.0, 160.0],
+        tolerance: 4.999998,
+    };
+    s.obstacles.clear();
+    s.obstacles
+        .push(Obstacle {
+            center: [40.0, 29.062332, 103.52941],
+            radius: 17.575777,
+        })
+        .unwrap();
+    s.weights = Weights {
+        length: 4.3137255,
+        risk: 1.5179675,
+        penalty: 1725.4902,
+        control: 8.749981,
+    };
+    s.options.max_control_degree = 4;
+    s.options.workspace = Workspace::Space;
+    s.options.min_clearance = 4.3137255;
+    s.driver = Driver {
+        insert_speed: 28.247526,
+        rotate_speed: 1553.346,
+        spin_rate: 19.373377,
+        max_twist_deg: 3097.9722,
+    };
+    soundness::check_plan(&s).unwrap();
+}

@@ -136,7 +136,9 @@ impl<'a> Problem<'a> {
             upper,
             m_eq: if plane { 2 } else { 3 },
             radius,
-            min_clearance: scenario.options.min_clearance.max(CLEARANCE_FLOOR),
+            // Twice the check's margin above the scenario's minimum (see `check::check`).
+            min_clearance: (scenario.options.min_clearance + 2.0 * scenario.resolution())
+                .max(CLEARANCE_FLOOR),
             cos_max_tilt: crate::fmath::cos(tilt),
             vers_max_tilt: versine(tilt),
             basis: entry_basis(scenario.entry.direction),
