@@ -48,13 +48,22 @@ pub trait SeedSink {
 /// Seeds are scored in their plane (the distance from a point to a planar path is its in-plane
 /// distance combined with its height over the plane), which costs a fraction of a 3-D
 /// evaluation; only the seeds offered are turned into problem variables.
-pub fn sweep(p: &Problem, psi: f32, sides: u8, sink: &mut dyn SeedSink) -> u32 {
+///
+/// `planned_without` has bit i set when the form without its line i has been planned already:
+/// its best path then comes in as an extension start, and that sweep is left out.
+pub fn sweep(
+    p: &Problem,
+    psi: f32,
+    sides: u8,
+    planned_without: u8,
+    sink: &mut dyn SeedSink,
+) -> u32 {
     let plane = SeedPlane::new(p, psi, sides);
     let mut scored = 0;
     sweep_pieces(p, &plane, &pieces(p, &plane.sides, 0), sink, &mut scored);
     if p.form.len() > 1 {
         for i in 0..p.form.len() {
-            if p.form.kind(i) == SegmentKind::Line {
+            if p.form.kind(i) == SegmentKind::Line && planned_without & (1 << i) == 0 {
                 let without = pieces(p, &plane.sides, 1 << i);
                 sweep_pieces(p, &plane, &without, sink, &mut scored);
             }
@@ -241,7 +250,7 @@ fn sweep_pieces(
             let nearest = probe(heading, &cell);
             // A probe that just misses (a thin feasible sliver between obstacles can fall between
             // grid points) is followed by a finer grid over its cell.
-            if nearest < 0.0 && nearest > -NEAR_MISS {
+            if p.plane && nearest < 0.0 && nearest > -NEAR_MISS {
                 let fine = REFINE.pow(free as u32 + 1);
                 for k in 0..fine {
                     let mut kk = k;

@@ -1,8 +1,9 @@
 //! "Path classification": the best path of one form.
 //!
 //! For every side assignment of the arcs (plane mode) or every seed plane (3-D), seeds are moved
-//! onto the target and scored; the best distinct ones are refined by the SQP; the best refined
-//! path is re-checked by [`crate::check`] and reported with the numbers the check measured.
+//! onto the target and scored; the best distinct ones of the whole form (in plane mode, of each
+//! side assignment's best few) are refined by the SQP, best first; the best refined path is
+//! re-checked by [`crate::check`] and reported with the numbers the check measured.
 
 use crate::check::check;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
@@ -16,43 +17,85 @@ use crate::search::seeds::{sweep, SeedSink};
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
-/// Distinct seeds refined per side assignment (plane) or per seed plane (3-D).
+/// Distinct seeds kept per side assignment in plane mode (the form's best of them are refined).
 pub const REFINED_PER_GROUP: usize = 4;
 /// Near misses moved out of their obstacles per group, when the group has room for more seeds.
 pub const NEAR_MISSES_PER_GROUP: usize = 2;
 
-/// The best few admissible seeds, kept distinct.
+/// Distinct seeds refined per form in 3-D, gathered over all its seed planes.
+pub const SPACE_REFINED: usize = 16;
+/// Near misses moved out of their obstacles per form in 3-D.
+pub const SPACE_NEAR_MISSES: usize = 4;
+
+/// The best few admissible seeds, kept distinct, and the best few near misses. One type with
+/// run-time limits serves both workspaces (one copy of its code in the firmware).
 struct Shortlist {
-    items: heapless::Vec<(f32, Vars), REFINED_PER_GROUP>,
+    items: heapless::Vec<(f32, Vars), SPACE_REFINED>,
     /// The near misses that cut least into obstacles (their smallest clearance, variables).
-    near: heapless::Vec<(f32, Vars), NEAR_MISSES_PER_GROUP>,
+    near: heapless::Vec<(f32, Vars), SPACE_NEAR_MISSES>,
+    /// How many seeds and near misses are kept.
+    limits: (usize, usize),
     /// Variables compared when telling seeds apart.
     n: usize,
+    /// An objective no seed of use reaches (that of seeds already chosen elsewhere).
+    ceiling: f32,
 }
 
 impl Shortlist {
-    fn new(n: usize) -> Self {
+    /// Keeps up to `seeds` seeds and `near_misses` near misses (at most the capacities).
+    fn new(n: usize, seeds: usize, near_misses: usize) -> Self {
         Shortlist {
             items: heapless::Vec::new(),
             near: heapless::Vec::new(),
+            limits: (seeds.min(SPACE_REFINED), near_misses.min(SPACE_NEAR_MISSES)),
             n,
+            ceiling: f32::INFINITY,
         }
+    }
+
+    /// Moves the near misses out of their obstacles when the shortlist has room for more seeds:
+    /// a search with few admissible seeds may hide a feasible region thinner than the sweep's
+    /// spacing next to them.
+    fn escape_near_misses(&mut self, p: &Problem, effort: &mut Effort) {
+        if self.items.len() >= self.limits.0 {
+            return;
+        }
+        let near = core::mem::take(&mut self.near);
+        for (_, x) in near.iter() {
+            if let Some(v) = escape(p, x, &mut effort.evaluations) {
+                self.offer(v.objective, &v.x);
+            }
+        }
+    }
+
+    /// The seeds, best first (their refinement then finds the best basins before the others).
+    fn sorted(&mut self) -> &[(f32, Vars)] {
+        sort_by_objective(&mut self.items, |s| s.0);
+        &self.items
     }
 }
 
 impl SeedSink for Shortlist {
     fn bound(&self) -> f32 {
-        if !self.items.is_full() {
-            return f32::INFINITY;
+        if self.items.len() < self.limits.0 {
+            return self.ceiling;
         }
-        self.items
+        let worst = self
+            .items
             .iter()
             .map(|(f, _)| *f)
-            .fold(f32::NEG_INFINITY, f32::max)
+            .fold(f32::NEG_INFINITY, f32::max);
+        crate::fmath::min(worst, self.ceiling)
     }
 
     fn offer(&mut self, objective: f32, at: &Vars) {
-        keep_best(&mut self.items, objective, at, self.n);
+        keep_best(
+            self.items.as_mut_view(),
+            self.limits.0,
+            objective,
+            at,
+            self.n,
+        );
     }
 
     fn near_miss(&mut self, min_clearance: f32, x: &dyn Fn() -> Option<Vars>) {
@@ -61,19 +104,26 @@ impl SeedSink for Shortlist {
             .iter()
             .map(|(c, _)| -*c)
             .fold(f32::NEG_INFINITY, f32::max);
-        if self.near.is_full() && -min_clearance >= worst {
+        if self.near.len() >= self.limits.1 && -min_clearance >= worst {
             return;
         }
         if let Some(x) = x() {
-            keep_best(&mut self.near, -min_clearance, &x, self.n);
+            keep_best(
+                self.near.as_mut_view(),
+                self.limits.1,
+                -min_clearance,
+                &x,
+                self.n,
+            );
         }
     }
 }
 
 /// Keeps in `items` the distinct points of lowest `key`: a point near one already kept replaces it
 /// if lower, otherwise it takes the place of the highest when that is higher.
-fn keep_best<const N: usize>(
-    items: &mut heapless::Vec<(f32, Vars), N>,
+fn keep_best(
+    items: &mut heapless::vec::VecView<(f32, Vars)>,
+    limit: usize,
     key: f32,
     at: &Vars,
     n: usize,
@@ -85,7 +135,7 @@ fn keep_best<const N: usize>(
         }
         return;
     }
-    if items.is_full() {
+    if items.len() >= limit.min(items.capacity()) {
         let worst = (0..items.len())
             .max_by(|&a, &b| items[a].0.total_cmp(&items[b].0))
             .unwrap_or(0);
@@ -98,55 +148,27 @@ fn keep_best<const N: usize>(
     let _ = items.push((key, *at));
 }
 
+/// Sorts a shortlist by `objective`, lowest first (ties keep their order). An insertion sort:
+/// the lists hold at most 16 seeds, and `core`'s sorts cost 12 KiB of firmware and a panic path.
+fn sort_by_objective<T>(items: &mut [T], objective: impl Fn(&T) -> f32) {
+    for i in 1..items.len() {
+        let mut j = i;
+        while j > 0
+            && objective(&items[j - 1])
+                .total_cmp(&objective(&items[j]))
+                .is_gt()
+        {
+            items.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+}
+
 /// Effort spent on a form.
 #[derive(Default)]
 struct Effort {
     iterations: u32,
     evaluations: u32,
-}
-
-/// Scores every seed of one group and refines the shortlist and the `extra` starts; returns the
-/// best local solution.
-fn solve_group(
-    p: &Problem,
-    psi: f32,
-    sides: u8,
-    extra: &[Vars],
-    known: &mut Basins,
-    effort: &mut Effort,
-) -> Option<LocalSolution> {
-    let mut list = Shortlist::new(p.n);
-    let arc_sides = if p.plane {
-        1
-    } else {
-        1u16 << p.form.arc_count()
-    };
-    for s in 0..arc_sides {
-        let s = if p.plane { sides } else { s as u8 };
-        effort.evaluations += sweep(p, psi, s, &mut list);
-    }
-    // A group with few admissible seeds may hide a feasible region thinner than the sweep's
-    // spacing next to its near misses.
-    if !list.items.is_full() {
-        let near = core::mem::take(&mut list.near);
-        for (_, x) in near.iter() {
-            if let Some(v) = escape(p, x, &mut effort.evaluations) {
-                list.offer(v.objective, &v.x);
-            }
-        }
-    }
-    let mut best: Option<LocalSolution> = None;
-    for x in list.items.iter().map(|(_, x)| x).chain(extra.iter()) {
-        if let Some(sol) = refine(p, x, known, effort) {
-            if best
-                .as_ref()
-                .is_none_or(|b| sol.eval.objective < b.eval.objective)
-            {
-                best = Some(sol);
-            }
-        }
-    }
-    best
 }
 
 /// Local solutions found so far for one problem (variables, objective), distinct.
@@ -243,41 +265,145 @@ const EXTENSIONS: usize = 16;
 /// Plans one form of `scenario`; `previous` holds the outcomes of forms already planned.
 pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> FormOutcome {
     let mut effort = Effort::default();
-    let mut best: Option<(Problem, LocalSolution)> = None;
     let extensions = extension_starts(scenario, form, previous);
-    let mut extra: heapless::Vec<Vars, EXTENSIONS> = heapless::Vec::new();
+    let planned = planned_without(form, previous);
     if scenario.options.workspace == Workspace::PlaneYz {
-        for sides in 0..(1u16 << form.arc_count()) {
-            let p = Problem::new(scenario, form, sides as u8);
-            extra.clear();
-            for (s, x) in extensions.iter() {
-                if u16::from(*s) == sides {
-                    // Same capacity as `extensions`.
-                    let _ = extra.push(*x);
-                }
-            }
-            let mut known = Basins::new();
-            let sol = solve_group(&p, 0.0, sides as u8, &extra, &mut known, &mut effort);
-            consider(p, sol, &mut best);
-        }
+        plane_form(scenario, form, planned, &extensions, &mut effort)
     } else {
-        // Every seed plane poses the same problem: its solutions are shared.
-        let mut known = Basins::new();
-        for k in 0..SPACE_PLANES {
-            let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
-            let p = Problem::new(scenario, form, 0);
-            let sol = solve_group(&p, psi, 0, &[], &mut known, &mut effort);
-            consider(p, sol, &mut best);
-        }
-        for (_, x) in extensions.iter() {
-            let p = Problem::new(scenario, form, 0);
-            let sol = refine(&p, x, &mut known, &mut effort);
-            consider(p, sol, &mut best);
+        space_form(scenario, form, planned, &extensions, &mut effort)
+    }
+}
+
+/// Bit i set: the form without its line i is among the `previous` outcomes (planned already,
+/// feasible or not).
+fn planned_without(form: Form, previous: &[FormOutcome]) -> u8 {
+    let mut out = 0u8;
+    for i in (0..form.len()).filter(|&i| form.kind(i) == SegmentKind::Line) {
+        let shorter = || {
+            (0..form.len())
+                .filter(move |&k| k != i)
+                .map(|k| form.kind(k))
+        };
+        let planned = previous.iter().any(|o| {
+            o.form.len() + 1 == form.len()
+                && shorter().eq((0..o.form.len()).map(|k| o.form.kind(k)))
+        });
+        if planned {
+            out |= 1 << i;
         }
     }
+    out
+}
+
+/// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
+pub const PLANE_REFINED: usize = 12;
+
+/// A seed chosen for refinement in plane mode: objective, side assignment, variables.
+type SidedSeed = (f32, u8, Vars);
+
+/// Keeps in `chosen` the `PLANE_REFINED` seeds of lowest objective.
+fn choose(chosen: &mut heapless::Vec<SidedSeed, PLANE_REFINED>, seed: SidedSeed) {
+    if chosen.is_full() {
+        let worst = (0..chosen.len())
+            .max_by(|&a, &b| chosen[a].0.total_cmp(&chosen[b].0))
+            .unwrap_or(0);
+        if seed.0 >= chosen[worst].0 {
+            return;
+        }
+        chosen.swap_remove(worst);
+    }
+    // Room was made above.
+    let _ = chosen.push(seed);
+}
+
+/// Plane mode: every side assignment is its own problem. Each is swept into its own shortlist
+/// (its near misses escaped when it has room), the best seeds of all of them are refined
+/// together, and each side assignment's extension starts are refined as well.
+fn plane_form(
+    scenario: &Scenario,
+    form: Form,
+    planned_without: u8,
+    extensions: &[(u8, Vars)],
+    effort: &mut Effort,
+) -> FormOutcome {
+    let groups = 1u16 << form.arc_count();
+    let mut chosen: heapless::Vec<SidedSeed, PLANE_REFINED> = heapless::Vec::new();
+    for sides in 0..groups {
+        let p = Problem::new(scenario, form, sides as u8);
+        let mut list = Shortlist::new(p.n, REFINED_PER_GROUP, NEAR_MISSES_PER_GROUP);
+        if chosen.is_full() {
+            list.ceiling = chosen.iter().map(|s| s.0).fold(f32::NEG_INFINITY, f32::max);
+        }
+        effort.evaluations += sweep(&p, 0.0, sides as u8, planned_without, &mut list);
+        list.escape_near_misses(&p, effort);
+        for (f, x) in list.items.iter() {
+            choose(&mut chosen, (*f, sides as u8, *x));
+        }
+    }
+    sort_by_objective(&mut chosen, |s| s.0);
+    let mut best: Option<(Problem, LocalSolution)> = None;
+    for sides in 0..groups {
+        let sides = sides as u8;
+        let seeds = chosen.iter().filter(|s| s.1 == sides).map(|s| &s.2);
+        let extra = extensions.iter().filter(|s| s.0 == sides).map(|s| &s.1);
+        let mut starts = seeds.chain(extra).peekable();
+        if starts.peek().is_none() {
+            continue;
+        }
+        let p = Problem::new(scenario, form, sides);
+        let mut known = Basins::new();
+        let mut group_best: Option<LocalSolution> = None;
+        for x in starts {
+            keep_lower(&mut group_best, refine(&p, x, &mut known, effort));
+        }
+        consider(p, group_best, &mut best);
+    }
     match best {
-        Some((p, sol)) => report(&p, &sol, &effort),
-        None => infeasible(form, &effort),
+        Some((p, sol)) => report(&p, &sol, effort),
+        None => infeasible(form, effort),
+    }
+}
+
+/// 3-D: every seed plane poses the same problem, so the seeds of all planes compete for one
+/// shortlist (seeds of neighbouring planes often lie in one basin) and the solutions found are
+/// shared.
+fn space_form(
+    scenario: &Scenario,
+    form: Form,
+    planned_without: u8,
+    extensions: &[(u8, Vars)],
+    effort: &mut Effort,
+) -> FormOutcome {
+    let p = Problem::new(scenario, form, 0);
+    let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
+    for k in 0..SPACE_PLANES {
+        let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
+        for sides in 0..(1u16 << form.arc_count()) {
+            effort.evaluations += sweep(&p, psi, sides as u8, planned_without, &mut list);
+        }
+    }
+    list.escape_near_misses(&p, effort);
+    let mut known = Basins::new();
+    let mut best: Option<LocalSolution> = None;
+    let starts = list.sorted().iter().map(|(_, x)| x);
+    for x in starts.chain(extensions.iter().map(|(_, x)| x)) {
+        keep_lower(&mut best, refine(&p, x, &mut known, effort));
+    }
+    match best {
+        Some(sol) => report(&p, &sol, effort),
+        None => infeasible(form, effort),
+    }
+}
+
+/// Keeps the lower of `best` and `sol`.
+fn keep_lower(best: &mut Option<LocalSolution>, sol: Option<LocalSolution>) {
+    if let Some(sol) = sol {
+        if best
+            .as_ref()
+            .is_none_or(|b| sol.eval.objective < b.eval.objective)
+        {
+            *best = Some(sol);
+        }
     }
 }
 
