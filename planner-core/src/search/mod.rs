@@ -5,3 +5,4 @@ pub(crate) mod escape;
 pub(crate) mod plane;
 pub(crate) mod seeds;
 pub(crate) mod solve;
+pub(crate) mod starts;

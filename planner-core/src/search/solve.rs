@@ -6,7 +6,7 @@
 //! re-checked by [`crate::check`] and reported with the numbers the check measured.
 
 use crate::check::check;
-use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
+use crate::model::form::{Form, SegmentKind};
 use crate::model::kinematics::{entry_basis, insertion_frame, V3};
 use crate::model::scenario::{Scenario, Workspace};
 use crate::optim::problem::{Problem, Vars};
@@ -14,6 +14,7 @@ use crate::optim::sqp::{self, LocalSolution};
 use crate::report::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::search::escape::escape;
 use crate::search::seeds::{sweep, SeedSink};
+use crate::search::starts::{extension_starts, planned_without};
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
@@ -200,68 +201,6 @@ fn refine(p: &Problem, x: &Vars, known: &mut Basins, effort: &mut Effort) -> Opt
     Some(sol)
 }
 
-/// Starts for `form` made from the best paths of the forms one segment shorter: the missing
-/// segment is inserted with zero length, so a form never reports a worse path than a sub-form
-/// it contains. Each start comes with its plane-mode side assignment.
-#[inline(never)]
-fn extension_starts(
-    scenario: &Scenario,
-    form: Form,
-    previous: &[FormOutcome],
-) -> heapless::Vec<(u8, Vars), EXTENSIONS> {
-    let mut out = heapless::Vec::new();
-    for o in previous
-        .iter()
-        .filter(|o| o.feasible && o.form.len() + 1 == form.len())
-    {
-        for gap in 0..form.len() {
-            let shorter = (0..form.len()).filter(|&i| i != gap).map(|i| form.kind(i));
-            if !shorter.eq((0..o.form.len()).map(|i| o.form.kind(i))) {
-                continue;
-            }
-            let mut lengths = [0.0; MAX_CONTROL_DEGREE];
-            let mut bevels = [0.0; MAX_CONTROL_DEGREE];
-            for (k, i) in (0..form.len()).filter(|&i| i != gap).enumerate() {
-                lengths[i] = o.segments[k].length;
-                bevels[i] = o.segments[k].bevel_deg.to_radians();
-            }
-            let mut sides = 0u8;
-            let mut facing_negative = false;
-            let mut arc = 0;
-            for i in 0..form.len() {
-                if form.kind(i) == SegmentKind::Arc {
-                    if libm::fabsf(bevels[i]) > 1.0 {
-                        facing_negative = !facing_negative;
-                    }
-                    if facing_negative {
-                        sides |= 1 << arc;
-                    }
-                    arc += 1;
-                }
-            }
-            let p = Problem::new(scenario, form, sides);
-            let mut x = [0.0; crate::optim::problem::MAX_VARS];
-            x[0] = o.insertion.theta1_deg.to_radians();
-            if !p.plane {
-                x[1] = o.insertion.theta2_deg.to_radians();
-            }
-            for i in 0..form.len() {
-                x[p.length_var(i)] = lengths[i] / p.radius;
-                if let Some(k) = p.bevel_var(i) {
-                    x[k] = bevels[i];
-                }
-            }
-            if out.push((sides, x)).is_err() {
-                return out;
-            }
-        }
-    }
-    out
-}
-
-/// Extension starts kept per form (forms one shorter times insertion places).
-const EXTENSIONS: usize = 16;
-
 /// Plans one form of `scenario`; `previous` holds the outcomes of forms already planned.
 pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> FormOutcome {
     let mut effort = Effort::default();
@@ -272,27 +211,6 @@ pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> 
     } else {
         space_form(scenario, form, planned, &extensions, &mut effort)
     }
-}
-
-/// Bit i set: the form without its line i is among the `previous` outcomes (planned already,
-/// feasible or not).
-fn planned_without(form: Form, previous: &[FormOutcome]) -> u8 {
-    let mut out = 0u8;
-    for i in (0..form.len()).filter(|&i| form.kind(i) == SegmentKind::Line) {
-        let shorter = || {
-            (0..form.len())
-                .filter(move |&k| k != i)
-                .map(|k| form.kind(k))
-        };
-        let planned = previous.iter().any(|o| {
-            o.form.len() + 1 == form.len()
-                && shorter().eq((0..o.form.len()).map(|k| o.form.kind(k)))
-        });
-        if planned {
-            out |= 1 << i;
-        }
-    }
-    out
 }
 
 /// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
