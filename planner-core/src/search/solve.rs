@@ -214,7 +214,7 @@ pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> 
 }
 
 /// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
-pub const PLANE_REFINED: usize = 12;
+pub const PLANE_REFINED: usize = 8;
 
 /// A seed chosen for refinement in plane mode: objective, side assignment, variables.
 type SidedSeed = (f32, u8, Vars);
@@ -264,7 +264,7 @@ fn plane_form(
         let sides = sides as u8;
         let seeds = chosen.iter().filter(|s| s.1 == sides).map(|s| &s.2);
         let extra = extensions.iter().filter(|s| s.0 == sides).map(|s| &s.1);
-        let mut starts = seeds.chain(extra).peekable();
+        let mut starts = extra.chain(seeds).peekable();
         if starts.peek().is_none() {
             continue;
         }
@@ -304,7 +304,7 @@ fn space_form(
     let mut known = Basins::new();
     let mut best: Option<LocalSolution> = None;
     let starts = list.sorted().iter().map(|(_, x)| x);
-    for x in starts.chain(extensions.iter().map(|(_, x)| x)) {
+    for x in extensions.iter().map(|(_, x)| x).chain(starts) {
         keep_lower(&mut best, refine(&p, x, &mut known, effort));
     }
     match best {
