@@ -19,7 +19,7 @@ use crate::search::starts::{extension_starts, planned_without};
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
 /// Distinct seeds kept per side assignment in plane mode (the form's best of them are refined).
-pub const REFINED_PER_GROUP: usize = 4;
+pub const REFINED_PER_GROUP: usize = 3;
 /// Near misses moved out of their obstacles per group, when the group has room for more seeds.
 pub const NEAR_MISSES_PER_GROUP: usize = 2;
 
