@@ -14,12 +14,8 @@ pub struct Pose {
     pub psi: f32,
 }
 
-/// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at heading `psi`.
-pub fn bend(psi: f32, s: f32) -> (f32, f32) {
-    bend_of(crate::fmath::sincos(psi), s)
-}
-
-/// [`bend`] from the heading's (sin, cos), already known.
+/// Unit normal towards which an arc of side `s` (+1 right, -1 left) bends at the heading whose
+/// (sin, cos) is given.
 fn bend_of((sn, cs): (f32, f32), s: f32) -> (f32, f32) {
     (s * sn, -s * cs)
 }
@@ -35,13 +31,15 @@ pub fn turn(from: f32, to: f32, s: f32) -> f32 {
 }
 
 /// The pose after a segment of `kind` and length `len` bending to side `s`.
+#[cfg(test)]
 pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pose {
     advance_from(p, crate::fmath::sincos(p.psi), kind, len, s, radius).0
 }
 
-/// [`advance`] from the start heading's (sin, cos), already known; also returns the end
+/// The pose after a segment of `kind` and length `len` bending to side `s`, from the start
+/// heading's (sin, cos), already known; also returns the end
 /// heading's (sin, cos). The same operations as computing every sine afresh, so the same bits.
-fn advance_from(
+pub fn advance_from(
     p: Pose,
     sc: (f32, f32),
     kind: SegmentKind,
@@ -179,10 +177,11 @@ impl Drawn {
     }
 }
 
-/// Closed-form completions of the last two segments from `p` to the target `(tx, 0)`; calls
-/// `out(length_a, length_b)` for each.
+/// Closed-form completions of the last two segments from `p` (its heading's (sin, cos): `sc`)
+/// to the target `(tx, 0)`; calls `out(length_a, length_b)` for each.
 pub fn complete(
     p: Pose,
+    sc: (f32, f32),
     kinds: (SegmentKind, SegmentKind),
     sides: (f32, f32),
     tx: f32,
@@ -192,7 +191,7 @@ pub fn complete(
     match kinds {
         (SegmentKind::Arc, SegmentKind::Line) => {
             let s = sides.0;
-            let (nx, ny) = bend(p.psi, s);
+            let (nx, ny) = bend_of(sc, s);
             let (qx, qy) = (tx - (p.x + r * nx), -(p.y + r * ny));
             let q2 = qx * qx + qy * qy;
             if q2 < r * r {
@@ -204,7 +203,6 @@ pub fn complete(
         }
         (SegmentKind::Line, SegmentKind::Arc) => {
             let s = sides.1;
-            let sc = crate::fmath::sincos(p.psi);
             let (nx, ny) = bend_of(sc, s);
             let (dx, dy) = (sc.1, sc.0);
             let (wx, wy) = (tx - p.x - r * nx, -p.y - r * ny);
@@ -231,7 +229,7 @@ pub fn complete(
             if s1 == s2 {
                 return; // one circle: `pieces` merges such runs into one arc
             }
-            let (nx, ny) = bend(p.psi, s1);
+            let (nx, ny) = bend_of(sc, s1);
             let (c1x, c1y) = (p.x + r * nx, p.y + r * ny);
             let (ux, uy) = (tx - c1x, -c1y);
             let d = crate::fmath::sqrt(ux * ux + uy * uy);

@@ -10,7 +10,7 @@
 //! its spacing. Seeds are handed on as problem variables.
 
 use crate::model::form::SegmentKind;
-use crate::model::planar::{advance, complete, heading_of_bend, turn, Pose};
+use crate::model::planar::{advance_from, complete, heading_of_bend, turn, Pose};
 use crate::optim::problem::{Problem, Vars};
 pub use crate::search::plane::NEAR_MISS;
 use crate::search::plane::{pieces, Pieces, Planar, SeedPlane};
@@ -89,59 +89,50 @@ fn sweep_pieces(
     // The sink's bound as it stands (it changes only when a seed is offered): a probe whose
     // free pieces plus the straight distance left to the target reach it cannot emit a seed.
     let bound = core::cell::Cell::new(sink.bound());
-    // The (sin, cos) of the last heading emitted: every completion of a probe shares it.
-    let mut last_heading: Option<(u32, (f32, f32))> = None;
-    let mut emit = |heading: f32, piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
-        let mut length = 0.0;
-        for (piece, len) in pieces.iter().zip(piece_lengths) {
-            let first = piece.segments.trailing_zeros() as usize;
-            let each = len / f32::from(piece.count);
-            if !(each >= 0.0 && each <= p.upper[p.length_var(first)] * r) {
+    let mut emit =
+        |heading: f32, sc: (f32, f32), piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
+            let mut length = 0.0;
+            for (piece, len) in pieces.iter().zip(piece_lengths) {
+                let first = piece.segments.trailing_zeros() as usize;
+                let each = len / f32::from(piece.count);
+                if !(each >= 0.0 && each <= p.upper[p.length_var(first)] * r) {
+                    return f32::NEG_INFINITY;
+                }
+                length += len;
+            }
+            // D >= 0, so a1 L + a4 N bounds F from below.
+            if !plane.within_tilt(p, sc) || w.length * length + fixed >= sink.bound() {
                 return f32::NEG_INFINITY;
             }
-            length += len;
-        }
-        let sc = match last_heading {
-            Some((bits, sc)) if bits == heading.to_bits() => sc,
-            _ => {
-                let sc = crate::fmath::sincos(heading);
-                last_heading = Some((heading.to_bits(), sc));
-                sc
-            }
-        };
-        // D >= 0, so a1 L + a4 N bounds F from below.
-        if !plane.within_tilt(p, sc) || w.length * length + fixed >= sink.bound() {
-            return f32::NEG_INFINITY;
-        }
-        *scored += 1;
-        let (risk, min_clearance) = plane.clearances(p, heading, sc, pieces, piece_lengths);
-        let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
-        let objective = w.length * length + risk_term + fixed;
-        let variables = || {
-            let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
-            for (piece, len) in pieces.iter().zip(piece_lengths) {
-                for (i, l) in lengths.iter_mut().enumerate() {
-                    if piece.segments & (1 << i) != 0 {
-                        *l = len / f32::from(piece.count);
+            *scored += 1;
+            let (risk, min_clearance) = plane.clearances(p, heading, sc, pieces, piece_lengths);
+            let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
+            let objective = w.length * length + risk_term + fixed;
+            let variables = || {
+                let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
+                for (piece, len) in pieces.iter().zip(piece_lengths) {
+                    for (i, l) in lengths.iter_mut().enumerate() {
+                        if piece.segments & (1 << i) != 0 {
+                            *l = len / f32::from(piece.count);
+                        }
                     }
                 }
+                plane.variables(p, &Planar { heading, lengths })
+            };
+            if min_clearance > p.min_clearance && objective.is_finite() {
+                if let Some(x) = variables() {
+                    sink.offer(objective, &x);
+                    bound.set(sink.bound());
+                }
+            } else if min_clearance > p.min_clearance - NEAR_MISS {
+                sink.near_miss(min_clearance, &variables);
             }
-            plane.variables(p, &Planar { heading, lengths })
+            min_clearance
         };
-        if min_clearance > p.min_clearance && objective.is_finite() {
-            if let Some(x) = variables() {
-                sink.offer(objective, &x);
-                bound.set(sink.bound());
-            }
-        } else if min_clearance > p.min_clearance - NEAR_MISS {
-            sink.near_miss(min_clearance, &variables);
-        }
-        min_clearance
-    };
     if n == 1 {
         match pieces[0].kind {
             SegmentKind::Line => {
-                emit(0.0, &[dist, 0.0, 0.0, 0.0]);
+                emit(0.0, crate::fmath::sincos(0.0), &[dist, 0.0, 0.0, 0.0]);
             }
             SegmentKind::Arc => {
                 if dist > 2.0 * r {
@@ -153,7 +144,8 @@ fn sweep_pieces(
                     let cx = dist / 2.0;
                     let h0 = heading_of_bend((cx / r, cy / r), side);
                     let h1 = heading_of_bend(((cx - dist) / r, cy / r), side);
-                    emit(h0, &[r * turn(h0, h1, side), 0.0, 0.0, 0.0]);
+                    let sc = crate::fmath::sincos(h0);
+                    emit(h0, sc, &[r * turn(h0, h1, side), 0.0, 0.0, 0.0]);
                 }
             }
         }
@@ -178,42 +170,47 @@ fn sweep_pieces(
     };
     // One probe: the free pieces at fractions `cell` of their caps, completed onto the target;
     // returns the largest clearance among the completions (how near the probe came to feasible).
-    let mut probe = |heading: f32, cell: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
-        let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
-        let mut pose = Pose {
-            x: 0.0,
-            y: 0.0,
-            psi: heading,
+    // The heading's (sin, cos) are carried from piece to piece (the same bits as computing them
+    // afresh).
+    let mut probe =
+        |heading: f32, heading_sc: (f32, f32), cell: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
+            let mut lengths = [0.0f32; MAX_CONTROL_DEGREE];
+            let mut pose = Pose {
+                x: 0.0,
+                y: 0.0,
+                psi: heading,
+            };
+            let mut sc = heading_sc;
+            for i in 0..free {
+                lengths[i] = caps[i] * cell[i];
+                (pose, sc) = advance_from(pose, sc, pieces[i].kind, lengths[i], pieces[i].side, r);
+            }
+            // The last two pieces are at least as long as the straight line to the target (less a
+            // margin far above the rounding of the completions), and D >= 0: when that bounds F at or
+            // above the sink's bound, every completion would be refused.
+            let free_length: f32 = lengths[..free].iter().sum();
+            let (dx, dy) = (dist - pose.x, -pose.y);
+            let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
+            if w.length * (free_length + rest) + fixed >= bound.get() {
+                return f32::NEG_INFINITY;
+            }
+            let (a, b) = (pieces[n - 2], pieces[n - 1]);
+            let mut nearest = f32::NEG_INFINITY;
+            complete(
+                pose,
+                sc,
+                (a.kind, b.kind),
+                (a.side, b.side),
+                dist,
+                r,
+                &mut |la, lb| {
+                    lengths[n - 2] = la;
+                    lengths[n - 1] = lb;
+                    nearest = crate::fmath::max(nearest, emit(heading, heading_sc, &lengths));
+                },
+            );
+            nearest
         };
-        for i in 0..free {
-            lengths[i] = caps[i] * cell[i];
-            pose = advance(pose, pieces[i].kind, lengths[i], pieces[i].side, r);
-        }
-        // The last two pieces are at least as long as the straight line to the target (less a
-        // margin far above the rounding of the completions), and D >= 0: when that bounds F at or
-        // above the sink's bound, every completion would be refused.
-        let free_length: f32 = lengths[..free].iter().sum();
-        let (dx, dy) = (dist - pose.x, -pose.y);
-        let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
-        if w.length * (free_length + rest) + fixed >= bound.get() {
-            return f32::NEG_INFINITY;
-        }
-        let (a, b) = (pieces[n - 2], pieces[n - 1]);
-        let mut nearest = f32::NEG_INFINITY;
-        complete(
-            pose,
-            (a.kind, b.kind),
-            (a.side, b.side),
-            dist,
-            r,
-            &mut |la, lb| {
-                lengths[n - 2] = la;
-                lengths[n - 1] = lb;
-                nearest = crate::fmath::max(nearest, emit(heading, &lengths));
-            },
-        );
-        nearest
-    };
     let combos = steps.pow(free as u32);
     // The grid's headings, then the two at the tilt bound (optima often lie on it).
     let grid_heading = |hi: usize| -> Option<f32> {
@@ -229,8 +226,9 @@ fn sweep_pieces(
         let Some(heading) = grid_heading(hi) else {
             continue;
         };
+        let heading_sc = crate::fmath::sincos(heading);
         // Outside the tilt cone every seed is refused, and no probe of it is refined.
-        if !plane.within_tilt(p, crate::fmath::sincos(heading)) {
+        if !plane.within_tilt(p, heading_sc) {
             continue;
         }
         // The bound is one line in the grid's space: it gets a finer grid of lengths.
@@ -247,7 +245,7 @@ fn sweep_pieces(
                 *f = ((c % steps) as f32 + 0.5) / steps as f32;
                 c /= steps;
             }
-            let nearest = probe(heading, &cell);
+            let nearest = probe(heading, heading_sc, &cell);
             // A probe that just misses (a thin feasible sliver between obstacles can fall between
             // grid points) is followed by a finer grid over its cell. In 3-D the SQP leaves the
             // plane and eight planes are swept: there the finer grid bought no optimum in the
@@ -266,7 +264,7 @@ fn sweep_pieces(
                     for f in sub.iter_mut().take(free) {
                         *f += off(&mut kk) / steps as f32;
                     }
-                    probe(h, &sub);
+                    probe(h, crate::fmath::sincos(h), &sub);
                 }
             }
         }
