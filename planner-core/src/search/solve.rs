@@ -136,17 +136,31 @@ fn keep_best(
         }
         return;
     }
-    if items.len() >= limit.min(items.capacity()) {
-        let worst = (0..items.len())
-            .max_by(|&a, &b| items[a].0.total_cmp(&items[b].0))
-            .unwrap_or(0);
-        if key >= items[worst].0 {
-            return;
-        }
-        items.swap_remove(worst);
+    if make_room(items, limit, key, |item| item.0) {
+        // Room was made.
+        let _ = items.push((key, *at));
     }
-    // Room was made above.
-    let _ = items.push((key, *at));
+}
+
+/// Whether an item of `key` belongs among the `limit` lowest of `items` (by `key_of`): true when
+/// there is room, or after the highest, if higher than `key`, is removed to make it.
+fn make_room<T>(
+    items: &mut heapless::vec::VecView<T>,
+    limit: usize,
+    key: f32,
+    key_of: impl Fn(&T) -> f32,
+) -> bool {
+    if items.len() < limit.min(items.capacity()) {
+        return true;
+    }
+    let worst = (0..items.len())
+        .max_by(|&a, &b| key_of(&items[a]).total_cmp(&key_of(&items[b])))
+        .unwrap_or(0);
+    if items.is_empty() || key >= key_of(&items[worst]) {
+        return false;
+    }
+    items.swap_remove(worst);
+    true
 }
 
 /// Sorts a shortlist by `objective`, lowest first (ties keep their order). An insertion sort:
@@ -221,17 +235,10 @@ type SidedSeed = (f32, u8, Vars);
 
 /// Keeps in `chosen` the `PLANE_REFINED` seeds of lowest objective.
 fn choose(chosen: &mut heapless::Vec<SidedSeed, PLANE_REFINED>, seed: SidedSeed) {
-    if chosen.is_full() {
-        let worst = (0..chosen.len())
-            .max_by(|&a, &b| chosen[a].0.total_cmp(&chosen[b].0))
-            .unwrap_or(0);
-        if seed.0 >= chosen[worst].0 {
-            return;
-        }
-        chosen.swap_remove(worst);
+    if make_room(chosen.as_mut_view(), PLANE_REFINED, seed.0, |s| s.0) {
+        // Room was made.
+        let _ = chosen.push(seed);
     }
-    // Room was made above.
-    let _ = chosen.push(seed);
 }
 
 /// Plane mode: every side assignment is its own problem. Each is swept into its own shortlist
