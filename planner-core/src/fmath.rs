@@ -156,26 +156,31 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 /// Square root to about one ulp: an integer estimate of 1/sqrt refined by three Newton steps,
 /// then one correction of the root (the soft-float `sqrtf` cost a tenth of the device's time).
 pub fn sqrt(x: f32) -> f32 {
-    if !(x > 0.0) || x.is_infinite() {
-        // 0 -> 0, +inf -> inf, negative or NaN -> NaN.
-        return if x == 0.0 || x == f32::INFINITY {
-            x
-        } else {
-            f32::NAN
-        };
+    // One test for the common case (positive, finite, normal): the special cases and the scaling
+    // of subnormals stay off its path. The same operations on it as ever, so the same bits.
+    if x >= 1e-30 && x < f32::INFINITY {
+        return sqrt_normal(x);
     }
-    // Scale subnormals into the normal range, where the bit estimate holds.
-    let (x, scale) = if x < 1e-30 {
-        (x * 1e30, 1e-15)
+    if x > 0.0 && x < 1e-30 {
+        // Subnormal or tiny: scaled into the range where the bit estimate holds.
+        return sqrt_normal(x * 1e30) * 1e-15;
+    }
+    // 0 -> 0, +inf -> inf, negative or NaN -> NaN.
+    if x == 0.0 || x == f32::INFINITY {
+        x
     } else {
-        (x, 1.0)
-    };
+        f32::NAN
+    }
+}
+
+/// [`sqrt`] of `x` in [1e-30, infinity).
+fn sqrt_normal(x: f32) -> f32 {
     let mut y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
     for _ in 0..3 {
         y *= 1.5 - 0.5 * x * y * y;
     }
     let s = x * y;
-    (s + 0.5 * y * (x - s * s)) * scale
+    s + 0.5 * y * (x - s * s)
 }
 
 /// `a` wrapped into [0, 2 pi).
@@ -252,6 +257,21 @@ mod tests {
         assert_eq!(sqrt(0.0), 0.0);
         assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
         assert_eq!(sqrt(f32::INFINITY), f32::INFINITY);
+        // Either side of the scaling threshold, the subnormals' edge and the top of the range.
+        for x in [
+            9.99e-31f32,
+            1e-30,
+            1.0001e-30,
+            f32::MIN_POSITIVE,
+            1e-38,
+            f32::MAX,
+            3.4e38,
+        ] {
+            let want = (x as f64).sqrt();
+            assert!((sqrt(x) as f64 - want).abs() <= 2.5e-7 * want, "{x}");
+        }
+        assert_eq!(sqrt(-0.0).to_bits(), (-0.0f32).to_bits());
+        assert!(sqrt(f32::NEG_INFINITY).is_nan());
         let tiny = 1e-40f32;
         assert!((sqrt(tiny) as f64 - (tiny as f64).sqrt()).abs() < 1e-6 * (tiny as f64).sqrt());
         assert!((wrap_positive(-0.5) - (core::f32::consts::TAU - 0.5)).abs() < 1e-6);
