@@ -57,13 +57,12 @@ pub fn sincos(x: f32) -> (f32, f32) {
     if !x.is_finite() {
         return (f32::NAN, f32::NAN);
     }
-    let k = round(x * (2.0 / PI));
+    let (k, quadrant) = round(x * (2.0 / PI));
     let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
     let z = r * r;
     let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1);
     let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    // Quadrant from k mod 4 (the cast saturates: only for |x| far beyond any angle here).
-    match (k as i32) & 3 {
+    match quadrant & 3 {
         0 => (s, c),
         1 => (c, -s),
         2 => (-s, -c),
@@ -81,13 +80,15 @@ pub fn cos(x: f32) -> f32 {
     sincos(x).1
 }
 
-fn round(x: f32) -> f32 {
-    // Round half away from zero without libm: truncate x ± 0.5.
+/// `x` rounded half away from zero without libm (truncating x ± 0.5), and as an integer (the
+/// cast saturates: only for |x| far beyond any angle here).
+fn round(x: f32) -> (f32, i32) {
     let t = if x >= 0.0 { x + 0.5 } else { x - 0.5 };
     if t.abs() >= 8_388_608.0 {
-        t
+        (t, t as i32)
     } else {
-        (t as i32) as f32
+        let k = t as i32;
+        (k as f32, k)
     }
 }
 
