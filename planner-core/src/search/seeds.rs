@@ -89,19 +89,23 @@ fn sweep_pieces(
     // The sink's bound as it stands (it changes only when a seed is offered): a probe whose
     // free pieces plus the straight distance left to the target reach it cannot emit a seed.
     let bound = core::cell::Cell::new(sink.bound());
+    // Each piece's longest admissible segment (mm).
+    let mut longest = [0.0f32; MAX_CONTROL_DEGREE];
+    for (l, piece) in longest.iter_mut().zip(pieces.iter()) {
+        *l = p.upper[p.length_var(piece.segments.trailing_zeros() as usize)] * r;
+    }
     let mut emit =
         |heading: f32, sc: (f32, f32), piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
             let mut length = 0.0;
-            for (piece, len) in pieces.iter().zip(piece_lengths) {
-                let first = piece.segments.trailing_zeros() as usize;
+            for ((piece, len), longest) in pieces.iter().zip(piece_lengths).zip(&longest) {
                 let each = len / f32::from(piece.count);
-                if !(each >= 0.0 && each <= p.upper[p.length_var(first)] * r) {
+                if !(each >= 0.0 && each <= *longest) {
                     return f32::NEG_INFINITY;
                 }
                 length += len;
             }
             // D >= 0, so a1 L + a4 N bounds F from below.
-            if !plane.within_tilt(p, sc) || w.length * length + fixed >= sink.bound() {
+            if !plane.within_tilt(p, sc) || w.length * length + fixed >= bound.get() {
                 return f32::NEG_INFINITY;
             }
             *scored += 1;
