@@ -82,7 +82,8 @@ fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
         return finish(start.p, c, 0.0, Nearest::Start);
     }
     if a0 < sweep {
-        let p = center + (e2 * -crate::fmath::cos(a0) + e3 * crate::fmath::sin(a0)) * radius;
+        let (sn, cs) = crate::fmath::sincos(a0);
+        let p = center + (e2 * -cs + e3 * sn) * radius;
         return finish(p, c, a0 * radius, Nearest::Interior);
     }
     let at_start = finish(start.p, c, 0.0, Nearest::Start);

@@ -45,7 +45,7 @@ impl Frame {
 
     /// The frame turned by `angle` (radians) about the heading: the bevel rotation.
     pub fn rolled(&self, angle: f32) -> Frame {
-        let (s, c) = (crate::fmath::sin(angle), crate::fmath::cos(angle));
+        let (s, c) = crate::fmath::sincos(angle);
         let (e1, e2) = (self.e1(), self.e2());
         Frame::from_columns(self.p, e1 * c + e2 * s, e2 * c - e1 * s, self.e3())
     }
@@ -59,7 +59,7 @@ impl Frame {
             },
             SegmentKind::Arc => {
                 let a = s / radius;
-                let (sn, cs) = (crate::fmath::sin(a), crate::fmath::cos(a));
+                let (sn, cs) = crate::fmath::sincos(a);
                 let (e2, e3) = (self.e2(), self.e3());
                 let p = self.p + e2 * (radius * (1.0 - cs)) + e3 * (radius * sn);
                 Frame::from_columns(p, self.e1(), e2 * cs - e3 * sn, e3 * cs + e2 * sn)
@@ -120,7 +120,7 @@ pub fn entry_basis(direction: [f32; 3]) -> Matrix3<f32> {
 
 /// Rotation of `v` about unit `axis` by `angle` (Rodrigues).
 pub fn rotate(v: V3, axis: V3, angle: f32) -> V3 {
-    let (s, c) = (crate::fmath::sin(angle), crate::fmath::cos(angle));
+    let (s, c) = crate::fmath::sincos(angle);
     v * c + axis.cross(&v) * s + axis * (axis.dot(&v) * (1.0 - c))
 }
 
@@ -128,8 +128,8 @@ pub fn rotate(v: V3, axis: V3, angle: f32) -> V3 {
 /// `theta1` about its (fixed) e1. The tilt from the nominal axis satisfies
 /// cos(tilt) = cos(theta1) cos(theta2).
 pub fn insertion_frame(position: V3, basis: &Matrix3<f32>, theta1: f32, theta2: f32) -> Frame {
-    let (s1, c1) = (crate::fmath::sin(theta1), crate::fmath::cos(theta1));
-    let (s2, c2) = (crate::fmath::sin(theta2), crate::fmath::cos(theta2));
+    let (s1, c1) = crate::fmath::sincos(theta1);
+    let (s2, c2) = crate::fmath::sincos(theta2);
     // Rx(theta1) * Ry(theta2) in basis coordinates.
     let turn = Matrix3::new(c2, 0.0, s2, s1 * s2, c1, -s1 * c2, -c1 * s2, s1, c1 * c2);
     Frame {

@@ -110,7 +110,8 @@ impl SeedPlane {
         };
         let a = pick - chord * pick.dot(&chord);
         let a = a / crate::fmath::sqrt(a.dot(&a));
-        let normal = a * crate::fmath::cos(psi) + chord.cross(&a) * crate::fmath::sin(psi);
+        let (sn, cs) = crate::fmath::sincos(psi);
+        let normal = a * cs + chord.cross(&a) * sn;
         let m = normal.cross(&chord);
         // heading . b3 = A cos h + B sin h = R cos(h - phi) meets cos(max tilt) at phi +- w.
         let (ca, cb) = (chord.dot(&b3), m.dot(&b3));
@@ -197,8 +198,8 @@ impl SeedPlane {
 
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
     pub(super) fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
-        let heading =
-            self.chord * crate::fmath::cos(path.heading) + self.m * crate::fmath::sin(path.heading);
+        let (sn, cs) = crate::fmath::sincos(path.heading);
+        let heading = self.chord * cs + self.m * sn;
         let basis = &p.basis;
         let b1: V3 = basis.column(0).into();
         let b2: V3 = basis.column(1).into();
