@@ -121,6 +121,9 @@ pub fn atan(x: f32) -> f32 {
 }
 
 /// The angle of the point (x, y) in (-pi, pi], as `atan2(y, x)`.
+// Inlined on the host (1.2 % fewer instructions per plan); the firmware keeps one copy (inlined
+// there it cost 4.7 KiB of flash for 1.3 % fewer instructions).
+#[cfg_attr(not(target_os = "none"), inline)]
 pub fn atan2(y: f32, x: f32) -> f32 {
     if x.is_nan() || y.is_nan() {
         return f32::NAN;
