@@ -162,7 +162,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 pub fn sqrt(x: f32) -> f32 {
     // One test for the common case (positive, finite, normal): the special cases and the scaling
     // of subnormals stay off its path. The same operations on it as ever, so the same bits.
-    if x >= 1e-30 && x < f32::INFINITY {
+    if (1e-30..f32::INFINITY).contains(&x) {
         return sqrt_normal(x);
     }
     if x > 0.0 && x < 1e-30 {

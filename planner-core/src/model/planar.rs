@@ -177,18 +177,42 @@ impl Drawn {
     }
 }
 
-/// Closed-form completions of the last two segments from `p` (its heading's (sin, cos): `sc`)
-/// to the target `(tx, 0)`; calls `out(length_a, length_b)` for each.
+/// How far past half a turn an arc must be (the sine of its turn below minus this) before a
+/// completion is dropped unseen: far above the rounding of either way of working out the turn.
+const PAST_HALF: f32 = 1e-3;
+
+/// Whether the arc of side `s` from radial `u0` to radial `u1` (not unit: `scale` is the product
+/// of their lengths) certainly turns by more than half a circle, and by less than a whole one
+/// less the margin: the sine of its turn, from the vectors, is below `-PAST_HALF`.
+fn past_half(u0: (f32, f32), u1: (f32, f32), scale: f32, s: f32) -> bool {
+    -s * (u0.0 * u1.1 - u0.1 * u1.0) < -PAST_HALF * scale
+}
+
+/// The last two pieces of planar paths, completed onto the target in closed form.
+#[derive(Clone, Copy, Debug)]
+pub struct Tail {
+    /// Their kinds.
+    pub kinds: (SegmentKind, SegmentKind),
+    /// Their sides (+1 right, -1 left).
+    pub sides: (f32, f32),
+    /// Whether each is an arc that may turn by at most half a circle: completions in which it
+    /// certainly turns further are left out before their angles are worked out (an `atan2` or two
+    /// each), since they would be refused anyway.
+    pub half_turn_at_most: (bool, bool),
+}
+
+/// Closed-form completions of `tail` from `p` (its heading's (sin, cos): `sc`) to the target
+/// `(tx, 0)`; calls `out(length_a, length_b)` for each.
 pub fn complete(
     p: Pose,
     sc: (f32, f32),
-    kinds: (SegmentKind, SegmentKind),
-    sides: (f32, f32),
+    tail: &Tail,
     tx: f32,
     r: f32,
     out: &mut dyn FnMut(f32, f32),
 ) {
-    match kinds {
+    let (sides, limited) = (tail.sides, tail.half_turn_at_most);
+    match tail.kinds {
         (SegmentKind::Arc, SegmentKind::Line) => {
             let s = sides.0;
             let (nx, ny) = bend_of(sc, s);
@@ -198,6 +222,11 @@ pub fn complete(
                 return;
             }
             let line = crate::fmath::sqrt(q2 - r * r);
+            // The radial at the tangent point, times |q|^2: r q + s line q_perp.
+            let tangent = (r * qx - s * line * qy, r * qy + s * line * qx);
+            if limited.0 && past_half((-nx, -ny), tangent, q2, s) {
+                return;
+            }
             let psi_end = crate::fmath::atan2(qy, qx) - s * crate::fmath::atan2(r, line);
             out(r * turn(p.psi, psi_end, s), line);
         }
@@ -217,8 +246,10 @@ pub fn complete(
                     continue;
                 }
                 let (cx, cy) = (p.x + line * dx + r * nx, p.y + line * dy + r * ny);
-                let psi_end = heading_of_bend(((cx - tx) / r, cy / r), s);
-                out(line, r * turn(p.psi, psi_end, s));
+                if !(limited.1 && past_half((-nx, -ny), (tx - cx, -cy), r, s)) {
+                    let psi_end = heading_of_bend(((cx - tx) / r, cy / r), s);
+                    out(line, r * turn(p.psi, psi_end, s));
+                }
                 if root == 0.0 {
                     break;
                 }
@@ -241,9 +272,16 @@ pub fn complete(
             let (ex, ey) = (ux / d, uy / d);
             for sign in [-1.0f32, 1.0] {
                 let (c2x, c2y) = (c1x + a * ex - sign * h * ey, c1y + a * ey + sign * h * ex);
-                let psi1 = heading_of_bend(((c1x - c2x) / (2.0 * r), (c1y - c2y) / (2.0 * r)), s1);
-                let psi2 = heading_of_bend(((c2x - tx) / r, c2y / r), s2);
-                out(r * turn(p.psi, psi1, s1), r * turn(psi1, psi2, s2));
+                let (joint_x, joint_y) = (c2x - c1x, c2y - c1y);
+                let beyond = (limited.0 && past_half((-nx, -ny), (joint_x, joint_y), 2.0 * r, s1))
+                    || (limited.1
+                        && past_half((-joint_x, -joint_y), (tx - c2x, -c2y), 2.0 * r * r, s2));
+                if !beyond {
+                    let psi1 =
+                        heading_of_bend(((c1x - c2x) / (2.0 * r), (c1y - c2y) / (2.0 * r)), s1);
+                    let psi2 = heading_of_bend(((c2x - tx) / r, c2y / r), s2);
+                    out(r * turn(p.psi, psi1, s1), r * turn(psi1, psi2, s2));
+                }
                 if h == 0.0 {
                     break;
                 }
@@ -261,6 +299,82 @@ mod tests {
     fn uniform(state: &mut u32) -> f32 {
         *state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
         (*state >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    #[test]
+    fn completions_left_out_turn_past_half_a_circle() {
+        let mut rng = 11u32;
+        let r = 50.0;
+        let kinds = [
+            (SegmentKind::Arc, SegmentKind::Line),
+            (SegmentKind::Line, SegmentKind::Arc),
+            (SegmentKind::Arc, SegmentKind::Arc),
+        ];
+        let (mut kept, mut dropped) = (0, 0);
+        for case in 0..6000 {
+            let pose = Pose {
+                x: 160.0 * uniform(&mut rng) - 40.0,
+                y: 160.0 * uniform(&mut rng) - 80.0,
+                psi: 7.0 * uniform(&mut rng) - 3.5,
+            };
+            let sc = crate::fmath::sincos(pose.psi);
+            let k = kinds[case % 3];
+            let sides = (
+                if case % 2 == 0 { 1.0 } else { -1.0 },
+                if case % 4 < 2 { -1.0 } else { 1.0 },
+            );
+            let tx = 40.0 + 80.0 * uniform(&mut rng);
+            let mut all = heapless::Vec::<(f32, f32), 4>::new();
+            complete(
+                pose,
+                sc,
+                &Tail {
+                    kinds: k,
+                    sides,
+                    half_turn_at_most: (false, false),
+                },
+                tx,
+                r,
+                &mut |a, b| {
+                    all.push((a, b)).unwrap();
+                },
+            );
+            let mut some = heapless::Vec::<(f32, f32), 4>::new();
+            complete(
+                pose,
+                sc,
+                &Tail {
+                    kinds: k,
+                    sides,
+                    half_turn_at_most: (true, true),
+                },
+                tx,
+                r,
+                &mut |a, b| {
+                    some.push((a, b)).unwrap();
+                },
+            );
+            // What is kept is kept bit for bit and in order; what is left out has an arc that
+            // turns by more than half a circle (`emit` refuses it).
+            let mut rest = all.iter();
+            for c in &some {
+                assert!(
+                    rest.any(|a| a.0.to_bits() == c.0.to_bits() && a.1.to_bits() == c.1.to_bits())
+                );
+            }
+            for c in all.iter().filter(|c| !some.contains(c)) {
+                let arc_a = k.0 == SegmentKind::Arc && c.0 > core::f32::consts::PI * r;
+                let arc_b = k.1 == SegmentKind::Arc && c.1 > core::f32::consts::PI * r;
+                assert!(arc_a || arc_b, "case {case}: {c:?} left out");
+                dropped += 1;
+            }
+            kept += some.len();
+        }
+        // Both happen often enough for the test to mean something.
+        assert!(
+            kept > 500 && dropped > 1000,
+            "kept {kept}, dropped {dropped}"
+        );
     }
 
     #[test]

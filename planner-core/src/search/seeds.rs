@@ -10,10 +10,10 @@
 //! its spacing. Seeds are handed on as problem variables.
 
 use crate::model::form::SegmentKind;
-use crate::model::planar::{advance_from, complete, heading_of_bend, turn, Pose};
+use crate::model::planar::{advance_from, complete, heading_of_bend, turn, Pose, Tail};
 use crate::optim::problem::{Problem, Vars};
 pub use crate::search::plane::NEAR_MISS;
-use crate::search::plane::{pieces, Pieces, Planar, SeedPlane};
+use crate::search::plane::{pieces, Piece, Pieces, Planar, SeedPlane};
 use crate::MAX_CONTROL_DEGREE;
 
 /// Widest heading from the chord swept (radians, about 86 degrees).
@@ -155,6 +155,22 @@ fn sweep_pieces(
         }
         return;
     }
+    // The last two pieces, completed onto the target. Those that are arcs which may turn by at
+    // most half a circle have their completions that turn further left out unseen (`emit`
+    // would refuse them).
+    let half_turn = |piece: &Piece| {
+        let first = piece.segments.trailing_zeros() as usize;
+        piece.kind == SegmentKind::Arc
+            && p.upper[p.length_var(first)] * f32::from(piece.count) <= core::f32::consts::PI
+    };
+    let [.., a, b] = pieces.as_slice() else {
+        return;
+    };
+    let tail = Tail {
+        kinds: (a.kind, b.kind),
+        sides: (a.side, b.side),
+        half_turn_at_most: (half_turn(a), half_turn(b)),
+    };
     let (headings, steps) = grid(n);
     let free = n - 2;
     let max_free = 1.25 * dist;
@@ -198,21 +214,12 @@ fn sweep_pieces(
             if w.length * (free_length + rest) + fixed >= bound.get() {
                 return f32::NEG_INFINITY;
             }
-            let (a, b) = (pieces[n - 2], pieces[n - 1]);
             let mut nearest = f32::NEG_INFINITY;
-            complete(
-                pose,
-                sc,
-                (a.kind, b.kind),
-                (a.side, b.side),
-                dist,
-                r,
-                &mut |la, lb| {
-                    lengths[n - 2] = la;
-                    lengths[n - 1] = lb;
-                    nearest = crate::fmath::max(nearest, emit(heading, heading_sc, &lengths));
-                },
-            );
+            complete(pose, sc, &tail, dist, r, &mut |la, lb| {
+                lengths[n - 2] = la;
+                lengths[n - 1] = lb;
+                nearest = crate::fmath::max(nearest, emit(heading, heading_sc, &lengths));
+            });
             nearest
         };
     let combos = steps.pow(free as u32);
