@@ -324,36 +324,19 @@ mod tests {
                 if case % 4 < 2 { -1.0 } else { 1.0 },
             );
             let tx = 40.0 + 80.0 * uniform(&mut rng);
-            let mut all = heapless::Vec::<(f32, f32), 4>::new();
-            complete(
-                pose,
-                sc,
-                &Tail {
+            let completions = |half_turn_at_most| {
+                let mut out = heapless::Vec::<(f32, f32), 4>::new();
+                let tail = Tail {
                     kinds: k,
                     sides,
-                    half_turn_at_most: (false, false),
-                },
-                tx,
-                r,
-                &mut |a, b| {
-                    all.push((a, b)).unwrap();
-                },
-            );
-            let mut some = heapless::Vec::<(f32, f32), 4>::new();
-            complete(
-                pose,
-                sc,
-                &Tail {
-                    kinds: k,
-                    sides,
-                    half_turn_at_most: (true, true),
-                },
-                tx,
-                r,
-                &mut |a, b| {
-                    some.push((a, b)).unwrap();
-                },
-            );
+                    half_turn_at_most,
+                };
+                complete(pose, sc, &tail, tx, r, &mut |a, b| {
+                    out.push((a, b)).unwrap();
+                });
+                out
+            };
+            let (all, some) = (completions((false, false)), completions((true, true)));
             // What is kept is kept bit for bit and in order; what is left out has an arc that
             // turns by more than half a circle (`emit` refuses it).
             let mut rest = all.iter();
