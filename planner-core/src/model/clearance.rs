@@ -37,7 +37,23 @@ const TWO_PI: f32 = core::f32::consts::TAU;
 pub fn closest(start: &Frame, kind: SegmentKind, length: f32, radius: f32, c: &V3) -> Closest {
     match kind {
         SegmentKind::Line => closest_on_line(start, length, c),
-        SegmentKind::Arc => closest_on_arc(start, length, radius, c),
+        SegmentKind::Arc => closest_on_arc(start, length, radius, c, None),
+    }
+}
+
+/// [`closest`] for a segment of a drawn path, whose end point `end` is known (an arc's end is
+/// then not drawn again: the same point, so the same result bit for bit).
+pub fn closest_drawn(
+    start: &Frame,
+    end: &V3,
+    kind: SegmentKind,
+    length: f32,
+    radius: f32,
+    c: &V3,
+) -> Closest {
+    match kind {
+        SegmentKind::Line => closest_on_line(start, length, c),
+        SegmentKind::Arc => closest_on_arc(start, length, radius, c, Some(end)),
     }
 }
 
@@ -63,7 +79,7 @@ fn closest_on_line(start: &Frame, length: f32, c: &V3) -> Closest {
     }
 }
 
-fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
+fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3, end: Option<&V3>) -> Closest {
     let (e2, e3) = (start.e2(), start.e3());
     let center = start.p + e2 * radius;
     let q = c - center;
@@ -87,7 +103,10 @@ fn closest_on_arc(start: &Frame, length: f32, radius: f32, c: &V3) -> Closest {
         return finish(p, c, a0 * radius, Nearest::Interior);
     }
     let at_start = finish(start.p, c, 0.0, Nearest::Start);
-    let end = start.advanced(SegmentKind::Arc, length, radius).p;
+    let end = match end {
+        Some(end) => *end,
+        None => start.advanced(SegmentKind::Arc, length, radius).p,
+    };
     let at_end = finish(end, c, length, Nearest::End);
     if at_end.distance <= at_start.distance {
         at_end
@@ -141,6 +160,8 @@ mod tests {
             let kind = if arc { SegmentKind::Arc } else { SegmentKind::Line };
             let c = V3::new(cx, cy, cz);
             let exact = closest(&f, kind, len, radius, &c);
+            let end = f.advanced(kind, len, radius).p;
+            prop_assert_eq!(closest_drawn(&f, &end, kind, len, radius, &c), exact);
             let brute = sampled(&f, kind, len, radius, &c);
             // Sampling can only overestimate; its step is at most 300/20000 mm.
             prop_assert!(exact.distance <= brute + 2e-3, "exact {} brute {}", exact.distance, brute);

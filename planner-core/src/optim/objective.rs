@@ -2,7 +2,7 @@
 //! their exact first derivatives (every parameter moves the downstream path as a rigid screw).
 
 use super::problem::{v3, Problem, Vars, MAX_VARS};
-use crate::model::clearance::{closest, Closest, Nearest};
+use crate::model::clearance::{closest_drawn, Closest, Nearest};
 use crate::model::kinematics::{PathGeometry, V3};
 use crate::model::scenario::{RiskMeasure, MAX_OBSTACLES};
 
@@ -156,8 +156,9 @@ impl Problem<'_> {
 
     /// The point of segment `seg` of the path `geo` nearest to the point `c`.
     fn closest_on(&self, geo: &PathGeometry, seg: usize, c: &V3) -> Closest {
-        closest(
+        closest_drawn(
             &geo.starts[seg],
+            &geo.ends[seg].p,
             self.form.kind(seg),
             geo.lengths[seg],
             self.radius,
