@@ -89,10 +89,11 @@ fn sweep_pieces(
     // The sink's bound as it stands (it changes only when a seed is offered): a probe whose
     // free pieces plus the straight distance left to the target reach it cannot emit a seed.
     let bound = core::cell::Cell::new(sink.bound());
-    // Each piece's longest admissible segment (mm).
+    // The bound of each segment of a piece (radius-lengths), and so its longest one (mm).
+    let upper = |piece: &Piece| p.upper[p.length_var(piece.segments.trailing_zeros() as usize)];
     let mut longest = [0.0f32; MAX_CONTROL_DEGREE];
     for (l, piece) in longest.iter_mut().zip(pieces.iter()) {
-        *l = p.upper[p.length_var(piece.segments.trailing_zeros() as usize)] * r;
+        *l = upper(piece) * r;
     }
     let mut emit =
         |heading: f32, sc: (f32, f32), piece_lengths: &[f32; MAX_CONTROL_DEGREE]| -> f32 {
@@ -159,9 +160,8 @@ fn sweep_pieces(
     // most half a circle have their completions that turn further left out unseen (`emit`
     // would refuse them).
     let half_turn = |piece: &Piece| {
-        let first = piece.segments.trailing_zeros() as usize;
         piece.kind == SegmentKind::Arc
-            && p.upper[p.length_var(first)] * f32::from(piece.count) <= core::f32::consts::PI
+            && upper(piece) * f32::from(piece.count) <= core::f32::consts::PI
     };
     let [.., a, b] = pieces.as_slice() else {
         return;
