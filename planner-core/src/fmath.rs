@@ -157,19 +157,38 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     }
 }
 
-/// Square root to about one ulp: an integer estimate of 1/sqrt refined by three Newton steps,
-/// then one correction of the root (the soft-float `sqrtf` cost a tenth of the device's time).
+/// Square root, correctly rounded (IEEE 754's `sqrt`), so the same bits on every target: the
+/// FPU's instruction where safe `no_std` Rust reaches it (x86_64 and aarch64, through `libm`),
+/// [`sqrt_soft`] elsewhere. The Cortex-M4F's `vsqrt` is out of reach (`f32::sqrt` needs `std`,
+/// `libm` has no Arm routine and its generic one cost a tenth of the device's plan, inline
+/// assembly needs `unsafe`). A test compares the two over every float.
+#[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    {
+        libm::sqrtf(x)
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        sqrt_soft(x)
+    }
+}
+
+/// The correctly rounded square root in f32 and integer arithmetic: an estimate to an ulp or
+/// two, then moved to the rounded root by an exact integer test. On the host it runs in the
+/// tests only (which compare it with the FPU's root).
+#[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
+pub fn sqrt_soft(x: f32) -> f32 {
     // One test for the common case (positive, finite, normal): the special cases and the scaling
-    // of subnormals stay off its path. The same operations on it as ever, so the same bits.
+    // of subnormals stay off its path.
     if (1e-30..f32::INFINITY).contains(&x) {
         return sqrt_normal(x);
     }
     if x > 0.0 && x < 1e-30 {
-        // Subnormal or tiny: scaled into the range where the bit estimate holds.
-        return sqrt_normal(x * 1e30) * 1e-15;
+        // Subnormal or tiny: scaled by 2^100 into the normal range, both scalings exact.
+        return sqrt_normal(x * f32::from_bits(227 << 23)) * f32::from_bits(77 << 23);
     }
-    // 0 -> 0, +inf -> inf, negative or NaN -> NaN.
+    // 0 -> 0 (-0 -> -0), +inf -> inf, negative or NaN -> NaN.
     if x == 0.0 || x == f32::INFINITY {
         x
     } else {
@@ -177,14 +196,52 @@ pub fn sqrt(x: f32) -> f32 {
     }
 }
 
-/// [`sqrt`] of `x` in [1e-30, infinity).
+/// [`sqrt_soft`] of `x` in [1e-30, infinity).
+#[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
 fn sqrt_normal(x: f32) -> f32 {
     let mut y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
-    for _ in 0..3 {
+    // Two Newton steps for 1/sqrt and one for the root leave it within an ulp (a third step
+    // would not: the rounding of the last one dominates).
+    for _ in 0..2 {
         y *= 1.5 - 0.5 * x * y * y;
     }
     let s = x * y;
-    s + 0.5 * y * (x - s * s)
+    rounded_root(x, s + 0.5 * y * (x - s * s))
+}
+
+/// The float next to `s` (positive, normal, within an ulp of sqrt(x)) that is sqrt(x) rounded to
+/// nearest. With s = m 2^e (m the 24-bit significand) and x = mx 2^ex, s is that float when
+/// sqrt(x) lies between the midpoints (m -+ 1/2) 2^e, that is when (2m - 1)^2 < 4x / 2^2e <
+/// (2m + 1)^2, compared exactly in integers (4x / 2^2e = mx 2^k, under 2^55); below a power of
+/// two the lower midpoint is m - 1/4. Never equal: the left side is even, the squares odd.
+#[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
+fn rounded_root(x: f32, s: f32) -> f32 {
+    let xb = x.to_bits();
+    let mx = u64::from((xb & 0x007f_ffff) | 0x0080_0000);
+    let ex = (xb >> 23) as i32;
+    let mut sb = s.to_bits();
+    // At most one move is ever needed (the test over every float); the bound keeps it finite.
+    for _ in 0..3 {
+        let m = u64::from((sb & 0x007f_ffff) | 0x0080_0000);
+        let k = ex + 152 - 2 * ((sb >> 23) as i32);
+        if !(0..=30).contains(&k) {
+            break;
+        }
+        let t = mx << k;
+        let below = if m == 0x0080_0000 {
+            4 * t < (4 * m - 1) * (4 * m - 1)
+        } else {
+            t < (2 * m - 1) * (2 * m - 1)
+        };
+        if below {
+            sb -= 1;
+        } else if t > (2 * m + 1) * (2 * m + 1) {
+            sb += 1;
+        } else {
+            break;
+        }
+    }
+    f32::from_bits(sb)
 }
 
 /// `a` wrapped into [0, 2 pi).
@@ -247,37 +304,61 @@ mod tests {
         assert!(atan2(1.0, f32::INFINITY).abs() < 1e-6);
     }
 
-    #[test]
-    fn sqrt_is_within_an_ulp_or_two() {
-        for i in 0..100_000 {
-            let x = (i as f32 * 0.731).powi(2) * 1e-3 + 1e-6 * i as f32;
-            let got = sqrt(x);
-            let want = (x as f64).sqrt();
-            assert!(
-                (got as f64 - want).abs() <= 2.5e-7 * want,
-                "{x}: {got} vs {want}"
+    /// sqrt(x) correctly rounded, by another route: f64's root rounded to f32 (53 bits are more
+    /// than twice 24 plus two, so the double rounding is exact).
+    fn rounded(x: f32) -> f32 {
+        libm::sqrt(f64::from(x)) as f32
+    }
+
+    fn check_soft_root(bits: impl Iterator<Item = u32>) -> u64 {
+        let mut n = 0;
+        for b in bits {
+            let x = f32::from_bits(b);
+            let (got, want) = (sqrt_soft(x), rounded(x));
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "{x:e}: {got:e}, not {want:e}"
             );
+            n += 1;
         }
-        assert_eq!(sqrt(0.0), 0.0);
-        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
-        assert_eq!(sqrt(f32::INFINITY), f32::INFINITY);
-        // Either side of the scaling threshold, the subnormals' edge and the top of the range.
-        for x in [
-            9.99e-31f32,
-            1e-30,
-            1.0001e-30,
-            f32::MIN_POSITIVE,
-            1e-38,
-            f32::MAX,
-            3.4e38,
-        ] {
-            let want = (x as f64).sqrt();
-            assert!((sqrt(x) as f64 - want).abs() <= 2.5e-7 * want, "{x}");
+        n
+    }
+
+    #[test]
+    fn soft_sqrt_is_the_correctly_rounded_root() {
+        // Every 61st positive float, subnormals included, and every float near the powers of two
+        // (where the spacing of the roots changes) and the scaling threshold.
+        assert!(check_soft_root((1..0x7f80_0000u32).step_by(61)) > 34_000_000);
+        for e in 1..255u32 {
+            let p = e << 23;
+            check_soft_root(p.saturating_sub(300)..(p + 300).min(0x7f80_0000));
         }
-        assert_eq!(sqrt(-0.0).to_bits(), (-0.0f32).to_bits());
-        assert!(sqrt(f32::NEG_INFINITY).is_nan());
-        let tiny = 1e-40f32;
-        assert!((sqrt(tiny) as f64 - (tiny as f64).sqrt()).abs() < 1e-6 * (tiny as f64).sqrt());
+        let edge = 1e-30f32.to_bits();
+        check_soft_root(edge - 5000..edge + 5000);
+        assert_eq!(sqrt_soft(0.0).to_bits(), 0);
+        assert_eq!(sqrt_soft(-0.0).to_bits(), (-0.0f32).to_bits());
+        assert_eq!(sqrt_soft(f32::INFINITY), f32::INFINITY);
+        for x in [-1.0, f32::NAN, f32::NEG_INFINITY, -1e-40] {
+            assert!(sqrt_soft(x).is_nan());
+        }
+        // On the host `sqrt` is the FPU's: the same bits.
+        for b in (1..0x7f80_0000u32).step_by(9973) {
+            let x = f32::from_bits(b);
+            assert_eq!(sqrt(x).to_bits(), sqrt_soft(x).to_bits());
+        }
+    }
+
+    /// Every positive float (2^31 of them; 18 s in release here):
+    /// `cargo test --release -p planner-core --lib -- --ignored every_float`.
+    #[test]
+    #[ignore]
+    fn soft_sqrt_is_the_correctly_rounded_root_of_every_float() {
+        assert_eq!(check_soft_root(1..0x7f80_0000u32), 0x7f7f_ffff);
+    }
+
+    #[test]
+    fn wrap_positive_wraps() {
         assert!((wrap_positive(-0.5) - (core::f32::consts::TAU - 0.5)).abs() < 1e-6);
         assert!((wrap_positive(7.0) - (7.0 - core::f32::consts::TAU)).abs() < 1e-6);
     }
