@@ -212,36 +212,32 @@ fn sqrt_normal(x: f32) -> f32 {
 /// The float next to `s` (positive, normal, within an ulp of sqrt(x)) that is sqrt(x) rounded to
 /// nearest. With s = m 2^e (m the 24-bit significand) and x = mx 2^ex, s is that float when
 /// sqrt(x) lies between the midpoints (m -+ 1/2) 2^e, that is when (2m - 1)^2 < 4x / 2^2e <
-/// (2m + 1)^2, compared exactly in integers (4x / 2^2e = mx 2^k, under 2^55); below a power of
-/// two the lower midpoint is m - 1/4. Never equal: the left side is even, the squares odd.
+/// (2m + 1)^2, compared exactly in integers (4x / 2^2e = mx 2^k) through one square: with
+/// d = 4x / 2^2e - 4m^2, s is the root when -4m + 1 < d < 4m + 1; below a power of two the lower
+/// midpoint is m - 1/4 (d > -2m). Never equal: the left side is even, the squares odd.
 #[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
 fn rounded_root(x: f32, s: f32) -> f32 {
     let xb = x.to_bits();
-    let mx = u64::from((xb & 0x007f_ffff) | 0x0080_0000);
-    let ex = (xb >> 23) as i32;
-    let mut sb = s.to_bits();
-    // At most one move is ever needed (the test over every float); the bound keeps it finite.
-    for _ in 0..3 {
-        let m = u64::from((sb & 0x007f_ffff) | 0x0080_0000);
-        let k = ex + 152 - 2 * ((sb >> 23) as i32);
-        if !(0..=30).contains(&k) {
-            break;
-        }
-        let t = mx << k;
-        let below = if m == 0x0080_0000 {
-            4 * t < (4 * m - 1) * (4 * m - 1)
-        } else {
-            t < (2 * m - 1) * (2 * m - 1)
-        };
-        if below {
-            sb -= 1;
-        } else if t > (2 * m + 1) * (2 * m + 1) {
-            sb += 1;
-        } else {
-            break;
-        }
+    let sb = s.to_bits();
+    let k = (xb >> 23) as i32 + 152 - 2 * ((sb >> 23) as i32);
+    if !(0..=30).contains(&k) {
+        return s;
     }
-    f32::from_bits(sb)
+    let mx = (xb & 0x007f_ffff) | 0x0080_0000;
+    let m = (sb & 0x007f_ffff) | 0x0080_0000;
+    // Both terms are near 2^50 but, s being within an ulp or two, |d| < 8m (2^27): their low 32
+    // bits give it exactly, with 32-bit integer operations only (the device has no 64-bit ones).
+    let d = (mx << k).wrapping_sub((4 * m).wrapping_mul(m)) as i32;
+    let m = m as i32;
+    let lower = if m == 0x0080_0000 { -2 * m } else { -4 * m };
+    // One move suffices: the test over every float checks it.
+    if d <= lower {
+        f32::from_bits(sb - 1)
+    } else if d > 4 * m + 1 {
+        f32::from_bits(sb + 1)
+    } else {
+        s
+    }
 }
 
 /// `a` wrapped into [0, 2 pi).
