@@ -1,5 +1,8 @@
 //! Plans do not drift: `needle plan --json` of the examples and of five random scenarios equals,
-//! number for number, what main printed before the restructuring (tests/data/golden/*.plan.json).
+//! number for number, what main printed when they were last blessed (tests/data/golden/*.plan.json;
+//! first before the restructuring, last when the square root became correctly rounded: a change
+//! that moves plan bits on purpose re-blesses them and says by how much F moved, in
+//! docs/optimality.md).
 //!
 //! Every key of the stored output must come back with exactly the same value; keys added later
 //! (new outputs) are allowed, and `stats.time_us` is a measurement, so it is not compared.
