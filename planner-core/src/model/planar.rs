@@ -39,6 +39,9 @@ pub fn advance(p: Pose, kind: SegmentKind, len: f32, s: f32, radius: f32) -> Pos
 /// The pose after a segment of `kind` and length `len` bending to side `s`, from the start
 /// heading's (sin, cos), already known; also returns the end
 /// heading's (sin, cos). The same operations as computing every sine afresh, so the same bits.
+// Inlined on the host, where the sweep's callers otherwise stall reading the pose it returns
+// through memory; the firmware keeps one copy (flash).
+#[cfg_attr(not(target_os = "none"), inline(always))]
 pub fn advance_from(
     p: Pose,
     sc: (f32, f32),
