@@ -199,15 +199,26 @@ fn encoded(result: &PlanResult) -> Result<Vec<u8>> {
         .to_vec())
 }
 
-/// Measures one board: build, sizes, then one QEMU run planning every scenario. With `profile`,
-/// also prints where the instructions went, by function.
+/// What one run measures besides the plans.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Extras {
+    /// Print where the instructions went, by function.
+    pub profile: bool,
+    /// Steer one closed-loop insertion per scenario (the per-reading figures).
+    pub steering: bool,
+}
+
+/// Measures one board: build, sizes, then one QEMU run planning every scenario (and steering
+/// it, unless `extras` leaves that out). With a profile, also prints where the instructions went,
+/// by function: the plans' alone when steering is left out.
 pub fn measure(
     root: &Path,
     board: &Board,
     plugin: &Path,
     scenarios: &[NamedScenario],
-    profile: bool,
+    extras: Extras,
 ) -> Result<BoardFigures> {
+    let profile = extras.profile;
     let image = artifacts::build_firmware(root, board.name, board.features)?;
     let footprint = elf::footprint(&image)?;
     let dir = root
@@ -244,7 +255,7 @@ pub fn measure(
         matches_host.push((s.name.clone(), encoded(&on_device)? == host));
     }
     let mut replan_instructions = Vec::new();
-    for s in scenarios {
+    for s in scenarios.iter().filter(|_| extras.steering) {
         let r = crate::replan_bench::measure(&mut device, &qemu, &s.scenario)
             .with_context(|| format!("steering {} on {}", s.name, board.name))?;
         replan_instructions.push((s.name.clone(), r));
@@ -274,14 +285,14 @@ pub fn measure(
 pub fn measure_all(
     root: &Path,
     scenarios: &[NamedScenario],
-    profile: bool,
+    extras: Extras,
 ) -> Result<Vec<BoardFigures>> {
     ensure_target()?;
     ensure_qemu()?;
     let plugin = artifacts::build_plugin(root)?;
     BOARDS
         .iter()
-        .map(|b| measure(root, b, &plugin, scenarios, profile))
+        .map(|b| measure(root, b, &plugin, scenarios, extras))
         .collect()
 }
 
@@ -304,6 +315,9 @@ pub fn table(figures: &[BoardFigures]) -> String {
                 *n as f64 / 1e6,
                 if *same { "equals" } else { "DIFFERS from" }
             ));
+        }
+        if f.replan_instructions.is_empty() {
+            s.push_str("  steering not measured (--plan-only)\n");
         }
         for (name, r) in &f.replan_instructions {
             s.push_str(&format!(
@@ -339,6 +353,10 @@ pub struct Args {
     /// Also print, per board, the functions the measured instructions were spent in (slower).
     #[arg(long)]
     profile: bool,
+    /// Measure the plans only, not the closed-loop steering (faster; with `--profile`, a profile
+    /// of the plans alone). `replan_instructions` is then empty, so `--check` is refused with it.
+    #[arg(long, conflicts_with = "check")]
+    plan_only: bool,
     /// The needle-planner checkout holding firmware/ and tools/ (default: where `needle` was built).
     #[arg(long)]
     root: Option<PathBuf>,
@@ -365,7 +383,11 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
         args.files.clone()
     };
     let scenarios = load_scenarios(&files, load)?;
-    let figures = measure_all(&root, &scenarios, args.profile)?;
+    let extras = Extras {
+        profile: args.profile,
+        steering: !args.plan_only,
+    };
+    let figures = measure_all(&root, &scenarios, extras)?;
     if args.json {
         let all: Vec<Value> = figures.iter().map(BoardFigures::to_json).collect();
         writeln!(std::io::stdout(), "{}", serde_json::to_string_pretty(&all)?)?;
@@ -380,4 +402,42 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
         eprintln!("warning: {o}");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    #[test]
+    fn plan_only_cannot_be_checked_against_the_steering_budget() {
+        assert!(Cli::try_parse_from(["device-bench", "--plan-only", "--check"]).is_err());
+        let cli = Cli::try_parse_from(["device-bench", "--plan-only", "--profile"]).unwrap();
+        assert!(cli.args.plan_only && cli.args.profile && !cli.args.check);
+    }
+
+    #[test]
+    fn the_table_says_when_steering_was_not_measured() {
+        let figures = BoardFigures {
+            board: "mps2-an386",
+            flash_bytes: 1,
+            static_ram_bytes: 2,
+            peak_stack_bytes: 3,
+            instructions: vec![("paper".into(), 14_000_000)],
+            matches_host: vec![("paper".into(), true)],
+            replan_instructions: Vec::new(),
+        };
+        let text = table(&[figures]);
+        assert!(
+            text.contains("paper: 14000000 instructions per plan"),
+            "{text}"
+        );
+        assert!(text.contains("steering not measured"), "{text}");
+    }
 }
