@@ -174,8 +174,8 @@ pub fn sqrt(x: f32) -> f32 {
     }
 }
 
-/// The correctly rounded square root in f32 and integer arithmetic: an estimate to an ulp or
-/// two, then moved to the rounded root by an exact integer test. On the host it runs in the
+/// The correctly rounded square root in f32 and integer arithmetic: an estimate within an ulp,
+/// then moved to the rounded root by an exact integer test. On the host it runs in the
 /// tests only (which compare it with the FPU's root).
 #[cfg_attr(any(target_arch = "x86_64", target_arch = "aarch64"), allow(dead_code))]
 pub fn sqrt_soft(x: f32) -> f32 {
