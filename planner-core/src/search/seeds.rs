@@ -208,11 +208,15 @@ fn sweep_pieces(
             // The last two pieces are at least as long as the straight line to the target (less a
             // margin far above the rounding of the completions), and D >= 0: when that bounds F at or
             // above the sink's bound, every completion would be refused.
-            let free_length: f32 = lengths[..free].iter().sum();
-            let (dx, dy) = (dist - pose.x, -pose.y);
-            let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
-            if w.length * (free_length + rest) + fixed >= bound.get() {
-                return f32::NEG_INFINITY;
+            // (No bound yet, as at the start of a sweep: nothing to test.)
+            let limit = bound.get();
+            if limit < f32::INFINITY {
+                let free_length: f32 = lengths[..free].iter().sum();
+                let (dx, dy) = (dist - pose.x, -pose.y);
+                let rest = crate::fmath::sqrt(dx * dx + dy * dy) * (1.0 - 1e-4);
+                if w.length * (free_length + rest) + fixed >= limit {
+                    return f32::NEG_INFINITY;
+                }
             }
             let mut nearest = f32::NEG_INFINITY;
             complete(pose, sc, &tail, dist, r, &mut |la, lb| {
@@ -249,6 +253,7 @@ fn sweep_pieces(
             let finer = steps * BOUND_FINER;
             (finer, finer.pow(free as u32))
         };
+        let mut turned = None;
         for combo in 0..combos {
             let mut cell = [0.0f32; MAX_CONTROL_DEGREE];
             let mut c = combo;
@@ -262,24 +267,40 @@ fn sweep_pieces(
             // plane and eight planes are swept: there the finer grid bought no optimum in the
             // optimality suites and cost a third of the sweep.
             if p.plane && nearest < 0.0 && nearest > -NEAR_MISS {
-                let fine = REFINE.pow(free as u32 + 1);
-                for k in 0..fine {
-                    let mut kk = k;
-                    let off = |kk: &mut usize| {
-                        let o = ((*kk % REFINE) as f32 + 0.5) / REFINE as f32 - 0.5;
-                        *kk /= REFINE;
-                        o
-                    };
-                    let h = heading + heading_step * off(&mut kk);
+                // The finer headings vary fastest: their (sin, cos) are taken once per heading.
+                let turned = *turned.get_or_insert_with(|| refined_headings(heading, heading_step));
+                for lengths_k in 0..REFINE.pow(free as u32) {
+                    let mut kk = lengths_k;
                     let mut sub = cell;
                     for f in sub.iter_mut().take(free) {
-                        *f += off(&mut kk) / steps as f32;
+                        *f += refined_offset(kk % REFINE) / steps as f32;
+                        kk /= REFINE;
                     }
-                    probe(h, crate::fmath::sincos(h), &sub);
+                    for &(h, h_sc) in &turned {
+                        probe(h, h_sc, &sub);
+                    }
                 }
             }
         }
     }
+}
+
+/// Offset of a refined cell's point `k` along one dimension of the cell, in cell widths.
+fn refined_offset(k: usize) -> f32 {
+    (k as f32 + 0.5) / REFINE as f32 - 0.5
+}
+
+/// The headings of a refined cell about `heading`, with their (sin, cos).
+// Not inlined: the compiler would otherwise take these sines for every probe of the grid, in
+// case the probe is refined.
+#[inline(never)]
+fn refined_headings(heading: f32, heading_step: f32) -> [(f32, (f32, f32)); REFINE] {
+    let mut out = [(0.0, (0.0, 0.0)); REFINE];
+    for (k, o) in out.iter_mut().enumerate() {
+        let h = heading + heading_step * refined_offset(k);
+        *o = (h, crate::fmath::sincos(h));
+    }
+    out
 }
 
 /// How much finer the lengths are gridded on the tilt-bound headings.
