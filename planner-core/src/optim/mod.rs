@@ -1,6 +1,7 @@
 //! The local optimiser: one form's problem (variables, objective, constraints and their exact
 //! derivatives), the feasible-path SQP that solves it and the active-set QP behind each step.
 
+pub(crate) mod basins;
 pub(crate) mod linalg;
 pub(crate) mod objective;
 pub(crate) mod problem;

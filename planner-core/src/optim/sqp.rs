@@ -9,6 +9,7 @@
 //! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
 
 use crate::model::scenario::MAX_OBSTACLES;
+use crate::optim::basins::{Known, Memory, STATIONARY};
 use crate::optim::linalg;
 use crate::optim::objective::{Derivatives, Value};
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
@@ -172,32 +173,37 @@ fn lagrangian_grad(
     g
 }
 
-/// Distance (largest change of any variable) within which an iterate counts as in the basin of a
-/// known local solution. 0.05 (was 0.03): 2.8 % fewer host instructions on the paper plan, the
-/// optimality suites unchanged (docs/optimality.md), plans within 2.2e-5 in F.
-pub const BASIN: f32 = 0.05;
-
-/// Whether `x` (objective `f`) lies within [`BASIN`] of a known local solution that is no worse:
-/// a descent from there ends at that solution (to rounding), so it need not be followed.
-fn in_known_basin(known: &[(Vars, f32)], x: &Vars, f: f32, n: usize) -> bool {
-    known
-        .iter()
-        .any(|(k, kf)| f >= *kf && (0..n).all(|j| libm::fabsf(x[j] - k[j]) < BASIN))
-}
-
 /// Runs the SQP from `x0` (restored onto the target first). `None` when the start cannot be made
-/// feasible. `known` holds local solutions already found for this problem (variables,
-/// objective): a run that enters the basin of one of them stops there (status `Converged`, its
-/// objective no better than the known one's).
-pub fn solve(p: &Problem, x0: &Vars, known: &[(Vars, f32)]) -> Option<LocalSolution> {
-    solve_within(p, x0, known, MAX_ITERATIONS)
+/// feasible. `known` holds local solutions already found for this problem, and the iterates
+/// that led there: a run that enters the basin of one of them stops there (status `Converged`,
+/// its objective no better than the known one's; see [`crate::optim::basins`]). A run that ends
+/// stationary adds its solution and its iterates.
+pub fn solve(p: &Problem, x0: &Vars, known: &mut Known) -> Option<LocalSolution> {
+    let mut memory = Memory::start(known);
+    let Some(sol) = run(p, x0, Some(&mut memory), MAX_ITERATIONS) else {
+        memory.forget();
+        return None;
+    };
+    if sol.status == SolveStatus::Converged && sol.step_norm < STATIONARY {
+        memory.settle(&sol.eval.x, sol.eval.objective, p.n);
+    } else {
+        // One stopped by its budget may lie on a slope that a later start would descend further.
+        memory.forget();
+    }
+    Some(sol)
 }
 
-/// [`solve`] with at most `max_iterations` iterations (a replan's fixed budget).
-pub fn solve_within(
+/// [`solve`] with at most `max_iterations` iterations and nothing known (a replan's fixed
+/// budget).
+pub fn solve_within(p: &Problem, x0: &Vars, max_iterations: u32) -> Option<LocalSolution> {
+    run(p, x0, None, max_iterations)
+}
+
+/// The SQP; its accepted iterates go to `memory`.
+fn run(
     p: &Problem,
     x0: &Vars,
-    known: &[(Vars, f32)],
+    mut memory: Option<&mut Memory>,
     max_iterations: u32,
 ) -> Option<LocalSolution> {
     let max_iterations = max_iterations.min(MAX_ITERATIONS);
@@ -229,7 +235,10 @@ pub fn solve_within(
     while iterations < max_iterations {
         iterations += 1;
         let cur = &vals[ci];
-        if in_known_basin(known, &cur.x, cur.objective, n) {
+        if memory
+            .as_ref()
+            .is_some_and(|m| m.holds(&cur.x, cur.objective, n))
+        {
             status = SolveStatus::Converged;
             step_norm = 0.0;
             break;
@@ -300,6 +309,9 @@ pub fn solve_within(
             break;
         }
         let next: &Value = trial;
+        if let Some(m) = memory.as_mut() {
+            m.passed(&next.x, next.objective);
+        }
         let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = clear_rows[..n_clear]
             .iter()
             .map(|&(o, row)| (o, sol.mult[row]))

@@ -186,32 +186,18 @@ struct Effort {
     evaluations: u32,
 }
 
-/// Local solutions found so far for one problem (variables, objective), distinct.
+/// Local solutions found so far for one problem and the iterates that led to them (see
+/// [`sqp::solve`]).
 type Basins = heapless::Vec<(Vars, f32), KNOWN_BASINS>;
 
-/// Largest final step of a solve whose end marks a basin.
-const STATIONARY: f32 = 1e-3;
+/// Points remembered per problem (beyond, new ones are not remembered).
+const KNOWN_BASINS: usize = 24;
 
-/// Local solutions remembered per problem (beyond, new ones are not remembered).
-const KNOWN_BASINS: usize = 12;
-
-/// The SQP from `x`, stopped early in the basin of a solution in `known`; a new solution is
-/// remembered there.
+/// The SQP from `x`, stopped early in a basin `known` holds, which it adds to.
 fn refine(p: &Problem, x: &Vars, known: &mut Basins, effort: &mut Effort) -> Option<LocalSolution> {
-    let sol = sqp::solve(p, x, known)?;
+    let sol = sqp::solve(p, x, known.as_mut_view())?;
     effort.iterations += sol.iterations;
     effort.evaluations += sol.evaluations;
-    let (x, f) = (&sol.eval.x, sol.eval.objective);
-    // Only a solve that ended stationary marks a basin: one stopped by its budget may lie on a
-    // slope that a later start would descend further.
-    let stationary = sol.status == SolveStatus::Converged && sol.step_norm < STATIONARY;
-    let fresh = known
-        .iter()
-        .all(|(k, _)| (0..p.n).any(|j| libm::fabsf(x[j] - k[j]) >= sqp::BASIN));
-    if stationary && fresh {
-        // Full: the solution is simply not remembered.
-        let _ = known.push((*x, f));
-    }
     Some(sol)
 }
 

@@ -196,7 +196,7 @@ fn attempt(
             x0[b] = seg.bevel_deg.to_radians();
         }
     }
-    let sol = solve_within(&p, &x0, &[], input.iterations);
+    let sol = solve_within(&p, &x0, input.iterations);
     let Some(sol) = sol else {
         spent.0 += 1;
         return None;
