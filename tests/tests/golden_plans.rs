@@ -1,6 +1,6 @@
 //! Plans do not drift: `needle plan --json` of the examples and of five random scenarios equals,
 //! number for number, what main printed when they were last blessed (tests/data/golden/*.plan.json;
-//! first before the restructuring, last when the square root became correctly rounded: a change
+//! first before the restructuring, last when the SQP began to remember earlier descents: a change
 //! that moves plan bits on purpose re-blesses them and says by how much F moved, in
 //! docs/optimality.md).
 //!
