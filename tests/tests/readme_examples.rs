@@ -1,0 +1,197 @@
+//! The README's promises, kept: every `needle` subcommand has an example in its command table,
+//! every example there and in the first session runs as written (from a working directory that
+//! sees the repository's `examples/` and `tests/`, the device commands against
+//! `hil-sim --tcp 127.0.0.1:7878` as the README starts it), the paper table it prints is what
+//! `needle plan` prints, and the scenario it shows plans.
+
+mod firmware_support;
+mod wire_support;
+
+use needle_e2e::{needle_bin, workspace};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use wire_support::SimProcess;
+
+/// The address the README's device examples use.
+const README_DEVICE: &str = "127.0.0.1:7878";
+
+fn readme() -> String {
+    std::fs::read_to_string(workspace().join("README.md")).expect("read README.md")
+}
+
+/// The README's fenced blocks: (language, lines).
+fn fenced_blocks(text: &str) -> Vec<(String, Vec<String>)> {
+    let mut blocks = Vec::new();
+    let mut open: Option<(String, Vec<String>)> = None;
+    for line in text.lines() {
+        match (open.take(), line.strip_prefix("```")) {
+            (None, Some(lang)) => open = Some((lang.trim().to_string(), Vec::new())),
+            (Some(block), Some(_)) => blocks.push(block),
+            (Some((lang, mut lines)), None) => {
+                lines.push(line.to_string());
+                open = Some((lang, lines));
+            }
+            (None, None) => {}
+        }
+    }
+    blocks
+}
+
+/// The example of each row of the command table: (subcommand, example).
+fn table_examples(text: &str) -> Vec<(String, String)> {
+    let section = text
+        .split("\n## Commands")
+        .nth(1)
+        .and_then(|s| s.split("\n## ").next())
+        .expect("README has a Commands section");
+    section
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .filter_map(|l| {
+            let cells: Vec<&str> = l.split(" | ").collect();
+            let command = cells.first()?.trim_start_matches("| ").trim_matches('`');
+            let example = cells.last()?.trim_end_matches(" |").trim_matches('`');
+            example
+                .starts_with("needle ")
+                .then(|| (command.to_string(), example.to_string()))
+        })
+        .collect()
+}
+
+/// `needle`'s subcommands, as its help lists them.
+fn subcommands() -> Vec<String> {
+    let out = Command::new(needle_bin()).arg("--help").output().unwrap();
+    let help = String::from_utf8(out.stdout).unwrap();
+    help.split("Commands:")
+        .nth(1)
+        .and_then(|s| s.split("Options:").next())
+        .expect("help lists commands")
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .map(str::to_string)
+        .collect()
+}
+
+/// A scratch working directory that sees the repository's examples and test data, so outputs
+/// (plots) land there and not in the tree.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("needle-readme-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["examples", "tests"] {
+        std::os::unix::fs::symlink(workspace().join(name), dir.join(name)).unwrap();
+    }
+    dir
+}
+
+/// Runs one README line as written (`needle` is the binary under test); returns stdout.
+fn run_example(line: &str, dir: &Path) -> String {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    assert_eq!(words[0], "needle", "{line}");
+    let out = Command::new(needle_bin())
+        .args(&words[1..])
+        .current_dir(dir)
+        .output()
+        .expect("run needle");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "`{line}` failed: {stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    if words.contains(&"--json") {
+        serde_json::from_str::<serde_json::Value>(&stdout)
+            .unwrap_or_else(|e| panic!("`{line}` printed no JSON: {e}"));
+    } else if !words.contains(&"ports") {
+        let said = stdout.trim().len() + stderr.trim().len();
+        assert!(said > 0, "`{line}` printed nothing");
+    }
+    for (i, w) in words.iter().enumerate() {
+        let writes_svg = w.ends_with(".svg") && matches!(words[i - 1], "--plot" | "-o");
+        if writes_svg {
+            let svg = std::fs::read_to_string(dir.join(w)).expect("the plot was written");
+            assert!(svg.starts_with("<svg"), "`{line}` wrote no SVG to {w}");
+        }
+    }
+    stdout
+}
+
+/// Every example the README shows: its command table and the `needle` lines of its shell blocks.
+fn every_example(text: &str) -> Vec<String> {
+    let mut lines: Vec<String> = table_examples(text).into_iter().map(|(_, e)| e).collect();
+    for (lang, block) in fenced_blocks(text) {
+        for line in block.iter().filter(|_| lang == "sh") {
+            let command = line.split('#').next().unwrap_or("").trim();
+            if command.starts_with("needle ") {
+                lines.push(command.to_string());
+            }
+        }
+    }
+    lines
+}
+
+#[test]
+fn every_subcommand_has_an_example_in_the_command_table() {
+    let text = readme();
+    let documented: Vec<String> = table_examples(&text)
+        .into_iter()
+        .map(|(c, e)| {
+            assert_eq!(e.split_whitespace().nth(1), Some(c.as_str()), "{e}");
+            c
+        })
+        .collect();
+    for command in subcommands() {
+        assert!(documented.contains(&command), "README: no example of `needle {command}`");
+    }
+}
+
+#[test]
+fn every_example_in_the_readme_runs_as_written() {
+    let text = readme();
+    let start = format!("hil-sim --tcp {README_DEVICE} &");
+    assert!(text.contains(&start), "the README starts hil-sim as {start}");
+    let _device = SimProcess::start(&["--tcp", README_DEVICE]);
+    let dir = scratch("examples");
+    let emulator = firmware_support::emulator_ready("every_example_in_the_readme_runs_as_written");
+    let mut ran = 0;
+    for line in every_example(&text) {
+        if line.starts_with("needle device-bench") && !emulator {
+            continue;
+        }
+        run_example(&line, &dir);
+        ran += 1;
+    }
+    assert!(ran >= subcommands().len() - 1, "only {ran} examples ran");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_readme_paper_table_is_what_plan_prints() {
+    let prompt = "$ needle plan examples/paper.toml";
+    let shown = fenced_blocks(&readme())
+        .into_iter()
+        .map(|(_, lines)| lines)
+        .find(|lines| lines.first().map(String::as_str) == Some(prompt))
+        .expect("README shows the paper's plan");
+    let printed = run_example("needle plan examples/paper.toml", &workspace());
+    let printed: Vec<&str> = printed.lines().collect();
+    assert!(shown.len() > 10, "the table and the best plan");
+    for (i, line) in shown.iter().skip(1).enumerate() {
+        assert_eq!(Some(&line.as_str()), printed.get(i), "README's line {i} of the plan");
+    }
+}
+
+#[test]
+fn the_readme_scenario_plans() {
+    let text = readme();
+    let toml: Vec<String> = fenced_blocks(&text)
+        .into_iter()
+        .filter(|(lang, _)| lang == "toml")
+        .flat_map(|(_, lines)| lines)
+        .collect();
+    assert!(toml.len() > 5, "README shows a scenario");
+    let dir = scratch("scenario");
+    std::fs::write(dir.join("first.toml"), toml.join("\n")).unwrap();
+    let out = run_example("needle plan first.toml --json", &dir);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["best"]["feasible"], true, "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
