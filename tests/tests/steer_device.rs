@@ -87,7 +87,7 @@ fn the_firmware_in_qemu_steers_like_the_host() {
     firmware_steers_like_the_host("the_firmware_in_qemu_steers_like_the_host", "4", "1");
 }
 
-/// Issue 10's set: 20 paper and 5 space runs (`cargo test --release -p needle-e2e --test
+/// The long campaign: 20 paper and 5 space runs (`cargo test --release -p needle-e2e --test
 /// steer_device -- --ignored`; 12.5 minutes on this machine with both cores shared).
 #[test]
 #[ignore]
