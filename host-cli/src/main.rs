@@ -64,7 +64,7 @@ enum Command {
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
     /// Execute the plan's schedule in simulated perturbed insertions (open loop).
-    Simulate(analysis::SimulateArgs),
+    Simulate(needle_cli::simulate::SimulateArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(SendArgs),
     /// Check that a device answers, and how fast.
@@ -222,7 +222,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => analysis::run_compare(a),
         Command::Approx(a) => analysis::run_approx(a),
         Command::Plot(a) => analysis::run_plot(a),
-        Command::Simulate(a) => analysis::run_simulate(a),
+        Command::Simulate(a) => needle_cli::simulate::run_simulate(a),
         Command::Send(a) => send(a),
         Command::Ping { link, count } => device::commands::ping(link, *count),
         Command::Info { link, json } => device::commands::info(link, *json),

@@ -1,8 +1,8 @@
 //! `needle simulate` end to end: the JSON contract, repeatability over thread counts, the plot,
 //! the table, and bad input.
 
-use hil_sim::insertion::KEYS;
 use needle_e2e::{example, needle, needle_json};
+use needle_sim::KEYS;
 use serde_json::Value;
 
 fn paper() -> String {

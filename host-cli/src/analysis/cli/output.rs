@@ -7,7 +7,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 
 /// A progress bar on a terminal, nothing otherwise.
-pub(super) fn progress(len: usize, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: usize, what: &str) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
@@ -22,14 +22,14 @@ pub(super) fn progress(len: usize, what: &str) -> ProgressBar {
 }
 
 /// Writes `text` to `path` and says so on stderr.
-pub(super) fn write(path: &Path, text: &str) -> Result<()> {
+pub(crate) fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
 
 /// The scenario file's name, for plot titles.
-pub(super) fn title_of(file: &Path) -> String {
+pub(crate) fn title_of(file: &Path) -> String {
     file.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default()

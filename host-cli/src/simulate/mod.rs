@@ -1,16 +1,19 @@
-//! `needle simulate`'s work: a plan's schedule executed open loop in many perturbed worlds (the
-//! insertion simulator of `hil-sim`), in parallel, and the figures over the runs. Simulated
-//! figures, always called so.
+//! `needle simulate`: a plan's schedule executed in many perturbed worlds (the insertion
+//! simulator of `needle-sim`), open loop or steered, in parallel, and the figures over the runs.
+//! Simulated figures, always called so.
 
 pub mod closed;
+mod command;
 pub mod device;
 pub mod json;
 pub mod plot;
 pub mod table;
 
+pub use command::{run_simulate, SimulateArgs};
+
 use crate::analysis::parallel;
 use anyhow::{anyhow, Context, Result};
-use hil_sim::insertion::{open_loop, Perturbation, Planned, Run};
+use needle_sim::{open_loop, Perturbation, Planned, Run};
 use planner_core::execute::schedule::{schedule, Schedule};
 use planner_core::{FormOutcome, Scenario};
 

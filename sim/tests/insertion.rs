@@ -1,7 +1,7 @@
 //! The insertion simulator: no perturbation reproduces the plan; each perturbation alone moves
 //! the tip the way its physics says; a seed repeats bit for bit; bad input is a typed error.
 
-use hil_sim::insertion::{open_loop, PerturbError, Perturbation, Planned, Run, World};
+use needle_sim::{open_loop, PerturbError, Perturbation, Planned, Run, World};
 use planner_core::execute::nominal;
 use planner_core::execute::schedule::{schedule, Op, Schedule};
 use planner_core::model::scenario::Workspace;

@@ -4,9 +4,7 @@
 use super::{run_seed, Prepared};
 use crate::analysis::parallel;
 use anyhow::{anyhow, Result};
-use hil_sim::insertion::{
-    closed_loop, in_process, ClosedRun, Perturbation, Planned, TrackerFaults,
-};
+use needle_sim::{closed_loop, in_process, ClosedRun, Perturbation, Planned, TrackerFaults};
 use planner_core::steer::{SteerConfig, StopReason};
 use planner_core::Scenario;
 use std::collections::BTreeMap;

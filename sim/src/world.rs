@@ -11,17 +11,17 @@
 //!   with curvature 2·|d| / [`DRIFT_REFERENCE_MM`] (a 50 mm line ends |d|·50 mm sideways);
 //! - the shaft is a torsional spring with play: the tip roll stays within ± lag·depth of the base
 //!   roll and moves only when the base drags it (a backlash). After any rotation larger than the
-//!   play the tip rests lag·depth behind the base: its bend plane is off by lag·depth, the
-//!   issue's "lag of the tip behind the base rotation". The tip's *turn* is Δ − 2·lag·depth when
-//!   it rested on the far side of the play (after a spin, whose alternating turns leave it
-//!   lag·depth past the base on the side of its first turn), but its error is still lag·depth:
-//!   the play is not counted twice;
+//!   play the tip rests lag·depth behind the base: its bend plane is off by lag·depth, the "lag
+//!   of the tip behind the base rotation" the torsion literature measures. The tip's *turn* is
+//!   Δ − 2·lag·depth when it rested on the far side of the play (after a spin, whose alternating
+//!   turns leave it lag·depth past the base on the side of its first turn), but its error is
+//!   still lag·depth: the play is not counted twice;
 //! - the entry point and direction are off by their draws, and the true target is displaced.
 //!
 //! The tracker measures the tip after every piece of insertion (pieces at most
 //! `measure_every_mm` and 1 mm long) and after every rotation.
 
-use super::perturbation::{PerturbError, Perturbation};
+use crate::perturbation::{PerturbError, Perturbation};
 use crate::random::{seeded, Draw, SplitMix64};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};

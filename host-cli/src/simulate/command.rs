@@ -1,19 +1,19 @@
 //! `needle simulate`.
 
-use super::output::{progress, title_of, write};
+use crate::analysis::cli::output::{progress, title_of, write};
 use crate::analysis::parallel;
-use crate::analysis::simulate::closed::{simulate_closed, summarise_steering};
-use crate::analysis::simulate::device::simulate_on_device;
-use crate::analysis::simulate::json::closed_json;
-use crate::analysis::simulate::json::to_json;
-use crate::analysis::simulate::plot::simulate_svg;
-use crate::analysis::simulate::table::closed_table;
-use crate::analysis::simulate::table::{to_table, Header};
-use crate::analysis::simulate::{prepare, simulate, summarise};
 use crate::device::commands::LinkArgs;
 use crate::scenario::{load_scenario_shapes, restrict};
+use crate::simulate::closed::{simulate_closed, summarise_steering};
+use crate::simulate::device::simulate_on_device;
+use crate::simulate::json::closed_json;
+use crate::simulate::json::to_json;
+use crate::simulate::plot::simulate_svg;
+use crate::simulate::table::closed_table;
+use crate::simulate::table::{to_table, Header};
+use crate::simulate::{prepare, simulate, summarise};
 use anyhow::{Context, Result};
-use hil_sim::insertion::{Perturbation, TrackerFaults};
+use needle_sim::{Perturbation, TrackerFaults};
 use planner_core::steer::SteerConfig;
 use std::io::Write;
 use std::path::PathBuf;

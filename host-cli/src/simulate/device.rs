@@ -4,10 +4,25 @@
 use super::{run_seed, Prepared};
 use crate::device::commands::LinkArgs;
 use anyhow::{anyhow, bail, Context, Result};
-use hil_sim::insertion::{closed_loop, ClosedRun, Perturbation, Planned, TrackerFaults};
-use planner_core::steer::SteerConfig;
+use needle_link::{Client, LinkError, Transport};
+use needle_sim::{closed_loop, ClosedRun, Controller, Perturbation, Planned, TrackerFaults};
+use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
 use planner_core::Scenario;
 use std::time::Duration;
+
+/// A device's controller behind the link (hil-sim or the firmware), answering the simulated
+/// tracker's readings: the simulator knows no transport, so the host adapts the client to it.
+pub struct LinkController<'a, T: Transport>(pub &'a mut Client<T>);
+
+impl<T: Transport> Controller for LinkController<'_, T> {
+    type Error = LinkError;
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, LinkError> {
+        self.0.steer(m)
+    }
+    fn stats(&mut self) -> Result<SteerStats, LinkError> {
+        self.0.steer_status().map(|(stats, _)| stats)
+    }
+}
 
 /// `runs` closed-loop insertions, one after the other, each steered by the device at `link`
 /// (which plans the scenario first: its plan must be the host's, bit for bit).
@@ -46,7 +61,7 @@ pub fn simulate_on_device(
             &prepared.schedule,
             p,
             faults,
-            &mut client,
+            &mut LinkController(&mut client),
             run_seed(seed, i),
         )
         .map_err(|e| anyhow!("run {}: {e}", i + 1))?;

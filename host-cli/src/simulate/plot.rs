@@ -4,7 +4,7 @@
 use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene};
 use crate::report::path_points;
 use crate::scenario::ObstacleShape;
-use hil_sim::insertion::Run;
+use needle_sim::Run;
 use planner_core::{FormOutcome, Scenario};
 
 /// Most executed paths drawn (the first runs): enough for the tube, a file a viewer opens.

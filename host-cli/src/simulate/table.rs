@@ -2,7 +2,7 @@
 
 use super::closed::SteeringSummary;
 use super::{Spread, Summary};
-use hil_sim::insertion::{Perturbation, KEYS};
+use needle_sim::{Perturbation, KEYS};
 use std::fmt::Write;
 
 /// What the table's header names.

@@ -3,7 +3,7 @@
 use super::closed::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
-use hil_sim::insertion::{ClosedRun, Perturbation, Run};
+use needle_sim::{ClosedRun, Perturbation, Run};
 use serde::Serialize;
 
 /// The whole output.

@@ -2,9 +2,10 @@
 //! literature-motivated defaults, their floors, and `KEY=VALUE` parsing with typed errors.
 //!
 //! The defaults are the world every later comparison (open against closed loop) runs in. Each is
-//! at least the floor issue 9 sets (so no result can be flattered by a quieter world) and was
-//! fixed from the literature and the calibration against the seed paper's experiment before any
-//! comparison was made; docs/execution.md tabulates them with their sources.
+//! at least its floor, the least perturbation the simulator is required to model (so no result
+//! can be flattered by a quieter world), and was fixed from the literature and the calibration
+//! against the seed paper's experiment before any comparison was made; docs/execution.md
+//! tabulates them with their sources.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -14,7 +15,7 @@ use std::fmt;
 pub struct Perturbation {
     /// Per-run relative spread of the tissue's curvature 1/r (the factor is 1 + N(0, this)).
     ///
-    /// Default 0.03, issue 9's floor. Webster et al. 2006 (IJRR 25(5), "Nonholonomic modeling of
+    /// Default 0.03, the floor. Webster et al. 2006 (IJRR 25(5), "Nonholonomic modeling of
     /// needle steering") fit one curvature per phantom and needle and report that it changes with
     /// the tissue and the insertion; Majewicz et al. 2012 (IEEE TBME 59(2)) measure radii that
     /// differ by tens of percent between tissues. Run to run in one phantom (where the radius was
@@ -56,12 +57,12 @@ pub struct Perturbation {
     pub entry_position_mm: f32,
     /// Entry direction error, about both axes across the heading (degrees).
     ///
-    /// Default 0.5: the guide's alignment, the floor of issue 9.
+    /// Default 0.5: the guide's alignment, the floor.
     pub entry_direction_deg: f32,
     /// Static displacement of the target, per axis (mm): the tissue moved between imaging and
     /// insertion (and the insertion itself pushes it).
     ///
-    /// Default 0.5, the floor of issue 9.
+    /// Default 0.5, the floor.
     pub target_shift_mm: f32,
     /// Tracker position noise, per axis (mm).
     ///
@@ -70,7 +71,7 @@ pub struct Perturbation {
     pub tracker_position_mm: f32,
     /// Tracker heading noise, about both axes across the heading (degrees).
     ///
-    /// Default 0.5: NDI Aurora, 0.30 degrees RMS (cube) to 0.5 degrees; the floor of issue 9.
+    /// Default 0.5: NDI Aurora, 0.30 degrees RMS (cube) to 0.5 degrees; the floor.
     pub tracker_heading_deg: f32,
     /// Insertion between two tracker measurements (mm).
     ///
@@ -96,7 +97,7 @@ impl Default for Perturbation {
     }
 }
 
-/// A key, the range it accepts and its floor as a default (issue 9's minima).
+/// A key, the range it accepts and its floor as a default (the least perturbation required).
 struct KeySpec {
     key: &'static str,
     min: f32,
@@ -273,7 +274,7 @@ impl Perturbation {
         Ok(())
     }
 
-    /// The keys whose value lies below issue 9's floor (empty for the defaults: a test).
+    /// The keys whose value lies below their floor (empty for the defaults: a test).
     pub fn below_floor(&self) -> Vec<&'static str> {
         let mut copy = *self;
         SPECS
