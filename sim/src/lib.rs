@@ -48,7 +48,7 @@ mod run;
 mod world;
 
 pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller, TrackerFaults};
-pub use perturbation::{PerturbError, Perturbation, KEYS};
+pub use perturbation::{PerturbError, Perturbation, KEYS, MEASURE_EVERY_MM_MIN};
 pub use run::{finish, open_loop, Planned, Run};
 pub use world::{
     Drawn, Executed, Measurement, StepDraw, World, DRIFT_REFERENCE_MM, MAX_PIECE_MM, MIN_FACTOR,

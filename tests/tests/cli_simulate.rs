@@ -163,7 +163,11 @@ fn bad_input_is_a_clear_error() {
         ),
         (
             vec!["--perturb", "measure_every_mm=0"],
-            "measure_every_mm = 0 is outside (0, 1]",
+            "measure_every_mm = 0 is outside [0.05, 1]",
+        ),
+        (
+            vec!["--perturb", "measure_every_mm=0.00001"],
+            "measure_every_mm = 0.00001 is outside [0.05, 1]",
         ),
         (
             vec!["--perturb", "entry_position_mm=nan"],
