@@ -63,7 +63,7 @@ enum Command {
     Approx(analysis::ApproxArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
-    /// Execute the plan's schedule in simulated perturbed insertions (open loop).
+    /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
     Simulate(needle_cli::simulate::SimulateArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(SendArgs),

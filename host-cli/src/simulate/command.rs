@@ -1,195 +1,152 @@
-//! `needle simulate`.
+//! `needle simulate`: from the flags to one [`Setup`], the runs of the mode asked for (open
+//! loop, closed loop in-process or on a device, or both), then the table or the JSON, and the
+//! plot (its file opened before the runs).
 
-use crate::analysis::cli::output::{progress, title_of, write};
+use super::args::SimulateArgs;
+use super::device::on_device;
+use super::json::{closed_json, to_json};
+use super::plot::{simulate_svg, Executed, MAX_DRAWN};
+use super::setup::{Keep, Setup};
+use super::steering::summarise_steering;
+use super::summarise;
+use super::table::{closed_table, to_table, Header};
+use crate::analysis::cli::output::{progress, title_of, OutputFile};
 use crate::analysis::parallel;
-use crate::device::commands::LinkArgs;
-use crate::scenario::{load_scenario_shapes, restrict};
-use crate::simulate::closed::{simulate_closed, summarise_steering};
-use crate::simulate::device::simulate_on_device;
-use crate::simulate::json::closed_json;
-use crate::simulate::json::to_json;
-use crate::simulate::plot::simulate_svg;
-use crate::simulate::table::closed_table;
-use crate::simulate::table::{to_table, Header};
-use crate::simulate::{prepare, simulate, summarise};
-use anyhow::{Context, Result};
-use needle_sim::{Perturbation, TrackerFaults};
-use planner_core::steer::SteerConfig;
+use crate::scenario::{load_scenario_shapes, restrict, ObstacleShape};
+use anyhow::{anyhow, Context, Result};
+use needle_sim::{ClosedRun, Perturbation, Run, TrackerFaults};
 use std::io::Write;
-use std::path::PathBuf;
 
-/// `needle simulate`
-#[derive(clap::Args, Clone, Debug)]
-pub struct SimulateArgs {
-    /// Scenario file (TOML, see examples/paper.toml).
-    pub file: PathBuf,
-    /// Simulated insertions.
-    #[arg(long, default_value_t = 100)]
-    pub runs: usize,
-    /// Seed of the first run (run i uses seed + i).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Plan and simulate only this form (e.g. RL) instead of the best.
-    #[arg(long)]
-    pub form: Option<String>,
-    /// Change one perturbation, KEY=VALUE (repeatable; see docs/execution.md).
-    #[arg(long = "perturb", value_name = "KEY=VALUE")]
-    pub perturb: Vec<String>,
-    /// Print one JSON object instead of the table.
-    #[arg(long)]
-    pub json: bool,
-    /// With --json: every run's draws, figures, points and steps.
-    #[arg(long)]
-    pub detail: bool,
-    /// Also draw the plan and the executed paths (SVG).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Threads (default: every core).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Steer every run with the closed-loop controller (replanning from each tracker reading).
-    #[arg(long)]
-    pub closed_loop: bool,
-    /// With --closed-loop: a tracker fault, KEY=VALUE (repeatable): dropout_rate, dropout_mm,
-    /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
-    #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
-    pub fault: Vec<String>,
-    /// With --closed-loop: steer on the device at this TCP address (hil-sim --tcp, QEMU)
-    /// instead of in-process; the host runs the simulated robot, tissue and tracker.
-    #[arg(long, requires = "closed_loop", conflicts_with = "port")]
-    pub tcp: Option<String>,
-    /// With --closed-loop: steer on the device at this serial port instead of in-process.
-    #[arg(long, requires = "closed_loop")]
-    pub port: Option<String>,
-    /// Baud rate of --port.
-    #[arg(long, default_value_t = 115_200)]
-    pub baud: u32,
-    /// Seconds of silence allowed per exchange with the device.
-    #[arg(long, default_value_t = 5.0)]
-    pub timeout: f64,
-    /// With --closed-loop: also run the same worlds open loop and print both side by side.
-    #[arg(long, requires = "closed_loop")]
-    pub compare_open_loop: bool,
+/// The runs made: open loop, closed loop, or both (`--compare-open-loop`).
+struct Results {
+    open: Option<Vec<Run>>,
+    closed: Option<Vec<ClosedRun>>,
 }
 
 /// Runs `needle simulate`.
 pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
+    let (setup, shapes) = set_up(a)?;
+    let plot = a.plot.as_deref().map(OutputFile::open).transpose()?;
+    let drawn = if plot.is_some() { MAX_DRAWN } else { 0 };
+    let keep = Keep {
+        detail: a.detail,
+        paths: drawn,
+        stopped_paths: drawn,
+    };
+    let results = execute(a, &setup, &keep)?;
+    print(a, &setup, &results)?;
+    if let Some(file) = plot {
+        let executed = Executed {
+            open: results.open.as_deref(),
+            closed: results.closed.as_deref(),
+        };
+        let title = plot_title(a, &setup, &executed);
+        let outcome = &setup.prepared.outcome;
+        file.write(&simulate_svg(
+            &setup.scenario,
+            &shapes,
+            outcome,
+            &executed,
+            &title,
+        ))?;
+    }
+    Ok(())
+}
+
+/// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
+fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
     let mut p = Perturbation::default();
     for kv in &a.perturb {
         p.apply(kv).context("--perturb")?;
+    }
+    let mut faults = TrackerFaults::default();
+    for kv in &a.fault {
+        faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
     }
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
     let (mut scenario, shapes) = load_scenario_shapes(&a.file, None)?;
     if let Some(f) = &a.form {
         restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
     }
-    let prepared = prepare(&scenario)?;
-    let form = prepared.outcome.form.to_string();
+    Ok((Setup::new(scenario, p, faults, a.runs, a.seed)?, shapes))
+}
+
+/// The runs of the mode asked for, with a progress bar on a terminal (not with `--json`).
+fn execute(a: &SimulateArgs, setup: &Setup, keep: &Keep) -> Result<Results> {
+    let form = setup.prepared.outcome.form;
     let bar = if a.json {
         indicatif::ProgressBar::hidden()
     } else {
         progress(a.runs, &format!("simulate {form}"))
     };
-    let threads = a.threads.unwrap_or_else(parallel::default_threads).max(1);
+    let threads = a.threads.unwrap_or_else(parallel::default_threads);
+    let open = if !a.closed_loop || a.compare_open_loop {
+        Some(setup.open_loop(keep, threads, || bar.inc(1))?)
+    } else {
+        None
+    };
+    let closed = if a.closed_loop {
+        bar.reset();
+        bar.set_message(format!("closed loop {form}"));
+        Some(match a.link() {
+            Some(link) => on_device(setup, keep, &link, || bar.inc(1))?,
+            None => setup.closed_loop(keep, threads, || bar.inc(1))?,
+        })
+    } else {
+        None
+    };
+    bar.finish_and_clear();
+    Ok(Results { open, closed })
+}
+
+/// The table, or the JSON object, on stdout.
+fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
     let file = title_of(&a.file);
+    let form = setup.prepared.outcome.form.to_string();
     let header = Header {
         file: &file,
         form: &form,
         runs: a.runs,
         seed: a.seed,
     };
-    let open_needed = !a.closed_loop || a.compare_open_loop;
-    let runs = if open_needed {
-        simulate(&scenario, &prepared, &p, a.runs, a.seed, threads, || {
-            bar.inc(1)
-        })?
-    } else {
-        Vec::new()
-    };
-    let closed = if a.closed_loop {
-        bar.reset();
-        bar.set_message(format!("closed loop {form}"));
-        let mut faults = TrackerFaults::default();
-        for kv in &a.fault {
-            faults
-                .apply(kv)
-                .map_err(|e| anyhow::anyhow!("--fault: {e}"))?;
-        }
-        let config = SteerConfig::DEFAULT;
-        let c = if a.tcp.is_some() || a.port.is_some() {
-            let link = LinkArgs {
-                port: a.port.clone(),
-                baud: a.baud,
-                tcp: a.tcp.clone(),
-                timeout: a.timeout,
-                retries: needle_link::ClientConfig::DEFAULT.retries,
-                deadline: 120.0,
-            };
-            simulate_on_device(
-                &scenario,
-                &prepared,
-                &p,
-                &faults,
-                &config,
-                a.runs,
-                a.seed,
-                &link,
-                || bar.inc(1),
-            )?
-        } else {
-            simulate_closed(
-                &scenario,
-                &prepared,
-                &p,
-                &faults,
-                &config,
-                a.runs,
-                a.seed,
-                threads,
-                || bar.inc(1),
-            )?
-        };
-        Some(c)
-    } else {
-        None
-    };
-    bar.finish_and_clear();
-    let open_summary = (!runs.is_empty()).then(|| summarise(&runs));
-    let mut out = std::io::stdout();
-    match &closed {
-        None => {
-            let summary = open_summary.unwrap_or_else(|| summarise(&runs));
+    let p = &setup.perturbation;
+    let text = match (&r.closed, &r.open) {
+        (Some(closed), open) => {
+            let open = open.as_deref().map(summarise);
+            let summary = summarise(closed.iter().map(|c| &c.run));
+            let steering = summarise_steering(closed);
             if a.json {
-                let j = to_json(&p, &runs, &summary, a.detail);
-                writeln!(out, "{}", serde_json::to_string(&j)?)?;
+                let j = closed_json(p, closed, &summary, &steering, open.as_ref(), a.detail);
+                serde_json::to_string(&j)? + "\n"
             } else {
-                write!(out, "{}", to_table(&header, &p, &summary))?;
+                closed_table(&header, p, &summary, &steering, open.as_ref())
             }
         }
-        Some(c) => {
-            let plain: Vec<_> = c.iter().map(|r| r.run.clone()).collect();
-            let summary = summarise(&plain);
-            let steering = summarise_steering(c);
+        (None, Some(runs)) => {
+            let summary = summarise(runs);
             if a.json {
-                let j = closed_json(&p, c, &summary, &steering, open_summary.as_ref(), a.detail);
-                writeln!(out, "{}", serde_json::to_string(&j)?)?;
+                serde_json::to_string(&to_json(p, runs, &summary, a.detail))? + "\n"
             } else {
-                let t = closed_table(&header, &p, &summary, &steering, open_summary.as_ref());
-                write!(out, "{t}")?;
+                to_table(&header, p, &summary)
             }
         }
-    }
-    if let Some(out) = &a.plot {
-        let (shown, kind) = match &closed {
-            Some(c) => (c.iter().map(|r| r.run.clone()).collect(), "closed-loop"),
-            None => (runs.clone(), "open-loop"),
-        };
-        let title = format!(
-            "{file}: {form}, {} simulated {kind} insertions",
-            shown.len()
-        );
-        let svg = simulate_svg(&scenario, &shapes, &prepared.outcome, &shown, &title);
-        write(out, &svg)?;
-    }
+        (None, None) => return Err(anyhow!("no run was made")),
+    };
+    write!(std::io::stdout(), "{text}")?;
     Ok(())
+}
+
+/// "paper.toml: RL, 100 simulated closed-loop insertions", and what else the plot shows.
+fn plot_title(a: &SimulateArgs, setup: &Setup, executed: &Executed<'_>) -> String {
+    let kind = match (executed.closed, executed.open) {
+        (Some(_), Some(_)) => "closed-loop insertions (and the same worlds open loop)",
+        (Some(_), None) => "closed-loop insertions",
+        _ => "open-loop insertions",
+    };
+    format!(
+        "{}: {}, {} simulated {kind}",
+        title_of(&a.file),
+        setup.prepared.outcome.form,
+        a.runs
+    )
 }

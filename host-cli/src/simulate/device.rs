@@ -1,17 +1,16 @@
 //! Closed-loop simulation with the controller on a device (hil-sim or the firmware): the host
 //! runs the simulated robot, tissue and tracker and sends each reading over the link.
 
-use super::{run_seed, Prepared};
+use super::setup::{Keep, Setup};
 use crate::device::commands::LinkArgs;
 use anyhow::{anyhow, bail, Context, Result};
 use needle_link::{Client, LinkError, Transport};
-use needle_sim::{closed_loop, ClosedRun, Controller, Perturbation, Planned, TrackerFaults};
-use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
-use planner_core::Scenario;
+use needle_sim::{ClosedRun, Controller};
+use planner_core::steer::{SteerReply, SteerStats, TipMeasurement};
 use std::time::Duration;
 
-/// A device's controller behind the link (hil-sim or the firmware), answering the simulated
-/// tracker's readings: the simulator knows no transport, so the host adapts the client to it.
+/// A device's controller behind the link, answering the simulated tracker's readings: the
+/// simulator knows no transport, so the host adapts the client to it.
 pub struct LinkController<'a, T: Transport>(pub &'a mut Client<T>);
 
 impl<T: Transport> Controller for LinkController<'_, T> {
@@ -24,49 +23,39 @@ impl<T: Transport> Controller for LinkController<'_, T> {
     }
 }
 
-/// `runs` closed-loop insertions, one after the other, each steered by the device at `link`
-/// (which plans the scenario first: its plan must be the host's, bit for bit).
-#[allow(clippy::too_many_arguments)]
-pub fn simulate_on_device(
-    scenario: &Scenario,
-    prepared: &Prepared,
-    p: &Perturbation,
-    faults: &TrackerFaults,
-    config: &SteerConfig,
-    runs: usize,
-    seed: u64,
+/// Every run of `setup`, one after the other, each steered by the device at `link` (which plans
+/// the scenario first: its plan must be the host's, bit for bit).
+pub fn on_device(
+    setup: &Setup,
+    keep: &Keep,
     link: &LinkArgs,
     done: impl Fn(),
 ) -> Result<Vec<ClosedRun>> {
-    p.validate()?;
     let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
     let planned_there = client
-        .plan(scenario, &mut |_| {})
+        .plan(&setup.scenario, &mut |_| {})
         .context("planning on the device")?
         .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
+    let schedule = &setup.prepared.schedule;
     match &planned_there.schedule {
-        Ok(s) if *s == prepared.schedule => {}
+        Ok(s) if s == schedule => {}
         _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
     }
-    let planned = Planned::of(scenario, &prepared.outcome);
-    let mut out = Vec::with_capacity(runs);
-    for i in 0..runs {
-        let steps = client.steer_start(config).context("starting to steer")?;
-        if steps[..] != prepared.schedule.steps[..] {
-            bail!("the device starts steering with other steps than the plan's");
+    setup.collect(keep, |items| {
+        let mut out = Vec::with_capacity(items.len());
+        for &(i, seed) in items {
+            let steps = client
+                .steer_start(&setup.config)
+                .context("starting to steer")?;
+            if steps[..] != schedule.steps[..] {
+                bail!("the device starts steering with other steps than the plan's");
+            }
+            let run = setup
+                .steer(&mut LinkController(&mut client), seed)
+                .map_err(|e| anyhow!("run {}: {e}", i + 1))?;
+            out.push(keep.trim_closed(i, run));
+            done();
         }
-        let run = closed_loop(
-            scenario,
-            &planned,
-            &prepared.schedule,
-            p,
-            faults,
-            &mut LinkController(&mut client),
-            run_seed(seed, i),
-        )
-        .map_err(|e| anyhow!("run {}: {e}", i + 1))?;
-        out.push(run);
-        done();
-    }
-    Ok(out)
+        Ok(out)
+    })
 }

@@ -1,6 +1,6 @@
 //! The typed JSON of `needle simulate --json`.
 
-use super::closed::SteeringSummary;
+use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
 use needle_sim::{ClosedRun, Perturbation, Run};

@@ -1,6 +1,6 @@
 //! The table `needle simulate` prints.
 
-use super::closed::SteeringSummary;
+use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use needle_sim::{Perturbation, KEYS};
 use std::fmt::Write;
