@@ -177,4 +177,26 @@ mod tests {
             .unwrap();
         assert!(e.to_string().contains("tracker_heading_deg"), "{e}");
     }
+
+    /// Runs stopped before the target keep their paths for the plot, the first so many of them
+    /// wherever they are; the others keep their figures only.
+    #[test]
+    fn stopped_runs_keep_the_first_paths_only() {
+        use needle_sim::{Perturbation, TrackerFaults};
+        let mut faults = TrackerFaults::default();
+        faults.apply("dropout_rate=1").unwrap();
+        faults.apply("dropout_mm=50").unwrap();
+        let setup =
+            setup::Setup::new(Scenario::paper(), Perturbation::default(), faults, 5, 3).unwrap();
+        let keep = setup::Keep {
+            paths: 1,
+            stopped_paths: 2,
+            ..setup::Keep::default()
+        };
+        let runs = setup.closed_loop(&keep, 2, || {}).unwrap();
+        assert!(runs.iter().all(|r| r.stop_reason.is_some()));
+        let kept: Vec<bool> = runs.iter().map(|r| !r.run.points.is_empty()).collect();
+        assert_eq!(kept, [true, true, false, false, false]);
+        assert!(runs.iter().all(|r| r.replan_evaluations.is_empty()));
+    }
 }
