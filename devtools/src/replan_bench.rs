@@ -4,9 +4,9 @@
 
 use crate::qemu::Qemu;
 use anyhow::{anyhow, bail, Context, Result};
-use hil_sim::insertion::{closed_loop, Perturbation, Planned, TrackerFaults};
-use needle_link::{Client, Transport};
-use planner_core::steer::SteerConfig;
+use needle_link::{Client, LinkError, Transport};
+use needle_sim::{closed_loop, Controller, Perturbation, Planned, TrackerFaults};
+use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
 use planner_core::Scenario;
 
 /// Instructions per reading over one closed-loop insertion.
@@ -20,6 +20,19 @@ pub struct ReplanFigures {
     pub max: u64,
     /// Median instructions of a reading.
     pub median: u64,
+}
+
+/// The firmware's controller behind the link, answering the simulated tracker's readings.
+struct Firmware<'a, T: Transport>(&'a mut Client<T>);
+
+impl<T: Transport> Controller for Firmware<'_, T> {
+    type Error = LinkError;
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, LinkError> {
+        self.0.steer(m)
+    }
+    fn stats(&mut self) -> Result<SteerStats, LinkError> {
+        self.0.steer_status().map(|(stats, _)| stats)
+    }
 }
 
 /// Steers one insertion of `scenario` on `device` and returns the per-reading figures.
@@ -53,7 +66,7 @@ pub fn measure<T: Transport>(
         &schedule,
         &Perturbation::default(),
         &TrackerFaults::default(),
-        device,
+        &mut Firmware(device),
         1,
     )
     .map_err(|e| anyhow!("{e}"))?;

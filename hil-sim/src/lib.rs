@@ -4,16 +4,13 @@
 //! Use [`InProcess`] in tests (no threads, no clock), or [`serve`] on any byte stream (the
 //! `hil-sim` binary serves a pseudo-terminal or a TCP socket).
 //!
-//! It is also the simulated robot, tissue and tracker: [`insertion`] executes a motor schedule on
-//! a perturbed needle (the world `needle simulate` and the closed-loop tests run in), drawing from
-//! the one seeded generator, [`random`].
+//! It is only the device: the simulated robot, tissue and tracker of an insertion are the
+//! `needle-sim` crate.
 
 #![forbid(unsafe_code)]
 
 pub mod in_process;
-pub mod insertion;
 pub mod line;
-pub mod random;
 pub mod serve;
 
 pub use in_process::{AuditReport, InProcess};

@@ -49,8 +49,8 @@ impl FaultyLine {
     pub fn new(config: LineConfig) -> Self {
         FaultyLine {
             config,
-            // The workspace's one seeded generator (as `needle_cli::random`): neighbouring seeds
-            // give unrelated fault patterns.
+            // SplitMix64, the generator of `needle_sim::random` (seeded directly): neighbouring
+            // seeds give unrelated fault patterns.
             faults: SplitMix64::seed_from_u64(config.seed),
             stats: LineStats::default(),
             burst_left: 0,

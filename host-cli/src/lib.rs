@@ -1,4 +1,5 @@
-//! Host-side library behind the `needle` command: scenario files, plan rendering, commands.
+//! Host-side library behind the `needle` command: scenario files, plan rendering, commands,
+//! simulated insertions.
 
 pub mod analysis;
 pub mod bench;
@@ -6,3 +7,4 @@ pub mod device;
 pub mod random;
 pub mod report;
 pub mod scenario;
+pub mod simulate;

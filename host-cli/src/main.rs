@@ -63,8 +63,8 @@ enum Command {
     Approx(analysis::ApproxArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
-    /// Execute the plan's schedule in simulated perturbed insertions (open loop).
-    Simulate(analysis::SimulateArgs),
+    /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
+    Simulate(needle_cli::simulate::SimulateArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(SendArgs),
     /// Check that a device answers, and how fast.
@@ -222,7 +222,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => analysis::run_compare(a),
         Command::Approx(a) => analysis::run_approx(a),
         Command::Plot(a) => analysis::run_plot(a),
-        Command::Simulate(a) => analysis::run_simulate(a),
+        Command::Simulate(a) => needle_cli::simulate::run_simulate(a),
         Command::Send(a) => send(a),
         Command::Ping { link, count } => device::commands::ping(link, *count),
         Command::Info { link, json } => device::commands::info(link, *json),

@@ -1,4 +1,4 @@
-//! The one seeded generator, defined in `hil-sim` (the simulated tissue and tracker draw from it
-//! too) and re-exported here for the analysis and the tests.
+//! The one seeded generator, defined in `needle-sim` (the simulated tissue and tracker draw from
+//! it too) and re-exported here for the analysis and the tests.
 
-pub use hil_sim::random::*;
+pub use needle_sim::random::*;

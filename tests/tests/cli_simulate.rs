@@ -1,8 +1,8 @@
 //! `needle simulate` end to end: the JSON contract, repeatability over thread counts, the plot,
 //! the table, and bad input.
 
-use hil_sim::insertion::KEYS;
 use needle_e2e::{example, needle, needle_json};
+use needle_sim::KEYS;
 use serde_json::Value;
 
 fn paper() -> String {
@@ -163,7 +163,11 @@ fn bad_input_is_a_clear_error() {
         ),
         (
             vec!["--perturb", "measure_every_mm=0"],
-            "measure_every_mm = 0 is outside (0, 1]",
+            "measure_every_mm = 0 is outside [0.05, 1]",
+        ),
+        (
+            vec!["--perturb", "measure_every_mm=0.00001"],
+            "measure_every_mm = 0.00001 is outside [0.05, 1]",
         ),
         (
             vec!["--perturb", "entry_position_mm=nan"],
@@ -275,4 +279,170 @@ fn a_tracker_dropout_longer_than_the_gap_stops_with_tracking_lost() {
         err.contains("outlier_rate = 2 is out of range (0 to 1)"),
         "{err}"
     );
+}
+
+/// A closed-loop run's steps are broken off at every replan: `--detail` reports what the driver
+/// did of each (its length, and the time and turns that took), so an `insert` lasts its length at
+/// the driver's speed and the steps add up to about the insertion's time, not many times it.
+#[test]
+fn detail_reports_the_executed_part_of_a_step_broken_off() {
+    let v = needle_json(&[
+        "simulate",
+        &paper(),
+        "--runs",
+        "3",
+        "--closed-loop",
+        "--json",
+        "--detail",
+    ]);
+    // examples/paper.toml's driver: insertion at 2.5 mm/s, spin at 4 rev/s.
+    let (insert_speed, spin_rate) = (2.5, 4.0);
+    let f = |x: &Value| x.as_f64().unwrap();
+    for r in v["runs_detail"].as_array().unwrap() {
+        let steps = r["steps"].as_array().unwrap();
+        let mut pushed = 0.0;
+        for s in steps {
+            match s["op"].as_str().unwrap() {
+                "insert" => {
+                    let expected = f(&s["length_mm"]) / insert_speed;
+                    assert!((f(&s["duration_s"]) - expected).abs() < 1e-3, "{s}");
+                    pushed += f(&s["length_mm"]);
+                }
+                "insert_spin" => {
+                    let (length, turns) = (f(&s["length_mm"]), f(&s["turns"]));
+                    let least = (length / insert_speed).max(turns / spin_rate);
+                    assert!(f(&s["duration_s"]) >= least - 1e-3, "{s}");
+                    assert!(f(&s["duration_s"]) <= least + 2.0 / spin_rate + 1e-3, "{s}");
+                    pushed += length;
+                }
+                _ => {}
+            }
+        }
+        let pushing: f64 = steps
+            .iter()
+            .filter(|s| s["op"] != "rotate")
+            .map(|s| f(&s["duration_s"]))
+            .sum();
+        assert!(pushed > 80.0 && pushed < 110.0, "{pushed} mm");
+        assert!(
+            pushing < 2.0 * pushed / insert_speed,
+            "{pushing} s for {pushed} mm"
+        );
+    }
+}
+
+fn svg_of(args: &[&str], dir: &std::path::Path, name: &str) -> String {
+    let svg = dir.join(name);
+    let out = needle()
+        .args(["simulate", &paper()])
+        .args(args)
+        .arg("--plot")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read_to_string(&svg).unwrap()
+}
+
+/// The plot says what it shows: closed loop is not called open loop, runs stopped before the
+/// target are drawn apart (dashed, their own legend entry), and `--compare-open-loop` draws the
+/// open-loop paths too, in their own colour and legend entry.
+#[test]
+fn the_plot_tells_open_closed_and_stopped_runs_apart() {
+    let dir = std::env::temp_dir().join(format!("needle-sim-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let closed = svg_of(&["--runs", "3", "--closed-loop"], &dir, "closed.svg");
+    assert!(
+        !closed.contains("open loop"),
+        "closed loop called open loop"
+    );
+    assert!(closed.contains("closed loop, reached the target: 3 of 3 runs"));
+    assert_eq!(closed.matches(r#"class="executed""#).count(), 1);
+    let compare = ["--runs", "3", "--closed-loop", "--compare-open-loop"];
+    let both = svg_of(&compare, &dir, "compare.svg");
+    assert_eq!(both.matches(r#"class="executed open-loop""#).count(), 1);
+    assert!(both.contains("open loop, same worlds: 3 of 3 runs"));
+    assert_eq!(both.matches(r#"class="executed""#).count(), 1);
+    let faults = [
+        "--runs",
+        "2",
+        "--closed-loop",
+        "--fault",
+        "dropout_rate=1",
+        "--fault",
+        "dropout_mm=50",
+    ];
+    let stopped = svg_of(&faults, &dir, "stopped.svg");
+    assert_eq!(stopped.matches(r#"class="executed stopped""#).count(), 1);
+    assert!(stopped.contains("stopped before the target: 2 of 2 runs"));
+    assert!(stopped.contains("stroke-dasharray:4 2"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An output path that cannot be written fails before the simulation, not after it; a plot file
+/// the command created is not left behind empty when the simulation fails.
+#[test]
+fn the_plot_file_is_opened_before_simulating() {
+    // Nothing listens on port 1: steering there fails at once, but only once the runs start.
+    let device = ["--closed-loop", "--tcp", "127.0.0.1:1"];
+    let out = needle()
+        .args(["simulate", &paper()])
+        .args(device)
+        .args(["--plot", "/nonexistent-folder/sim.svg"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot write /nonexistent-folder/sim.svg"),
+        "{err}"
+    );
+    let svg = std::env::temp_dir().join(format!("needle-sim-unmade-{}.svg", std::process::id()));
+    let out = needle()
+        .args(["simulate", &paper()])
+        .args(device)
+        .arg("--plot")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot connect"));
+    assert!(!svg.exists(), "an empty plot was left behind");
+}
+
+/// Flags that would be silently ignored are usage errors (exit status 2, as clap's).
+#[test]
+fn flags_that_would_do_nothing_are_refused() {
+    for (args, says) in [
+        (vec!["--detail"], "--json"),
+        (vec!["--threads", "0"], "must be at least 1"),
+    ] {
+        let out = needle()
+            .args(["simulate", &paper()])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+}
+
+/// The help says what `simulate` does now: open loop or closed loop.
+#[test]
+fn help_names_both_loops() {
+    for args in [vec!["--help"], vec!["simulate", "--help"]] {
+        let out = needle().args(&args).output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text
+            .lines()
+            .find(|l| l.contains("simulated perturbed insertions"))
+            .unwrap_or_else(|| panic!("{args:?}: {text}"));
+        assert!(!line.contains("(open loop)"), "{line}");
+        assert!(line.contains("closed loop"), "{line}");
+    }
 }

@@ -6,10 +6,11 @@ use needle_e2e::workspace;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const CRATES: [&str; 6] = [
+const CRATES: [&str; 7] = [
     "planner-core/src",
     "host-cli/src",
     "hil-sim/src",
+    "sim/src",
     "firmware/src",
     "link/src",
     "devtools/src",

@@ -38,8 +38,49 @@ pub struct Scene<'a> {
     pub notes: Vec<String>,
     /// RRT tree edges as point lists, drawn thin and grey.
     pub tree: Vec<Vec<[f32; 3]>>,
-    /// Simulated executed paths, drawn thin and translucent: together a tube around the plan.
-    pub executed: Vec<Vec<[f32; 3]>>,
+    /// Simulated executed paths, kind by kind, drawn thin and translucent: together tubes
+    /// around the plan.
+    pub executed: Vec<Strands>,
+}
+
+/// Executed paths of one kind (say the runs that reached the target), with a legend entry.
+#[derive(Clone, Debug)]
+pub struct Strands {
+    /// Legend text.
+    pub label: String,
+    /// Class of the element (`executed` and more, e.g. `executed stopped`).
+    pub class: String,
+    /// Stroke colour.
+    pub colour: String,
+    /// Drawn dashed and stronger: few paths that must stand out of the tube.
+    pub dashed: bool,
+    /// The paths.
+    pub lines: Vec<Vec<[f32; 3]>>,
+}
+
+impl Strands {
+    fn style(&self) -> String {
+        if self.dashed {
+            format!(
+                "stroke:{};stroke-opacity:0.7;stroke-width:1.2;stroke-dasharray:4 2",
+                self.colour
+            )
+        } else {
+            format!(
+                "stroke:{};stroke-opacity:0.15;stroke-width:0.8",
+                self.colour
+            )
+        }
+    }
+
+    fn swatch_style(&self) -> String {
+        let dash = if self.dashed {
+            ";stroke-dasharray:4 2"
+        } else {
+            ""
+        };
+        format!("stroke:{};stroke-width:2{dash}", self.colour)
+    }
 }
 
 struct View {
@@ -103,7 +144,8 @@ fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], 
     for p in s.paths.iter().flat_map(|p| &p.points) {
         grow(*p, 0.0);
     }
-    for p in s.tree.iter().chain(&s.executed).flatten() {
+    let executed = s.executed.iter().flat_map(|e| &e.lines);
+    for p in s.tree.iter().chain(executed).flatten() {
         grow(*p, 0.0);
     }
     for (lo_k, hi_k) in lo.iter_mut().zip(hi.iter_mut()) {
@@ -162,15 +204,16 @@ fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
     svg.end_group();
 }
 
-/// The scenario picture as an SVG document.
-pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
-    let planes: Vec<(usize, usize)> = match scenario.options.workspace {
-        Workspace::PlaneYz => vec![(2, 1)],
-        Workspace::Space => vec![(2, 1), (2, 0)],
+/// The views of the scene (one for a plane scenario, two projections in 3-D) with the upper
+/// ends of their axes, and the height they take.
+fn layout(scenario: &Scenario, scene: &Scene<'_>) -> (Vec<(View, [f64; 2])>, f64) {
+    let planes: &[(usize, usize)] = match scenario.options.workspace {
+        Workspace::PlaneYz => &[(2, 1)],
+        Workspace::Space => &[(2, 1), (2, 0)],
     };
     let mut views = Vec::new();
     let mut top = PAD;
-    for &(h, v) in &planes {
+    for &(h, v) in planes {
         let (lo, hi) = extent(scene, scenario, h, v);
         let scale = (VIEW_W / (hi[0] - lo[0])).min(520.0 / (hi[1] - lo[1]));
         let size = [(hi[0] - lo[0]) * scale, (hi[1] - lo[1]) * scale];
@@ -187,17 +230,24 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
         ));
         top += size[1] + PAD + 10.0;
     }
+    (views, top)
+}
+
+/// The scenario picture as an SVG document.
+pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
+    let (views, top) = layout(scenario, scene);
     let mut notes = scene.notes.clone();
-    if planes.len() > 1 {
+    if views.len() > 1 {
         notes.extend(PROJECTION_NOTE.iter().map(|n| n.to_string()));
     }
-    let legend_lines = scene.paths.len() + notes.len() + 3;
+    let legend_lines = scene.paths.len() + scene.executed.len() + notes.len() + 3;
     let height = top.max(PAD + 30.0 + 18.0 * legend_lines as f64);
     // Wide enough for the longest legend line (about 6.5 px a character at 11 px).
     let longest = scene
         .paths
         .iter()
         .map(|p| p.label.chars().count() + 5)
+        .chain(scene.executed.iter().map(|e| e.label.chars().count() + 5))
         .chain(notes.iter().map(|n| n.chars().count()))
         .max()
         .unwrap_or(0);
@@ -207,103 +257,108 @@ pub fn scene_svg(scenario: &Scenario, scene: &Scene<'_>) -> String {
     svg.text([PAD, 24.0], &scene.title, 14.0, "start", "title");
     for (k, (view, hi)) in views.iter().enumerate() {
         axes(&mut svg, view, *hi);
-        // Paths and trees stay inside the frame.
-        svg.raw(&format!(
-            r#"<clipPath id="view{k}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath><g clip-path="url(#view{k})">"#,
-            view.origin[0], view.origin[1], view.size[0], view.size[1]
-        ));
-        let scale = view.scale;
-        view.lines(
-            &mut svg,
-            &scene.tree,
-            "rrt-tree",
-            "stroke:#bbb;stroke-width:0.6",
-        );
-        svg.group("obstacles");
-        let mut approximated = vec![false; scenario.obstacles.len()];
-        let mut k = 0;
-        for shape in scene.shapes {
-            for _ in &shape.circles {
-                if let Some(a) = approximated.get_mut(k) {
-                    *a = shape.polygon.is_some();
-                }
-                k += 1;
-            }
-        }
-        for (i, o) in scenario.obstacles.iter().enumerate() {
-            let style = if approximated[i] {
-                "fill:#d9d9d9;fill-opacity:0.5;stroke:#666;stroke-dasharray:4 3"
-            } else {
-                "fill:#c8c8c8;stroke:#333"
-            };
-            svg.raw(&format!(
-                r#"<circle class="obstacle" data-index="{i}" cx="{:.2}" cy="{:.2}" r="{:.2}" style="{style}"/>"#,
-                view.px(o.center)[0],
-                view.px(o.center)[1],
-                f64::from(o.radius) * scale
-            ));
-        }
-        let x = scenario.entry.position[0];
-        for shape in scene.shapes {
-            if let Some((poly, _)) = &shape.polygon {
-                let pts: Vec<[f64; 2]> = poly
-                    .vertices()
-                    .iter()
-                    .map(|p| view.px([x, p[0] as f32, p[1] as f32]))
-                    .collect();
-                svg.polygon(&pts, "polygon", "fill:#8c8c8c;fill-opacity:0.8;stroke:#222");
-            }
-        }
-        svg.end_group();
-        // Executed paths above the obstacles, so a run that enters one shows.
-        view.lines(
-            &mut svg,
-            &scene.executed,
-            "executed",
-            "stroke:#d62728;stroke-opacity:0.15;stroke-width:0.8",
-        );
-        // The best path last, on top of the others.
-        let order = scene
-            .paths
-            .iter()
-            .filter(|p| !p.best)
-            .chain(scene.paths.iter().filter(|p| p.best));
-        for p in order {
-            let pts: Vec<[f64; 2]> = p.points.iter().map(|q| view.px(*q)).collect();
-            let (class, width) = if p.best {
-                ("path best", 3.5)
-            } else {
-                ("path", 1.6)
-            };
-            svg.polyline(
-                &pts,
-                class,
-                &format!("stroke:{};stroke-width:{width}", p.colour),
-                &format!(r#"data-form="{}""#, esc(&p.form)),
-            );
-        }
-        let entry = view.px(scenario.entry.position);
-        svg.polygon(
-            &[
-                [entry[0] - 6.0, entry[1] - 6.0],
-                [entry[0] + 6.0, entry[1] - 6.0],
-                [entry[0], entry[1] + 6.0],
-            ],
-            "entry",
-            "fill:#000",
-        );
-        let target = view.px(scenario.target.position);
-        svg.circle(
-            target,
-            5.0,
-            "target",
-            "fill:none;stroke:#000;stroke-width:2",
-        );
-        svg.circle(target, 1.5, "target", "fill:#000");
-        svg.raw("</g>");
+        draw_view(&mut svg, k, view, scenario, scene);
     }
     legend(&mut svg, scene, &notes, PAD + 20.0 + VIEW_W + 30.0);
     svg.finish()
+}
+
+/// What view `k` shows inside its frame, bottom to top: the RRT tree, the obstacles, the
+/// executed paths, the planned paths, the entry and the target.
+fn draw_view(svg: &mut Svg, k: usize, view: &View, scenario: &Scenario, scene: &Scene<'_>) {
+    // Paths and trees stay inside the frame.
+    svg.raw(&format!(
+        r#"<clipPath id="view{k}"><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}"/></clipPath><g clip-path="url(#view{k})">"#,
+        view.origin[0], view.origin[1], view.size[0], view.size[1]
+    ));
+    view.lines(svg, &scene.tree, "rrt-tree", "stroke:#bbb;stroke-width:0.6");
+    obstacles(svg, view, scenario, scene.shapes);
+    // Executed paths above the obstacles, so a run that enters one shows.
+    for e in &scene.executed {
+        view.lines(svg, &e.lines, &e.class, &e.style());
+    }
+    plan_paths(svg, view, &scene.paths);
+    let entry = view.px(scenario.entry.position);
+    svg.polygon(
+        &[
+            [entry[0] - 6.0, entry[1] - 6.0],
+            [entry[0] + 6.0, entry[1] - 6.0],
+            [entry[0], entry[1] + 6.0],
+        ],
+        "entry",
+        "fill:#000",
+    );
+    let target = view.px(scenario.target.position);
+    svg.circle(
+        target,
+        5.0,
+        "target",
+        "fill:none;stroke:#000;stroke-width:2",
+    );
+    svg.circle(target, 1.5, "target", "fill:#000");
+    svg.raw("</g>");
+}
+
+/// The obstacles' circles (dashed where they cover a polygon) and the polygons themselves.
+fn obstacles(svg: &mut Svg, view: &View, scenario: &Scenario, shapes: &[ObstacleShape]) {
+    svg.group("obstacles");
+    let mut approximated = vec![false; scenario.obstacles.len()];
+    let mut k = 0;
+    for shape in shapes {
+        for _ in &shape.circles {
+            if let Some(a) = approximated.get_mut(k) {
+                *a = shape.polygon.is_some();
+            }
+            k += 1;
+        }
+    }
+    for (i, o) in scenario.obstacles.iter().enumerate() {
+        let style = if approximated[i] {
+            "fill:#d9d9d9;fill-opacity:0.5;stroke:#666;stroke-dasharray:4 3"
+        } else {
+            "fill:#c8c8c8;stroke:#333"
+        };
+        svg.raw(&format!(
+            r#"<circle class="obstacle" data-index="{i}" cx="{:.2}" cy="{:.2}" r="{:.2}" style="{style}"/>"#,
+            view.px(o.center)[0],
+            view.px(o.center)[1],
+            f64::from(o.radius) * view.scale
+        ));
+    }
+    let x = scenario.entry.position[0];
+    for shape in shapes {
+        if let Some((poly, _)) = &shape.polygon {
+            let pts: Vec<[f64; 2]> = poly
+                .vertices()
+                .iter()
+                .map(|p| view.px([x, p[0] as f32, p[1] as f32]))
+                .collect();
+            svg.polygon(&pts, "polygon", "fill:#8c8c8c;fill-opacity:0.8;stroke:#222");
+        }
+    }
+    svg.end_group();
+}
+
+/// The planned paths, the best last: on top of the others.
+fn plan_paths(svg: &mut Svg, view: &View, paths: &[PlotPath]) {
+    let order = paths
+        .iter()
+        .filter(|p| !p.best)
+        .chain(paths.iter().filter(|p| p.best));
+    for p in order {
+        let pts: Vec<[f64; 2]> = p.points.iter().map(|q| view.px(*q)).collect();
+        let (class, width) = if p.best {
+            ("path best", 3.5)
+        } else {
+            ("path", 1.6)
+        };
+        svg.polyline(
+            &pts,
+            class,
+            &format!("stroke:{};stroke-width:{width}", p.colour),
+            &format!(r#"data-form="{}""#, esc(&p.form)),
+        );
+    }
 }
 
 fn legend(svg: &mut Svg, scene: &Scene<'_>, notes: &[String], x: f64) {
@@ -318,6 +373,16 @@ fn legend(svg: &mut Svg, scene: &Scene<'_>, notes: &[String], x: f64) {
             &format!("stroke:{};stroke-width:{width}", p.colour),
         );
         svg.text([x + 30.0, y], &p.label, 11.0, "start", "legend-entry");
+        y += 18.0;
+    }
+    for e in &scene.executed {
+        svg.line(
+            [x, y - 4.0],
+            [x + 24.0, y - 4.0],
+            "legend-swatch",
+            &e.swatch_style(),
+        );
+        svg.text([x + 30.0, y], &e.label, 11.0, "start", "legend-entry");
         y += 18.0;
     }
     for n in notes {

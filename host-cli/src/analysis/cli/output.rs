@@ -1,13 +1,14 @@
 //! Where the analysis commands' output goes: progress bars on a terminal, files announced on
-//! stderr, plot titles named after the scenario file.
+//! stderr (opened before the work where it is long), plot titles named after the scenario file.
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::IsTerminal;
-use std::path::Path;
+use std::fs::{File, OpenOptions};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 
 /// A progress bar on a terminal, nothing otherwise.
-pub(super) fn progress(len: usize, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: usize, what: &str) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
@@ -22,15 +23,61 @@ pub(super) fn progress(len: usize, what: &str) -> ProgressBar {
 }
 
 /// Writes `text` to `path` and says so on stderr.
-pub(super) fn write(path: &Path, text: &str) -> Result<()> {
+pub(crate) fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
 
 /// The scenario file's name, for plot titles.
-pub(super) fn title_of(file: &Path) -> String {
+pub(crate) fn title_of(file: &Path) -> String {
     file.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default()
+}
+
+/// An output file opened before the work that fills it, so that a path that cannot be written
+/// fails at once rather than after a long run. It is emptied only when written; a file it
+/// created is removed again if the work fails before that.
+pub(crate) struct OutputFile {
+    path: PathBuf,
+    file: File,
+    created: bool,
+}
+
+impl OutputFile {
+    /// Opens (or creates) `path` for writing, leaving what it holds until [`OutputFile::write`].
+    pub(crate) fn open(path: &Path) -> Result<OutputFile> {
+        let created = !path.exists();
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(OutputFile {
+            path: path.to_path_buf(),
+            file,
+            created,
+        })
+    }
+
+    /// Replaces the file's content with `text` and says so on stderr.
+    pub(crate) fn write(mut self, text: &str) -> Result<()> {
+        let context = || format!("cannot write {}", self.path.display());
+        self.file.set_len(0).with_context(context)?;
+        self.file.write_all(text.as_bytes()).with_context(context)?;
+        self.created = false;
+        eprintln!("wrote {}", self.path.display());
+        Ok(())
+    }
+}
+
+impl Drop for OutputFile {
+    fn drop(&mut self) {
+        if self.created {
+            // Nothing was written: leave no empty file behind where there was none.
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
 }

@@ -1,54 +1,9 @@
-//! Closed-loop simulation: every run steered by the controller of `planner-core` (in-process
-//! here; on a device with `--tcp`/`--port`), in the same worlds the open-loop runs see.
+//! The closed loop's own figures over the runs: replans, stops by reason, the tracker's faults
+//! as the controller saw them.
 
-use super::{run_seed, Prepared};
-use crate::analysis::parallel;
-use anyhow::{anyhow, Result};
-use hil_sim::insertion::{
-    closed_loop, in_process, ClosedRun, Perturbation, Planned, TrackerFaults,
-};
-use planner_core::steer::{SteerConfig, StopReason};
-use planner_core::Scenario;
+use needle_sim::ClosedRun;
+use planner_core::steer::StopReason;
 use std::collections::BTreeMap;
-
-/// `runs` closed-loop insertions with the in-process controller on `threads` threads; the
-/// result is the same on any thread count.
-#[allow(clippy::too_many_arguments)]
-pub fn simulate_closed(
-    scenario: &Scenario,
-    prepared: &Prepared,
-    p: &Perturbation,
-    faults: &TrackerFaults,
-    config: &SteerConfig,
-    runs: usize,
-    seed: u64,
-    threads: usize,
-    done: impl Fn() + Sync,
-) -> Result<Vec<ClosedRun>> {
-    p.validate()?;
-    let planned = Planned::of(scenario, &prepared.outcome);
-    let seeds: Vec<u64> = (0..runs).map(|i| run_seed(seed, i)).collect();
-    let results = parallel::map(
-        &seeds,
-        threads,
-        |s| -> Result<ClosedRun> {
-            let mut ctl = in_process(scenario, &prepared.schedule, config)
-                .map_err(|e| anyhow!("steering cannot start: {e}"))?;
-            closed_loop(
-                scenario,
-                &planned,
-                &prepared.schedule,
-                p,
-                faults,
-                &mut ctl,
-                *s,
-            )
-            .map_err(|e| anyhow!("{e}"))
-        },
-        done,
-    );
-    results.into_iter().collect()
-}
 
 /// The closed loop's own figures over the runs (their keys in `--json`'s `summary`).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]

@@ -1,8 +1,8 @@
 //! The table `needle simulate` prints.
 
-use super::closed::SteeringSummary;
+use super::steering::SteeringSummary;
 use super::{Spread, Summary};
-use hil_sim::insertion::{Perturbation, KEYS};
+use needle_sim::{Perturbation, KEYS};
 use std::fmt::Write;
 
 /// What the table's header names.
@@ -15,6 +15,26 @@ pub struct Header<'a> {
     pub runs: usize,
     /// First seed.
     pub seed: u64,
+}
+
+impl Header<'_> {
+    /// "simulated KIND insertions of FORM in FILE: N runs, seeds S..".
+    fn title(&self, out: &mut String, kind: &str) {
+        let _ = writeln!(
+            out,
+            "simulated {kind} insertions of {} in {}: {} runs, seeds {}..",
+            self.form, self.file, self.runs, self.seed
+        );
+    }
+}
+
+/// The column heads after `what`, without the line's end (the open loop's may follow).
+fn heads(out: &mut String, what: &str) {
+    let _ = write!(
+        out,
+        "{what:<28}{:>9}{:>9}{:>9}{:>9}",
+        "mean", "rms", "p95", "max"
+    );
 }
 
 fn row(out: &mut String, what: &str, s: &Spread) {
@@ -33,16 +53,9 @@ fn perturbation_line(out: &mut String, p: &Perturbation) {
 /// The table of a simulation.
 pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "simulated open-loop insertions of {} in {}: {} runs, seeds {}..",
-        h.form, h.file, h.runs, h.seed
-    );
-    let _ = writeln!(
-        out,
-        "{:<28}{:>9}{:>9}{:>9}{:>9}",
-        "(mm)", "mean", "rms", "p95", "max"
-    );
+    h.title(&mut out, "open-loop");
+    heads(&mut out, "(mm)");
+    let _ = writeln!(out);
     row(&mut out, "target error", &s.target_error);
     row(&mut out, "path deviation, run RMS", &s.path_rms);
     row(&mut out, "path deviation, run max", &s.path_max);
@@ -90,16 +103,8 @@ pub fn closed_table(
     open: Option<&Summary>,
 ) -> String {
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "simulated closed-loop insertions of {} in {}: {} runs, seeds {}..",
-        h.form, h.file, h.runs, h.seed
-    );
-    let _ = write!(
-        out,
-        "{:<28}{:>9}{:>9}{:>9}{:>9}",
-        "closed loop (mm)", "mean", "rms", "p95", "max"
-    );
+    h.title(&mut out, "closed-loop");
+    heads(&mut out, "closed loop (mm)");
     if open.is_some() {
         let _ = write!(
             out,

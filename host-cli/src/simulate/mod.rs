@@ -1,16 +1,21 @@
-//! `needle simulate`'s work: a plan's schedule executed open loop in many perturbed worlds (the
-//! insertion simulator of `hil-sim`), in parallel, and the figures over the runs. Simulated
-//! figures, always called so.
+//! `needle simulate`: a plan's schedule executed in many perturbed worlds (the insertion
+//! simulator of `needle-sim`), open loop or steered, in parallel, and the figures over the runs.
+//! Simulated figures, always called so.
 
-pub mod closed;
+mod args;
+mod command;
 pub mod device;
 pub mod json;
 pub mod plot;
+pub mod setup;
+pub mod steering;
 pub mod table;
 
-use crate::analysis::parallel;
+pub use args::SimulateArgs;
+pub use command::run_simulate;
+
 use anyhow::{anyhow, Context, Result};
-use hil_sim::insertion::{open_loop, Perturbation, Planned, Run};
+use needle_sim::Run;
 use planner_core::execute::schedule::{schedule, Schedule};
 use planner_core::{FormOutcome, Scenario};
 
@@ -37,31 +42,6 @@ pub fn prepare(scenario: &Scenario) -> Result<Prepared> {
 /// The seed of run `i` (runs are independent: a run's result depends on its seed alone).
 pub fn run_seed(seed: u64, i: usize) -> u64 {
     seed.wrapping_add(i as u64)
-}
-
-/// `runs` open-loop insertions on `threads` threads; the result is the same on any thread count.
-pub fn simulate(
-    scenario: &Scenario,
-    prepared: &Prepared,
-    p: &Perturbation,
-    runs: usize,
-    seed: u64,
-    threads: usize,
-    done: impl Fn() + Sync,
-) -> Result<Vec<Run>> {
-    p.validate()?;
-    let planned = Planned::of(scenario, &prepared.outcome);
-    let seeds: Vec<u64> = (0..runs).map(|i| run_seed(seed, i)).collect();
-    let results = parallel::map(
-        &seeds,
-        threads,
-        |s| open_loop(scenario, &planned, &prepared.schedule, p, *s),
-        done,
-    );
-    results
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(Into::into)
 }
 
 /// Mean, RMS, 95th percentile (nearest rank) and maximum of some values.
@@ -116,24 +96,29 @@ pub struct Summary {
     pub min_clearance: f32,
 }
 
-/// The summary of `runs`.
-pub fn summarise(runs: &[Run]) -> Summary {
+/// The summary of `runs` (their figures: what is kept of every run).
+pub fn summarise<'a, I>(runs: I) -> Summary
+where
+    I: IntoIterator<Item = &'a Run>,
+    I::IntoIter: Clone,
+{
+    let runs = runs.into_iter();
     Summary {
-        target_error: Spread::of(runs.iter().map(|r| r.target_error)),
-        path_rms: Spread::of(runs.iter().map(|r| r.path_rms)),
-        path_max: Spread::of(runs.iter().map(|r| r.path_max)),
-        path_rms_in_plane: in_plane(runs, |r| r.path_rms_in_plane),
-        path_max_in_plane: in_plane(runs, |r| r.path_max_in_plane),
-        collisions: runs.iter().filter(|r| r.collided).count(),
-        min_clearance: runs
-            .iter()
-            .map(|r| r.min_clearance)
-            .fold(f32::INFINITY, f32::min),
+        target_error: Spread::of(runs.clone().map(|r| r.target_error)),
+        path_rms: Spread::of(runs.clone().map(|r| r.path_rms)),
+        path_max: Spread::of(runs.clone().map(|r| r.path_max)),
+        path_rms_in_plane: in_plane(runs.clone(), |r| r.path_rms_in_plane),
+        path_max_in_plane: in_plane(runs.clone(), |r| r.path_max_in_plane),
+        collisions: runs.clone().filter(|r| r.collided).count(),
+        min_clearance: runs.map(|r| r.min_clearance).fold(f32::INFINITY, f32::min),
     }
 }
 
-fn in_plane(runs: &[Run], f: impl Fn(&Run) -> Option<f32>) -> Option<Spread> {
-    let values: Option<Vec<f32>> = runs.iter().map(f).collect();
+fn in_plane<'a>(
+    runs: impl Iterator<Item = &'a Run>,
+    f: impl Fn(&Run) -> Option<f32>,
+) -> Option<Spread> {
+    let values: Option<Vec<f32>> = runs.map(f).collect();
     values
         .filter(|v| !v.is_empty())
         .map(|v| Spread::of(v.into_iter()))
@@ -156,17 +141,62 @@ mod tests {
     }
 
     #[test]
-    fn runs_repeat_on_any_thread_count() {
-        let scenario = Scenario::paper();
-        let prepared = prepare(&scenario).unwrap();
+    fn runs_repeat_on_any_thread_count_and_keep_only_what_is_asked() {
+        use needle_sim::{Perturbation, TrackerFaults};
         let p = Perturbation::default();
-        let one = simulate(&scenario, &prepared, &p, 6, 11, 1, || {}).unwrap();
-        let three = simulate(&scenario, &prepared, &p, 6, 11, 3, || {}).unwrap();
+        let setup = |runs| {
+            setup::Setup::new(Scenario::paper(), p, TrackerFaults::default(), runs, 11).unwrap()
+        };
+        let detail = setup::Keep {
+            detail: true,
+            ..setup::Keep::default()
+        };
+        let one = setup(6).open_loop(&detail, 1, || {}).unwrap();
+        let three = setup(6).open_loop(&detail, 3, || {}).unwrap();
         assert_eq!(one, three);
         assert_eq!(one[4].seed, 15);
+        assert!(one
+            .iter()
+            .all(|r| !r.points.is_empty() && !r.steps.is_empty()));
+        // Without --detail, the figures alone (the same), and the paths of the first runs only.
+        let drawn = setup::Keep {
+            paths: 2,
+            ..setup::Keep::default()
+        };
+        let lean = setup(6).open_loop(&drawn, 3, || {}).unwrap();
+        assert_eq!(summarise(&lean), summarise(&one));
+        let kept: Vec<bool> = lean.iter().map(|r| !r.points.is_empty()).collect();
+        assert_eq!(kept, [true, true, false, false, false, false]);
+        assert!(lean
+            .iter()
+            .all(|r| r.steps.is_empty() && r.drawn.steps.is_empty()));
         let mut bad = p;
         bad.tracker_heading_deg = -1.0;
-        let e = simulate(&scenario, &prepared, &bad, 2, 0, 1, || {}).unwrap_err();
+        let e = setup::Setup::new(Scenario::paper(), bad, TrackerFaults::default(), 2, 0)
+            .err()
+            .unwrap();
         assert!(e.to_string().contains("tracker_heading_deg"), "{e}");
+    }
+
+    /// Runs stopped before the target keep their paths for the plot, the first so many of them
+    /// wherever they are; the others keep their figures only.
+    #[test]
+    fn stopped_runs_keep_the_first_paths_only() {
+        use needle_sim::{Perturbation, TrackerFaults};
+        let mut faults = TrackerFaults::default();
+        faults.apply("dropout_rate=1").unwrap();
+        faults.apply("dropout_mm=50").unwrap();
+        let setup =
+            setup::Setup::new(Scenario::paper(), Perturbation::default(), faults, 5, 3).unwrap();
+        let keep = setup::Keep {
+            paths: 1,
+            stopped_paths: 2,
+            ..setup::Keep::default()
+        };
+        let runs = setup.closed_loop(&keep, 2, || {}).unwrap();
+        assert!(runs.iter().all(|r| r.stop_reason.is_some()));
+        let kept: Vec<bool> = runs.iter().map(|r| !r.run.points.is_empty()).collect();
+        assert_eq!(kept, [true, true, false, false, false]);
+        assert!(runs.iter().all(|r| r.replan_evaluations.is_empty()));
     }
 }

@@ -1,7 +1,7 @@
 //! The insertion simulator: no perturbation reproduces the plan; each perturbation alone moves
 //! the tip the way its physics says; a seed repeats bit for bit; bad input is a typed error.
 
-use hil_sim::insertion::{open_loop, PerturbError, Perturbation, Planned, Run, World};
+use needle_sim::{open_loop, PerturbError, Perturbation, Planned, Run, World};
 use planner_core::execute::nominal;
 use planner_core::execute::schedule::{schedule, Op, Schedule};
 use planner_core::model::scenario::Workspace;
@@ -262,6 +262,46 @@ fn a_controller_can_break_a_step_off() {
     assert!(
         matches!(world.executed()[0].op, Op::Insert { length_mm } if length_mm == done.inserted_mm)
     );
+}
+
+/// A step broken off is recorded as what the driver did of it: its share of the push, of the
+/// time and of a spin's turns, not the whole step's; a step done whole is recorded as planned.
+#[test]
+fn a_step_broken_off_records_the_time_and_turns_it_took() {
+    let scenario = Scenario::paper();
+    let (_, s) = form(&scenario, "LRR");
+    let spin = s.steps[0];
+    let Op::InsertSpin { length_mm, turns } = spin.op else {
+        panic!("LRR starts with a spun line: {:?}", spin.op);
+    };
+    let mut world = World::new(&scenario, &s.posture, &Perturbation::default(), 2).unwrap();
+    let done = world.execute(&spin, |m| {
+        if m.depth_mm >= length_mm / 4.0 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    assert!(done.interrupted);
+    let share = done.inserted_mm / length_mm;
+    assert!((0.2..0.35).contains(&share), "{share}");
+    let part = world.executed()[0];
+    assert!(
+        (part.duration_s - spin.duration_s * share).abs() < 1e-4,
+        "{part:?}"
+    );
+    assert!(part.duration_s < 0.4 * spin.duration_s);
+    let Op::InsertSpin { turns: turned, .. } = part.op else {
+        panic!("{:?}", part.op);
+    };
+    assert_eq!(turned, (turns as f32 * share) as u32);
+    assert!(turned < turns / 2, "{turned} of {turns}");
+    // The arc after the rotation, done whole, is recorded exactly as planned.
+    for step in &s.steps[1..3] {
+        world.execute(step, |_| ControlFlow::Continue(()));
+    }
+    assert!(matches!(s.steps[2].op, Op::Insert { .. }));
+    assert_eq!(world.executed()[2], s.steps[2]);
 }
 
 #[test]

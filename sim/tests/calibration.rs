@@ -7,7 +7,7 @@
 //! change to the model that moves any of them must update the docs. A few hundred runs (the
 //! 1000-run figures are in the docs).
 
-use hil_sim::insertion::{open_loop, Perturbation, Planned};
+use needle_sim::{open_loop, Perturbation, Planned};
 use planner_core::execute::schedule::schedule;
 use planner_core::{plan, Form, Scenario};
 

@@ -4,10 +4,10 @@
 //! outliers, repeated and stale sequence numbers) are drawn from their own stream, so turning
 //! them on does not change the tissue or the tracker's noise.
 
-use super::run::{finish, Planned, Run};
-use super::world::{Measurement, World};
-use super::PerturbError;
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::run::{finish, Planned, Run};
+use crate::world::{Measurement, World};
+use crate::PerturbError;
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::steer::{
     Command, Pose, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
@@ -20,7 +20,8 @@ use std::ops::ControlFlow;
 /// Offsets the fault stream from the physics stream of the same seed.
 const FAULT_STREAM: u64 = 0x4641_554C_5453_2121;
 
-/// What the controller on the other side of the readings is.
+/// What the controller on the other side of the readings is: the in-process [`Steering`] here; a
+/// device behind the link is adapted to it by its user (this crate knows no transport).
 pub trait Controller {
     /// Why a reading could not be answered (a link error, for a device).
     type Error;
@@ -37,17 +38,6 @@ impl Controller for Steering {
     }
     fn stats(&mut self) -> Result<SteerStats, Self::Error> {
         Ok(Steering::stats(self))
-    }
-}
-
-/// A device's controller behind the link (hil-sim or the firmware).
-impl<T: needle_link::Transport> Controller for needle_link::Client<T> {
-    type Error = needle_link::LinkError;
-    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, Self::Error> {
-        self.steer(m)
-    }
-    fn stats(&mut self) -> Result<SteerStats, Self::Error> {
-        self.steer_status().map(|(stats, _)| stats)
     }
 }
 
@@ -222,7 +212,7 @@ pub fn closed_loop<C: Controller>(
     scenario: &Scenario,
     planned: &Planned,
     schedule: &Schedule,
-    p: &super::Perturbation,
+    p: &crate::Perturbation,
     faults: &TrackerFaults,
     controller: &mut C,
     seed: u64,

@@ -1,9 +1,9 @@
 //! The typed JSON of `needle simulate --json`.
 
-use super::closed::SteeringSummary;
+use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
-use hil_sim::insertion::{ClosedRun, Perturbation, Run};
+use needle_sim::{ClosedRun, Perturbation, Run};
 use serde::Serialize;
 
 /// The whole output.

@@ -11,17 +11,17 @@
 //!   with curvature 2·|d| / [`DRIFT_REFERENCE_MM`] (a 50 mm line ends |d|·50 mm sideways);
 //! - the shaft is a torsional spring with play: the tip roll stays within ± lag·depth of the base
 //!   roll and moves only when the base drags it (a backlash). After any rotation larger than the
-//!   play the tip rests lag·depth behind the base: its bend plane is off by lag·depth, the
-//!   issue's "lag of the tip behind the base rotation". The tip's *turn* is Δ − 2·lag·depth when
-//!   it rested on the far side of the play (after a spin, whose alternating turns leave it
-//!   lag·depth past the base on the side of its first turn), but its error is still lag·depth:
-//!   the play is not counted twice;
+//!   play the tip rests lag·depth behind the base: its bend plane is off by lag·depth, the "lag
+//!   of the tip behind the base rotation" the torsion literature measures. The tip's *turn* is
+//!   Δ − 2·lag·depth when it rested on the far side of the play (after a spin, whose alternating
+//!   turns leave it lag·depth past the base on the side of its first turn), but its error is
+//!   still lag·depth: the play is not counted twice;
 //! - the entry point and direction are off by their draws, and the true target is displaced.
 //!
 //! The tracker measures the tip after every piece of insertion (pieces at most
 //! `measure_every_mm` and 1 mm long) and after every rotation.
 
-use super::perturbation::{PerturbError, Perturbation};
+use crate::perturbation::{PerturbError, Perturbation};
 use crate::random::{seeded, Draw, SplitMix64};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
@@ -146,6 +146,39 @@ fn turned(f: &Frame, axis: V3, angle: f32) -> Frame {
     out
 }
 
+/// What the driver did of `step` when it pushed `inserted_mm` of it: all of it, or, broken off,
+/// the share of its time and of a spin's whole turns that its share of the push took (the push
+/// and the spin run at steady rates for the whole step).
+fn executed_part(step: &Step, inserted_mm: f32) -> Step {
+    let share = |planned_mm: f32| {
+        if inserted_mm < planned_mm && planned_mm > 0.0 {
+            inserted_mm / planned_mm
+        } else {
+            1.0
+        }
+    };
+    let mut part = *step;
+    match &mut part.op {
+        Op::Rotate { .. } => {}
+        Op::Insert { length_mm } => {
+            let share = share(*length_mm);
+            if share < 1.0 {
+                part.duration_s *= share;
+            }
+            *length_mm = inserted_mm;
+        }
+        Op::InsertSpin { length_mm, turns } => {
+            let share = share(*length_mm);
+            if share < 1.0 {
+                part.duration_s *= share;
+                *turns = (*turns as f32 * share) as u32;
+            }
+            *length_mm = inserted_mm;
+        }
+    }
+    part
+}
+
 impl World {
     /// The world of a run: the needle set at `posture` (with the entry errors drawn), the target
     /// displaced; `seed` fixes every draw of the run.
@@ -230,7 +263,8 @@ impl World {
         &self.drawn
     }
 
-    /// The steps executed so far (an interrupted one with the length it reached).
+    /// The steps executed so far (one broken off with the length it reached, and the time and
+    /// turns that took).
     pub fn executed(&self) -> &[Step] {
         &self.executed
     }
@@ -339,14 +373,7 @@ impl World {
             }
         };
         self.drawn.steps.push(draw);
-        let mut record = *step;
-        match &mut record.op {
-            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
-                *length_mm = done.inserted_mm;
-            }
-            Op::Rotate { .. } => {}
-        }
-        self.executed.push(record);
+        self.executed.push(executed_part(step, done.inserted_mm));
         done
     }
 

@@ -1,0 +1,84 @@
+//! The flags of `needle simulate`. Flags that mean nothing alone are refused by clap as usage
+//! errors (exit status 2, as for any other bad flag) rather than silently ignored.
+
+use crate::device::commands::LinkArgs;
+use std::path::PathBuf;
+
+/// `needle simulate`
+#[derive(clap::Args, Clone, Debug)]
+pub struct SimulateArgs {
+    /// Scenario file (TOML, see examples/paper.toml).
+    pub file: PathBuf,
+    /// Simulated insertions.
+    #[arg(long, default_value_t = 100)]
+    pub runs: usize,
+    /// Seed of the first run (run i uses seed + i).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Plan and simulate only this form (e.g. RL) instead of the best.
+    #[arg(long)]
+    pub form: Option<String>,
+    /// Change one perturbation, KEY=VALUE (repeatable; see docs/execution.md).
+    #[arg(long = "perturb", value_name = "KEY=VALUE")]
+    pub perturb: Vec<String>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// With --json: every run's draws, figures, points and steps (as executed: a step broken off
+    /// with the length, time and turns it took).
+    #[arg(long, requires = "json")]
+    pub detail: bool,
+    /// Also draw the plan and the executed paths (SVG; the file is opened before simulating).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Threads, at least 1 (default: every core).
+    #[arg(long, value_parser = at_least_one)]
+    pub threads: Option<usize>,
+    /// Steer every run with the closed-loop controller (replanning from each tracker reading)
+    /// instead of executing the schedule open loop.
+    #[arg(long)]
+    pub closed_loop: bool,
+    /// With --closed-loop: a tracker fault, KEY=VALUE (repeatable): dropout_rate, dropout_mm,
+    /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
+    #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
+    pub fault: Vec<String>,
+    /// With --closed-loop: steer on the device at this TCP address (hil-sim --tcp, QEMU)
+    /// instead of in-process; the host runs the simulated robot, tissue and tracker.
+    #[arg(long, requires = "closed_loop", conflicts_with = "port")]
+    pub tcp: Option<String>,
+    /// With --closed-loop: steer on the device at this serial port instead of in-process.
+    #[arg(long, requires = "closed_loop")]
+    pub port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// Seconds of silence allowed per exchange with the device.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
+    /// With --closed-loop: also run the same worlds open loop and print both side by side.
+    #[arg(long, requires = "closed_loop")]
+    pub compare_open_loop: bool,
+}
+
+impl SimulateArgs {
+    /// The device to steer on (`--tcp` or `--port`), if any.
+    pub fn link(&self) -> Option<LinkArgs> {
+        (self.tcp.is_some() || self.port.is_some()).then(|| LinkArgs {
+            port: self.port.clone(),
+            baud: self.baud,
+            tcp: self.tcp.clone(),
+            timeout: self.timeout,
+            retries: needle_link::ClientConfig::DEFAULT.retries,
+            deadline: 120.0,
+        })
+    }
+}
+
+/// A count of at least one (`--threads 0` would run nothing, or silently one thread).
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}

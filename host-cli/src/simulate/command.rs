@@ -1,0 +1,152 @@
+//! `needle simulate`: from the flags to one [`Setup`], the runs of the mode asked for (open
+//! loop, closed loop in-process or on a device, or both), then the table or the JSON, and the
+//! plot (its file opened before the runs).
+
+use super::args::SimulateArgs;
+use super::device::on_device;
+use super::json::{closed_json, to_json};
+use super::plot::{simulate_svg, Executed, MAX_DRAWN};
+use super::setup::{Keep, Setup};
+use super::steering::summarise_steering;
+use super::summarise;
+use super::table::{closed_table, to_table, Header};
+use crate::analysis::cli::output::{progress, title_of, OutputFile};
+use crate::analysis::parallel;
+use crate::scenario::{load_scenario_shapes, restrict, ObstacleShape};
+use anyhow::{anyhow, Context, Result};
+use needle_sim::{ClosedRun, Perturbation, Run, TrackerFaults};
+use std::io::Write;
+
+/// The runs made: open loop, closed loop, or both (`--compare-open-loop`).
+struct Results {
+    open: Option<Vec<Run>>,
+    closed: Option<Vec<ClosedRun>>,
+}
+
+/// Runs `needle simulate`.
+pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
+    let (setup, shapes) = set_up(a)?;
+    let plot = a.plot.as_deref().map(OutputFile::open).transpose()?;
+    let drawn = if plot.is_some() { MAX_DRAWN } else { 0 };
+    let keep = Keep {
+        detail: a.detail,
+        paths: drawn,
+        stopped_paths: drawn,
+    };
+    let results = execute(a, &setup, &keep)?;
+    print(a, &setup, &results)?;
+    if let Some(file) = plot {
+        let executed = Executed {
+            open: results.open.as_deref(),
+            closed: results.closed.as_deref(),
+        };
+        let title = plot_title(a, &setup, &executed);
+        let outcome = &setup.prepared.outcome;
+        file.write(&simulate_svg(
+            &setup.scenario,
+            &shapes,
+            outcome,
+            &executed,
+            &title,
+        ))?;
+    }
+    Ok(())
+}
+
+/// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
+fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
+    let mut p = Perturbation::default();
+    for kv in &a.perturb {
+        p.apply(kv).context("--perturb")?;
+    }
+    let mut faults = TrackerFaults::default();
+    for kv in &a.fault {
+        faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
+    }
+    anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
+    let (mut scenario, shapes) = load_scenario_shapes(&a.file, None)?;
+    if let Some(f) = &a.form {
+        restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
+    }
+    Ok((Setup::new(scenario, p, faults, a.runs, a.seed)?, shapes))
+}
+
+/// The runs of the mode asked for, with a progress bar on a terminal (not with `--json`).
+fn execute(a: &SimulateArgs, setup: &Setup, keep: &Keep) -> Result<Results> {
+    let form = setup.prepared.outcome.form;
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        progress(a.runs, &format!("simulate {form}"))
+    };
+    let threads = a.threads.unwrap_or_else(parallel::default_threads);
+    let open = if !a.closed_loop || a.compare_open_loop {
+        Some(setup.open_loop(keep, threads, || bar.inc(1))?)
+    } else {
+        None
+    };
+    let closed = if a.closed_loop {
+        bar.reset();
+        bar.set_message(format!("closed loop {form}"));
+        Some(match a.link() {
+            Some(link) => on_device(setup, keep, &link, || bar.inc(1))?,
+            None => setup.closed_loop(keep, threads, || bar.inc(1))?,
+        })
+    } else {
+        None
+    };
+    bar.finish_and_clear();
+    Ok(Results { open, closed })
+}
+
+/// The table, or the JSON object, on stdout.
+fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
+    let file = title_of(&a.file);
+    let form = setup.prepared.outcome.form.to_string();
+    let header = Header {
+        file: &file,
+        form: &form,
+        runs: a.runs,
+        seed: a.seed,
+    };
+    let p = &setup.perturbation;
+    let text = match (&r.closed, &r.open) {
+        (Some(closed), open) => {
+            let open = open.as_deref().map(summarise);
+            let summary = summarise(closed.iter().map(|c| &c.run));
+            let steering = summarise_steering(closed);
+            if a.json {
+                let j = closed_json(p, closed, &summary, &steering, open.as_ref(), a.detail);
+                serde_json::to_string(&j)? + "\n"
+            } else {
+                closed_table(&header, p, &summary, &steering, open.as_ref())
+            }
+        }
+        (None, Some(runs)) => {
+            let summary = summarise(runs);
+            if a.json {
+                serde_json::to_string(&to_json(p, runs, &summary, a.detail))? + "\n"
+            } else {
+                to_table(&header, p, &summary)
+            }
+        }
+        (None, None) => return Err(anyhow!("no run was made")),
+    };
+    write!(std::io::stdout(), "{text}")?;
+    Ok(())
+}
+
+/// "paper.toml: RL, 100 simulated closed-loop insertions", and what else the plot shows.
+fn plot_title(a: &SimulateArgs, setup: &Setup, executed: &Executed<'_>) -> String {
+    let kind = match (executed.closed, executed.open) {
+        (Some(_), Some(_)) => "closed-loop insertions (and the same worlds open loop)",
+        (Some(_), None) => "closed-loop insertions",
+        _ => "open-loop insertions",
+    };
+    format!(
+        "{}: {}, {} simulated {kind}",
+        title_of(&a.file),
+        setup.prepared.outcome.form,
+        a.runs
+    )
+}

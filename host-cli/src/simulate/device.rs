@@ -1,0 +1,61 @@
+//! Closed-loop simulation with the controller on a device (hil-sim or the firmware): the host
+//! runs the simulated robot, tissue and tracker and sends each reading over the link.
+
+use super::setup::{Keep, Setup};
+use crate::device::commands::LinkArgs;
+use anyhow::{anyhow, bail, Context, Result};
+use needle_link::{Client, LinkError, Transport};
+use needle_sim::{ClosedRun, Controller};
+use planner_core::steer::{SteerReply, SteerStats, TipMeasurement};
+use std::time::Duration;
+
+/// A device's controller behind the link, answering the simulated tracker's readings: the
+/// simulator knows no transport, so the host adapts the client to it.
+pub struct LinkController<'a, T: Transport>(pub &'a mut Client<T>);
+
+impl<T: Transport> Controller for LinkController<'_, T> {
+    type Error = LinkError;
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, LinkError> {
+        self.0.steer(m)
+    }
+    fn stats(&mut self) -> Result<SteerStats, LinkError> {
+        self.0.steer_status().map(|(stats, _)| stats)
+    }
+}
+
+/// Every run of `setup`, one after the other, each steered by the device at `link` (which plans
+/// the scenario first: its plan must be the host's, bit for bit).
+pub fn on_device(
+    setup: &Setup,
+    keep: &Keep,
+    link: &LinkArgs,
+    done: impl Fn(),
+) -> Result<Vec<ClosedRun>> {
+    let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
+    let planned_there = client
+        .plan(&setup.scenario, &mut |_| {})
+        .context("planning on the device")?
+        .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
+    let schedule = &setup.prepared.schedule;
+    match &planned_there.schedule {
+        Ok(s) if s == schedule => {}
+        _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
+    }
+    setup.collect(keep, |items| {
+        let mut out = Vec::with_capacity(items.len());
+        for &(i, seed) in items {
+            let steps = client
+                .steer_start(&setup.config)
+                .context("starting to steer")?;
+            if steps[..] != schedule.steps[..] {
+                bail!("the device starts steering with other steps than the plan's");
+            }
+            let run = setup
+                .steer(&mut LinkController(&mut client), seed)
+                .map_err(|e| anyhow!("run {}: {e}", i + 1))?;
+            out.push(keep.trim_closed(i, run));
+            done();
+        }
+        Ok(out)
+    })
+}

@@ -1,0 +1,55 @@
+//! The insertion simulator: the simulated robot, tissue and tracker that execute a driver's motor
+//! schedule on a perturbed needle, and the one seeded generator ([`random`]) they and the
+//! host's analyses and tests draw from.
+//!
+//! A [`World`] executes driver [`Step`](planner_core::execute::schedule::Step)s on a perturbed
+//! needle and records the true tip path; [`open_loop`] runs a whole schedule; [`closed_loop`]
+//! lets a [`Controller`] (the in-process steering of `planner-core`, or anything that answers
+//! tracker readings) replace the steps as the tracker reports the tip; the [`Perturbation`] holds
+//! the model's parameters with their literature-motivated defaults (docs/execution.md).
+//!
+//! What it is not: not a device and not a transport. The simulated *device* (the firmware's
+//! request handler on a pty, TCP or in-process) is `hil-sim`; the link to a device is
+//! `needle-link`. This crate depends on neither, so a closed loop steered by a device is an
+//! adapter on the host side (`needle simulate --tcp|--port`, the device bench), and a change to
+//! the protocol never rebuilds the simulator. Every figure it produces is simulated.
+//!
+//! A closed-loop controller drives the world step by step:
+//!
+//! ```
+//! use needle_sim::{Perturbation, World};
+//! use planner_core::execute::schedule::schedule;
+//! use planner_core::{plan, Scenario};
+//! use std::ops::ControlFlow;
+//!
+//! let scenario = Scenario::paper();
+//! let best = plan(&scenario).unwrap().best().unwrap().clone();
+//! let s = schedule(&scenario, &best).unwrap();
+//! let mut world = World::new(&scenario, &s.posture, &Perturbation::default(), 7).unwrap();
+//! let mut seen = 0;
+//! for step in &s.steps {
+//!     world.execute(step, |m| {
+//!         seen += 1;
+//!         // A controller would compare m.position with the plan here, and break off to re-steer.
+//!         let _ = m.target;
+//!         ControlFlow::Continue(())
+//!     });
+//! }
+//! assert!(seen >= 90);
+//! assert!((world.tip().p - world.true_target()).norm() < 10.0);
+//! ```
+
+#![forbid(unsafe_code)]
+
+mod closed;
+mod perturbation;
+pub mod random;
+mod run;
+mod world;
+
+pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller, TrackerFaults};
+pub use perturbation::{PerturbError, Perturbation, KEYS, MEASURE_EVERY_MM_MIN};
+pub use run::{finish, open_loop, Planned, Run};
+pub use world::{
+    Drawn, Executed, Measurement, StepDraw, World, DRIFT_REFERENCE_MM, MAX_PIECE_MM, MIN_FACTOR,
+};
