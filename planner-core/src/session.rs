@@ -4,7 +4,7 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
-use crate::execute::scheduled::ScheduledPlan;
+use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::model::form::FormSet;
 use crate::model::scenario::Scenario;
 use crate::report::{FormOutcome, FormOutcomes, PlanReport};

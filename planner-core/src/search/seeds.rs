@@ -10,10 +10,10 @@
 //! its spacing. Seeds are handed on as problem variables.
 
 use crate::model::form::SegmentKind;
-use crate::model::planar::{advance_from, complete, heading_of_bend, turn, Pose, Tail};
 use crate::optim::problem::{Problem, Vars};
-pub use crate::search::plane::NEAR_MISS;
-use crate::search::plane::{pieces, Piece, Pieces, Planar, SeedPlane};
+use crate::search::in_plane_geometry::{advance_from, complete, heading_of_bend, turn, Pose, Tail};
+pub use crate::search::sweep_plane::NEAR_MISS;
+use crate::search::sweep_plane::{pieces, Piece, Pieces, PlanarPath, SweepPlane};
 use crate::MAX_CONTROL_DEGREE;
 
 /// Widest heading from the chord swept (radians, about 86 degrees).
@@ -58,7 +58,7 @@ pub fn sweep(
     planned_without: u8,
     sink: &mut dyn SeedSink,
 ) -> u32 {
-    let plane = SeedPlane::new(p, psi, sides);
+    let plane = SweepPlane::new(p, psi, sides);
     let mut scored = sweep_pieces(p, &plane, &pieces(p, &plane.sides, 0), sink);
     if p.form.len() > 1 {
         for i in 0..p.form.len() {
@@ -72,7 +72,7 @@ pub fn sweep(
 }
 
 /// Offers `sink` the seeds of `pieces` in `plane`; returns the number of seeds scored.
-fn sweep_pieces(p: &Problem, plane: &SeedPlane, pieces: &Pieces, sink: &mut dyn SeedSink) -> u32 {
+fn sweep_pieces(p: &Problem, plane: &SweepPlane, pieces: &Pieces, sink: &mut dyn SeedSink) -> u32 {
     let mut sweep = PieceSweep::new(p, plane, pieces, sink);
     if pieces.len() == 1 {
         sweep.single_piece();
@@ -85,7 +85,7 @@ fn sweep_pieces(p: &Problem, plane: &SeedPlane, pieces: &Pieces, sink: &mut dyn 
 /// One sweep of a form's pieces in one plane: what all its seeds share, and where they go.
 struct PieceSweep<'a, 's> {
     p: &'a Problem<'a>,
-    plane: &'a SeedPlane,
+    plane: &'a SweepPlane,
     pieces: &'a Pieces,
     sink: &'s mut dyn SeedSink,
     /// The sink's bound as it stands (it changes only when a seed is offered): a probe whose free
@@ -102,7 +102,7 @@ struct PieceSweep<'a, 's> {
 impl<'a, 's> PieceSweep<'a, 's> {
     fn new(
         p: &'a Problem<'a>,
-        plane: &'a SeedPlane,
+        plane: &'a SweepPlane,
         pieces: &'a Pieces,
         sink: &'s mut dyn SeedSink,
     ) -> Self {
@@ -315,7 +315,7 @@ fn segment_upper(p: &Problem, piece: &Piece) -> f32 {
 /// length shared equally among its segments).
 fn planar_variables(
     p: &Problem,
-    plane: &SeedPlane,
+    plane: &SweepPlane,
     pieces: &Pieces,
     heading: f32,
     piece_lengths: &[f32; MAX_CONTROL_DEGREE],
@@ -328,7 +328,7 @@ fn planar_variables(
             }
         }
     }
-    plane.variables(p, &Planar { heading, lengths })
+    plane.variables(p, &PlanarPath { heading, lengths })
 }
 
 /// The grid a form of two pieces or more is swept over: headings, and the lengths of the free
@@ -351,7 +351,7 @@ struct FreeGrid {
 
 impl FreeGrid {
     /// The grid of `pieces` (at least two) in `plane`.
-    fn new(p: &Problem, plane: &SeedPlane, pieces: &Pieces) -> Option<Self> {
+    fn new(p: &Problem, plane: &SweepPlane, pieces: &Pieces) -> Option<Self> {
         let r = p.radius;
         let n = pieces.len();
         // The last two pieces, completed onto the target. Those that are arcs which may turn by
@@ -393,7 +393,7 @@ impl FreeGrid {
 
     /// Heading `hi` of the grid (from the chord, radians), then the two at the tilt bound, if
     /// the plane crosses it.
-    fn heading(&self, plane: &SeedPlane, hi: usize) -> Option<f32> {
+    fn heading(&self, plane: &SweepPlane, hi: usize) -> Option<f32> {
         if hi < self.headings {
             Some(-HEADING_SPAN + self.heading_step * (hi as f32 + 0.5))
         } else {

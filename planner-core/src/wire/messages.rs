@@ -7,8 +7,8 @@
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
+use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::execute::schedule::Steps;
-use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::Form;
 use crate::model::scenario::{
     Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,

@@ -1,5 +1,6 @@
-//! Planar needle geometry in a seed plane: poses, arcs, and the closed-form completions of the
-//! last two segments onto the target (which lies at `(tx, 0)`, the entry at the origin).
+//! The needle's geometry within the plane a sweep's seeds lie in ([`super::sweep_plane`]):
+//! poses, arcs, exact distances to them, and the closed-form completions of the last two segments
+//! onto the target (which lies at `(tx, 0)`, the entry at the origin).
 
 use crate::model::form::SegmentKind;
 
