@@ -58,6 +58,24 @@ pub fn rebuild(
 }
 
 /// Checks a reported path against the scenario.
+///
+/// ```
+/// use planner_core::check::check;
+/// use planner_core::{plan, Scenario};
+///
+/// let scenario = Scenario::paper();
+/// let report = plan(&scenario).unwrap();
+/// let best = report.best().unwrap();
+/// let verdict = check(&scenario, best.form, &best.insertion, &best.segments);
+/// assert!(verdict.feasible && verdict.target_error <= scenario.target.tolerance);
+/// assert_eq!(verdict.length, best.length);
+///
+/// // The same path with its last segment 5 mm longer overshoots the target.
+/// let mut longer = best.segments.clone();
+/// longer.last_mut().unwrap().length += 5.0;
+/// let verdict = check(&scenario, best.form, &best.insertion, &longer);
+/// assert!(!verdict.feasible && verdict.target_error > 4.0);
+/// ```
 pub fn check(
     scenario: &Scenario,
     form: Form,

@@ -4,7 +4,7 @@
 //! honour a cancel request between forms; [`plan`] runs a session to the end.
 
 use crate::error::PlanError;
-use crate::execute::scheduled::ScheduledPlan;
+use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::model::form::FormSet;
 use crate::model::scenario::Scenario;
 use crate::report::{FormOutcome, FormOutcomes, PlanReport};
@@ -39,6 +39,22 @@ impl PlanSession {
     }
 
     /// Plans the next form and returns its outcome; `None` once every form is done.
+    ///
+    /// ```
+    /// use planner_core::{PlanSession, Scenario};
+    ///
+    /// let mut session = PlanSession::new(Scenario::paper()).unwrap();
+    /// let forms = session.form_count();
+    /// let mut words = Vec::new();
+    /// // One form per step: a device reports progress, or honours a cancel, in between.
+    /// while let Some(outcome) = session.step() {
+    ///     words.push(outcome.form.word());
+    /// }
+    /// assert_eq!(words.len(), forms);
+    /// assert_eq!((words[0].as_str(), words[1].as_str()), ("R", "L"));
+    /// let report = session.finish().unwrap();
+    /// assert_eq!(report.best().unwrap().form.word().as_str(), "RL");
+    /// ```
     pub fn step(&mut self) -> Option<&FormOutcome> {
         let form = self.remaining.iter().next()?;
         self.remaining.0 &= !(1 << form.index());

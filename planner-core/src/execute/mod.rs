@@ -4,7 +4,7 @@
 //! ([`ScheduledPlan`]), on the device as on the host.
 
 pub mod nominal;
+pub mod plan_with_schedule;
 pub mod schedule;
-pub mod scheduled;
 
-pub use scheduled::ScheduledPlan;
+pub use plan_with_schedule::ScheduledPlan;

@@ -420,3 +420,6 @@ fn consider<'a>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

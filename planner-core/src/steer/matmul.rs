@@ -1,7 +1,7 @@
 //! Matrix products for the estimator, kept out of line.
 //!
 //! nalgebra unrolls a fixed-size product completely: the Kalman update alone took 9 KiB of the
-//! firmware's flash (issue 12's budget is 128 KiB). These loops take the sizes at run time, so one
+//! firmware's flash (whose budget is 128 KiB). These loops take the sizes at run time, so one
 //! copy serves every shape, and they sum in nalgebra's order (`k` ascending, from the first
 //! product), so the results are the same bit for bit.
 

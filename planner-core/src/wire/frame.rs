@@ -38,10 +38,21 @@ const fn scratch_for(payload: usize) -> usize {
 /// Why a frame could not be built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum EncodeError {
     /// The message does not fit the scratch buffer (a bound in `max_size` is wrong).
     TooLarge,
 }
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            EncodeError::TooLarge => f.write_str("the message does not fit the frame buffer"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
 
 /// Which way a message travels; part of its frame's CRC.
 pub trait Directed {
@@ -130,6 +141,7 @@ fn frame_in_place(
 /// A frame that was received but must not be used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum FrameError {
     /// More than [`MAX_FRAME`] bytes before a delimiter; the rest was skipped.
     TooLong,
@@ -138,6 +150,18 @@ pub enum FrameError {
     /// The CRC-32 does not match.
     BadCrc,
 }
+
+impl core::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            FrameError::TooLong => "frame longer than the decoder's buffer",
+            FrameError::Truncated => "frame cut short",
+            FrameError::BadCrc => "frame failed its CRC-32",
+        })
+    }
+}
+
+impl core::error::Error for FrameError {}
 
 /// Accumulates line bytes and yields checked payloads. Fixed buffer of `N` bytes.
 pub struct FrameDecoder<const N: usize> {
@@ -185,6 +209,40 @@ impl<const N: usize> FrameDecoder<N> {
     }
 
     /// Takes one byte; at a delimiter that ends a non-empty frame, returns its payload or fault.
+    ///
+    /// ```
+    /// use planner_core::wire::{
+    ///     encode_frame, FrameDecoder, FrameError, Header, Request, RequestBody, ENCODE_SCRATCH,
+    ///     MAX_FRAME,
+    /// };
+    ///
+    /// let ping = Request { header: Header::new(7), body: RequestBody::Ping { nonce: 1 } };
+    /// let mut scratch = [0u8; ENCODE_SCRATCH];
+    /// let mut line = Vec::new();
+    /// encode_frame(&ping, &mut scratch, &mut |b: &[u8]| line.extend_from_slice(b)).unwrap();
+    ///
+    /// // The device's side: bytes in, one payload out at the closing delimiter.
+    /// let mut decoder = FrameDecoder::<MAX_FRAME>::for_requests();
+    /// let mut received = Vec::new();
+    /// for &b in &line {
+    ///     if let Some(frame) = decoder.push(b) {
+    ///         received.push(frame.map(<[u8]>::to_vec));
+    ///     }
+    /// }
+    /// assert_eq!(received.len(), 1);
+    /// let got: Request = postcard::from_bytes(received[0].as_ref().unwrap()).unwrap();
+    /// assert_eq!(got, ping);
+    ///
+    /// // One bit flipped on the line: the frame is reported damaged, never handed on.
+    /// line[2] ^= 0x10;
+    /// let mut faults = Vec::new();
+    /// for &b in &line {
+    ///     if let Some(frame) = decoder.push(b) {
+    ///         faults.push(frame.map(<[u8]>::to_vec));
+    ///     }
+    /// }
+    /// assert_eq!(faults, [Err(FrameError::BadCrc)]);
+    /// ```
     pub fn push(&mut self, byte: u8) -> Option<Result<&[u8], FrameError>> {
         if byte != 0 {
             if self.skip != Skip::No {

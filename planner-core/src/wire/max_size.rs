@@ -6,8 +6,8 @@
 //! field added to a type breaks them until its bound is updated too.
 
 use crate::error::{Field, PlanError};
+use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::execute::schedule::{Op, Posture, Schedule, ScheduleError, Step, Steps};
-use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::{Form, FormSet, SegmentKind};
 use crate::model::scenario::{Driver, Entry, Needle, Obstacle, PlannerOptions, Target, Weights};
 use crate::report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};

@@ -7,8 +7,8 @@
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 use crate::error::PlanError;
+use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::execute::schedule::Steps;
-use crate::execute::scheduled::ScheduledPlan;
 use crate::model::form::Form;
 use crate::model::scenario::{
     Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,
@@ -182,8 +182,10 @@ pub enum ReplyBody {
 }
 
 /// Protocol faults, reported in place of an answer.
+// Non-exhaustive: a later protocol version may report faults this one does not know.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Fault {
     /// A frame failed its CRC-32 (it was corrupted on the line).
     BadCrc,
@@ -237,6 +239,41 @@ pub enum Fault {
     /// is lost. Sent with id 0 by the firmware's panic handler.
     Internal,
 }
+
+impl core::fmt::Display for Fault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Fault::BadCrc => f.write_str("a frame failed its CRC-32"),
+            Fault::FrameTooLong => f.write_str("a frame was longer than the largest message"),
+            Fault::Truncated => f.write_str("a frame was cut short"),
+            Fault::Undecodable => f.write_str("a frame is not a message of this protocol"),
+            Fault::UnsupportedVersion { supported, got } => write!(
+                f,
+                "the request speaks protocol version {got}, the device {supported}"
+            ),
+            Fault::Busy { active } => write!(f, "the device is busy planning request {active}"),
+            Fault::UnknownRequest => f.write_str("no upload, plan or result with this id"),
+            Fault::TooLarge { len, capacity } => write!(
+                f,
+                "the plan request ({len} bytes) is larger than the device's buffer ({capacity} bytes)"
+            ),
+            Fault::BadOffset { offset, len } => {
+                write!(f, "fetch at offset {offset} past the result's {len} bytes")
+            }
+            Fault::Overrun => f.write_str("bytes arrived faster than they were processed"),
+            Fault::BadScenario => f.write_str("the plan request is not a scenario"),
+            Fault::BadUploadCrc => {
+                f.write_str("the plan request does not match its announced CRC-32")
+            }
+            Fault::NoPlan => f.write_str("no finished plan with a schedule to steer"),
+            Fault::NotSteering => f.write_str("a reading arrived, but steering has not started"),
+            Fault::BadSteerConfig => f.write_str("the steering settings are not finite and positive"),
+            Fault::Internal => f.write_str("the device hit an internal error and restarts"),
+        }
+    }
+}
+
+impl core::error::Error for Fault {}
 
 /// What a device reports about itself.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

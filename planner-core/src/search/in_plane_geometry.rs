@@ -1,5 +1,6 @@
-//! Planar needle geometry in a seed plane: poses, arcs, and the closed-form completions of the
-//! last two segments onto the target (which lies at `(tx, 0)`, the entry at the origin).
+//! The needle's geometry within the plane a sweep's seeds lie in ([`super::sweep_plane`]):
+//! poses, arcs, exact distances to them, and the closed-form completions of the last two segments
+//! onto the target (which lies at `(tx, 0)`, the entry at the origin).
 
 use crate::model::form::SegmentKind;
 
@@ -295,109 +296,4 @@ pub fn complete(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A small deterministic generator in [0, 1).
-    fn uniform(state: &mut u32) -> f32 {
-        *state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        (*state >> 8) as f32 / (1u32 << 24) as f32
-    }
-
-    #[test]
-    fn completions_left_out_turn_past_half_a_circle() {
-        let mut rng = 11u32;
-        let r = 50.0;
-        let kinds = [
-            (SegmentKind::Arc, SegmentKind::Line),
-            (SegmentKind::Line, SegmentKind::Arc),
-            (SegmentKind::Arc, SegmentKind::Arc),
-        ];
-        let (mut kept, mut dropped) = (0, 0);
-        for case in 0..6000 {
-            let pose = Pose {
-                x: 160.0 * uniform(&mut rng) - 40.0,
-                y: 160.0 * uniform(&mut rng) - 80.0,
-                psi: 7.0 * uniform(&mut rng) - 3.5,
-            };
-            let sc = crate::fmath::sincos(pose.psi);
-            let k = kinds[case % 3];
-            let sides = (
-                if case % 2 == 0 { 1.0 } else { -1.0 },
-                if case % 4 < 2 { -1.0 } else { 1.0 },
-            );
-            let tx = 40.0 + 80.0 * uniform(&mut rng);
-            let completions = |half_turn_at_most| {
-                let mut out = heapless::Vec::<(f32, f32), 4>::new();
-                let tail = Tail {
-                    kinds: k,
-                    sides,
-                    half_turn_at_most,
-                };
-                complete(pose, sc, &tail, tx, r, &mut |a, b| {
-                    out.push((a, b)).unwrap();
-                });
-                out
-            };
-            let (all, some) = (completions((false, false)), completions((true, true)));
-            // What is kept is kept bit for bit and in order; what is left out has an arc that
-            // turns by more than half a circle (`emit` refuses it).
-            let mut rest = all.iter();
-            for c in &some {
-                assert!(
-                    rest.any(|a| a.0.to_bits() == c.0.to_bits() && a.1.to_bits() == c.1.to_bits())
-                );
-            }
-            for c in all.iter().filter(|c| !some.contains(c)) {
-                let arc_a = k.0 == SegmentKind::Arc && c.0 > core::f32::consts::PI * r;
-                let arc_b = k.1 == SegmentKind::Arc && c.1 > core::f32::consts::PI * r;
-                assert!(arc_a || arc_b, "case {case}: {c:?} left out");
-                dropped += 1;
-            }
-            kept += some.len();
-        }
-        // Both happen often enough for the test to mean something.
-        assert!(
-            kept > 500 && dropped > 1000,
-            "kept {kept}, dropped {dropped}"
-        );
-    }
-
-    #[test]
-    fn distance_matches_dense_sampling_of_the_segment() {
-        let mut rng = 7u32;
-        let radius = 50.0;
-        for case in 0..400 {
-            let kind = if case % 2 == 0 {
-                SegmentKind::Arc
-            } else {
-                SegmentKind::Line
-            };
-            let side = if case % 4 < 2 { 1.0 } else { -1.0 };
-            let start = Pose {
-                x: 40.0 * uniform(&mut rng) - 20.0,
-                y: 40.0 * uniform(&mut rng) - 20.0,
-                psi: 6.0 * uniform(&mut rng) - 3.0,
-            };
-            let len = 2.0 * core::f32::consts::PI * radius * uniform(&mut rng);
-            let q = (
-                300.0 * uniform(&mut rng) - 150.0,
-                300.0 * uniform(&mut rng) - 150.0,
-            );
-            let exact =
-                crate::fmath::sqrt(Drawn::new(start, kind, len, side, radius).distance_squared(q));
-            let samples = 20_000;
-            let sampled = (0..=samples)
-                .map(|k| {
-                    let at = advance(start, kind, len * k as f32 / samples as f32, side, radius);
-                    crate::fmath::sqrt((q.0 - at.x).powi(2) + (q.1 - at.y).powi(2))
-                })
-                .fold(f32::INFINITY, f32::min);
-            // Sampling overestimates by at most half a step squared over the distance.
-            assert!(
-                exact <= sampled + 1e-3 && sampled - exact < 0.05,
-                "case {case}: exact {exact}, sampled {sampled}"
-            );
-        }
-    }
-}
+mod tests;

@@ -1,17 +1,17 @@
-//! The plane of a seed sweep: its frame (chord, in-plane normal, plane normal), the obstacles in
-//! its coordinates, the form's segments as the pieces swept in it, and what a planar path there
-//! scores and which problem variables it makes.
+//! The plane a group's seeds are swept in ([`SweepPlane`]): its frame (chord, in-plane normal,
+//! plane normal), the obstacles in its coordinates, the form's segments as the pieces swept in it,
+//! and what a planar path there scores and which problem variables it makes.
 
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{insertion_frame, V3};
-use crate::model::planar::{Drawn, Pose};
 use crate::model::scenario::MAX_OBSTACLES;
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::search::in_plane_geometry::{Drawn, Pose};
 use crate::MAX_CONTROL_DEGREE;
 
 /// A planar path: heading (radians from the chord, towards `m`), then segments.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Planar {
+pub(super) struct PlanarPath {
     pub(super) heading: f32,
     pub(super) lengths: [f32; MAX_CONTROL_DEGREE],
 }
@@ -75,7 +75,7 @@ pub(super) fn pieces(p: &Problem, side: &[f32; MAX_CONTROL_DEGREE], skipped: u8)
 pub const NEAR_MISS: f32 = 4.0;
 
 /// The plane of a sweep and the arcs' sides.
-pub(super) struct SeedPlane {
+pub(super) struct SweepPlane {
     /// Unit vector from the entry to the target.
     pub(super) chord: V3,
     /// In-plane unit normal to the chord (positive headings turn towards it).
@@ -92,7 +92,7 @@ pub(super) struct SeedPlane {
     pub(super) obstacles: [(f32, f32, f32); MAX_OBSTACLES],
 }
 
-impl SeedPlane {
+impl SweepPlane {
     /// The plane through the entry and the target turned by `psi` about the chord.
     pub(super) fn new(p: &Problem, psi: f32, sides: u8) -> Self {
         let e = p.scenario.entry.position;
@@ -131,7 +131,7 @@ impl SeedPlane {
             let h = c.dot(&normal);
             *o = (c.dot(&chord), c.dot(&m), h * h);
         }
-        SeedPlane {
+        SweepPlane {
             chord,
             m,
             normal,
@@ -197,7 +197,7 @@ impl SeedPlane {
     }
 
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
-    pub(super) fn variables(&self, p: &Problem, path: &Planar) -> Option<Vars> {
+    pub(super) fn variables(&self, p: &Problem, path: &PlanarPath) -> Option<Vars> {
         let (sn, cs) = crate::fmath::sincos(path.heading);
         let heading = self.chord * cs + self.m * sn;
         let basis = &p.basis;
