@@ -7,7 +7,7 @@
 //! device plan is also checked against the host's plan, bit for bit.
 
 use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
-use crate::{elf, profile, qemu};
+use crate::{budgets, elf, profile, qemu};
 use anyhow::{bail, Context, Result};
 use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;
@@ -32,15 +32,6 @@ const LINK: ClientConfig = ClientConfig {
 /// would be counted). Generous: a form takes well under a second in QEMU, so only a stuck
 /// board waits this long.
 const PLAN_SILENCE: Duration = Duration::from_secs(600);
-
-/// The "must" budgets of issue 4; `--check` fails when a board leaves them.
-pub const FLASH_BUDGET: u64 = 256 * 1024;
-/// RAM budget: static RAM plus peak stack.
-pub const RAM_BUDGET: u64 = 64 * 1024;
-/// Instructions for one plan of the paper's scenario.
-pub const PAPER_INSTRUCTION_BUDGET: u64 = 50_000_000;
-/// Most instructions one steering reading may take (issue 10: about 30 ms at 168 MHz).
-pub const REPLAN_INSTRUCTION_BUDGET: u64 = 5_000_000;
 
 /// A board build and the QEMU machine that runs it.
 pub struct Board {
@@ -67,9 +58,10 @@ pub const BOARDS: [Board; 2] = [
 ];
 
 /// Figures of one board.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct BoardFigures {
     /// Board name.
-    pub board: &'static str,
+    pub board: String,
     /// See [`elf::Footprint`].
     pub flash_bytes: u64,
     /// See [`elf::Footprint`].
@@ -120,38 +112,67 @@ impl BoardFigures {
         })
     }
 
-    /// Budget violations, as sentences (empty when within every "must" budget).
-    pub fn over_budget(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        if self.flash_bytes >= FLASH_BUDGET {
-            out.push(format!(
-                "{}: flash {} B >= {} B",
-                self.board, self.flash_bytes, FLASH_BUDGET
-            ));
-        }
-        let ram = self.static_ram_bytes + self.peak_stack_bytes;
-        if ram >= RAM_BUDGET {
-            out.push(format!(
-                "{}: RAM {} B (static + peak stack) >= {} B",
-                self.board, ram, RAM_BUDGET
-            ));
-        }
-        for (name, n) in &self.instructions {
-            if name == "paper" && *n >= PAPER_INSTRUCTION_BUDGET {
-                out.push(format!(
-                    "{}: paper plan {n} instructions >= {PAPER_INSTRUCTION_BUDGET}",
-                    self.board
-                ));
-            }
-        }
-        for (name, r) in &self.replan_instructions {
-            if r.max >= REPLAN_INSTRUCTION_BUDGET {
-                out.push(format!(
-                    "{}: a steering reading of {name} took {} instructions >= {REPLAN_INSTRUCTION_BUDGET}",
-                    self.board, r.max
-                ));
-            }
-        }
+    /// Reads back one object of `needle device-bench --json` (what [`Self::to_json`] wrote).
+    pub fn from_json(v: &Value) -> Result<BoardFigures> {
+        let number = |v: &Value, key: &str| {
+            v[key]
+                .as_u64()
+                .with_context(|| format!("device-bench JSON: {key} is not a count"))
+        };
+        let object = |key: &str| {
+            v[key]
+                .as_object()
+                .with_context(|| format!("device-bench JSON: {key} is not an object"))
+        };
+        let counts = object("instructions")?
+            .iter()
+            .map(|(k, n)| {
+                let n = n.as_u64().with_context(|| {
+                    format!("device-bench JSON: instructions.{k} is not a count")
+                })?;
+                Ok((k.clone(), n))
+            })
+            .collect::<Result<_>>()?;
+        let matches_host = object("matches_host")?
+            .iter()
+            .map(|(k, b)| {
+                let same = b.as_bool().context("device-bench JSON: matches_host")?;
+                Ok((k.clone(), same))
+            })
+            .collect::<Result<_>>()?;
+        let replan_instructions = object("replan_instructions")?
+            .iter()
+            .map(|(k, r)| {
+                let figures = crate::replan_bench::ReplanFigures {
+                    readings: usize::try_from(number(r, "readings")?)?,
+                    replans: u32::try_from(number(r, "replans")?)?,
+                    max: number(r, "max")?,
+                    median: number(r, "median")?,
+                };
+                Ok((k.clone(), figures))
+            })
+            .collect::<Result<_>>()?;
+        Ok(BoardFigures {
+            board: v["board"]
+                .as_str()
+                .context("device-bench JSON: board is not a name")?
+                .to_owned(),
+            flash_bytes: number(v, "flash_bytes")?,
+            static_ram_bytes: number(v, "static_ram_bytes")?,
+            peak_stack_bytes: number(v, "peak_stack_bytes")?,
+            instructions: counts,
+            matches_host,
+            replan_instructions,
+        })
+    }
+
+    /// What `--check` refuses, as sentences: every budget of [`budgets::BUDGETS`] left (or not
+    /// measured), and every device plan that differs from the host's. Empty when all is well.
+    pub fn problems(&self) -> Vec<String> {
+        let mut out: Vec<String> = budgets::breaches(self)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
         for (name, same) in &self.matches_host {
             if !same {
                 out.push(format!(
@@ -271,7 +292,7 @@ pub fn measure(
         eprintln!("{}: {text}", board.name);
     }
     Ok(BoardFigures {
-        board: board.name,
+        board: board.name.to_owned(),
         flash_bytes: footprint.flash_bytes,
         static_ram_bytes: footprint.static_ram_bytes,
         peak_stack_bytes: elf::peak_stack(&memory, STACK_PAINT),
@@ -346,10 +367,13 @@ pub struct Args {
     /// array.
     #[arg(long)]
     json: bool,
-    /// Fail when a board leaves a "must" budget (flash < 256 KiB, RAM < 64 KiB, paper plan
-    /// < 50 M instructions, a steering reading < 5 M) or a device plan differs from the host's.
+    /// Fail when a board leaves any device budget (`--budgets` lists them), or a device plan
+    /// differs from the host's.
     #[arg(long)]
     check: bool,
+    /// Print the device budgets as a Markdown table and measure nothing.
+    #[arg(long)]
+    budgets: bool,
     /// Also print, per board, the functions the measured instructions were spent in (slower).
     #[arg(long)]
     profile: bool,
@@ -364,6 +388,10 @@ pub struct Args {
 
 /// Runs `needle device-bench`, reading scenario files with `load`.
 pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
+    if args.budgets {
+        write!(std::io::stdout(), "{}", budgets::markdown_table())?;
+        return Ok(());
+    }
     let root = match &args.root {
         Some(r) => r.clone(),
         None => Path::new(env!("CARGO_MANIFEST_DIR")).join(".."),
@@ -394,9 +422,9 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     } else {
         write!(std::io::stdout(), "{}", table(&figures))?;
     }
-    let over: Vec<String> = figures.iter().flat_map(BoardFigures::over_budget).collect();
+    let over: Vec<String> = figures.iter().flat_map(BoardFigures::problems).collect();
     if args.check && !over.is_empty() {
-        bail!("over budget:\n  {}", over.join("\n  "));
+        bail!("{} check(s) failed:\n  {}", over.len(), over.join("\n  "));
     }
     for o in &over {
         eprintln!("warning: {o}");
@@ -423,9 +451,49 @@ mod tests {
     }
 
     #[test]
+    fn budgets_are_printed_without_measuring() {
+        let cli =
+            Cli::try_parse_from(["device-bench", "--budgets", "--root", "/nonexistent"]).unwrap();
+        // Measuring would refuse a root without firmware/; printing the budgets needs none.
+        assert!(run(&cli.args, &|_| unreachable!("no scenario is read")).is_ok());
+    }
+
+    #[test]
+    fn the_json_reads_back_as_the_figures_it_was_written_from() {
+        let figures = BoardFigures {
+            board: "stm32f4".into(),
+            flash_bytes: 127_496,
+            static_ram_bytes: 11_032,
+            peak_stack_bytes: 20_168,
+            instructions: vec![("paper".into(), 13_704_413), ("space".into(), 82_944_334)],
+            matches_host: vec![("paper".into(), true), ("space".into(), false)],
+            replan_instructions: vec![(
+                "paper".into(),
+                crate::replan_bench::ReplanFigures {
+                    readings: 537,
+                    replans: 410,
+                    max: 408_953,
+                    median: 261_697,
+                },
+            )],
+        };
+        let back = BoardFigures::from_json(&figures.to_json()).unwrap();
+        assert_eq!(back, figures);
+        // Within every budget, but the device's space plan differs from the host's.
+        assert_eq!(
+            back.problems(),
+            ["stm32f4: the device's plan of space differs from the host's"]
+        );
+        let mut broken = figures.to_json();
+        broken["flash_bytes"] = json!("many");
+        let error = BoardFigures::from_json(&broken).unwrap_err().to_string();
+        assert!(error.contains("flash_bytes"), "{error}");
+    }
+
+    #[test]
     fn the_table_says_when_steering_was_not_measured() {
         let figures = BoardFigures {
-            board: "mps2-an386",
+            board: "mps2-an386".into(),
             flash_bytes: 1,
             static_ram_bytes: 2,
             peak_stack_bytes: 3,

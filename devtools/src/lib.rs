@@ -1,5 +1,6 @@
 //! Developer tooling of needle-planner, kept out of the `needle` command's own code: what the
-//! firmware costs on the microcontroller ([`device_bench`], run as `needle device-bench`), the
+//! firmware costs on the microcontroller ([`device_bench`], run as `needle device-bench`) and
+//! what it may cost ([`budgets`]), the
 //! QEMU run it drives ([`qemu`]), reading the firmware image ([`elf`], with the `object` and
 //! `rustc-demangle` crates), where the counted instructions go ([`profile`]), and the firmware
 //! and plugin builds that device-bench and the `firmware_*` tests share
@@ -20,6 +21,7 @@
 
 #![deny(missing_docs)]
 
+pub mod budgets;
 pub mod device_bench;
 pub mod elf;
 pub mod firmware_artifacts;
