@@ -5,7 +5,7 @@
 //! test), and the firmware tests read them from here. The check is a pure function of the
 //! measured figures, so it is tested without QEMU.
 
-use crate::device_bench::BoardFigures;
+use crate::figures::BoardFigures;
 use std::fmt;
 
 /// The figure of one board a budget limits.

@@ -8,11 +8,13 @@
 
 use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
 use crate::{budgets, elf, profile, qemu};
+// The figures and their verdict live in `figures`; here they are measured.
+pub use crate::figures::{table, verdict, BoardFigures};
 use anyhow::{bail, Context, Result};
 use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;
 use planner_core::Scenario;
-use serde_json::{json, Map, Value};
+use serde_json::Value;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -56,134 +58,6 @@ pub const BOARDS: [Board; 2] = [
         machine: "netduinoplus2",
     },
 ];
-
-/// Figures of one board.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct BoardFigures {
-    /// Board name.
-    pub board: String,
-    /// See [`elf::Footprint`].
-    pub flash_bytes: u64,
-    /// See [`elf::Footprint`].
-    pub static_ram_bytes: u64,
-    /// Deepest stack use over all the runs (bytes).
-    pub peak_stack_bytes: u64,
-    /// Scenario name and instructions executed for its plan.
-    pub instructions: Vec<(String, u64)>,
-    /// Scenario name and whether the device's plan equals the host's bit for bit.
-    pub matches_host: Vec<(String, bool)>,
-    /// Scenario name and the instructions per steering reading of one closed-loop insertion.
-    pub replan_instructions: Vec<(String, crate::replan_bench::ReplanFigures)>,
-}
-
-impl BoardFigures {
-    /// The JSON object of `needle device-bench --json`.
-    pub fn to_json(&self) -> Value {
-        let map = |v: &[(String, u64)]| {
-            v.iter()
-                .map(|(k, n)| (k.clone(), json!(n)))
-                .collect::<Map<_, _>>()
-        };
-        let same = self
-            .matches_host
-            .iter()
-            .map(|(k, b)| (k.clone(), json!(b)))
-            .collect::<Map<_, _>>();
-        json!({
-            "board": self.board,
-            "flash_bytes": self.flash_bytes,
-            "static_ram_bytes": self.static_ram_bytes,
-            "peak_stack_bytes": self.peak_stack_bytes,
-            "instructions": map(&self.instructions),
-            "matches_host": same,
-            "replan_instructions": self
-                .replan_instructions
-                .iter()
-                .map(|(k, r)| {
-                    let v = json!({
-                        "max": r.max,
-                        "median": r.median,
-                        "readings": r.readings,
-                        "replans": r.replans,
-                    });
-                    (k.clone(), v)
-                })
-                .collect::<Map<_, _>>(),
-        })
-    }
-
-    /// Reads back one object of `needle device-bench --json` (what [`Self::to_json`] wrote).
-    pub fn from_json(v: &Value) -> Result<BoardFigures> {
-        let number = |v: &Value, key: &str| {
-            v[key]
-                .as_u64()
-                .with_context(|| format!("device-bench JSON: {key} is not a count"))
-        };
-        let object = |key: &str| {
-            v[key]
-                .as_object()
-                .with_context(|| format!("device-bench JSON: {key} is not an object"))
-        };
-        let counts = object("instructions")?
-            .iter()
-            .map(|(k, n)| {
-                let n = n.as_u64().with_context(|| {
-                    format!("device-bench JSON: instructions.{k} is not a count")
-                })?;
-                Ok((k.clone(), n))
-            })
-            .collect::<Result<_>>()?;
-        let matches_host = object("matches_host")?
-            .iter()
-            .map(|(k, b)| {
-                let same = b.as_bool().context("device-bench JSON: matches_host")?;
-                Ok((k.clone(), same))
-            })
-            .collect::<Result<_>>()?;
-        let replan_instructions = object("replan_instructions")?
-            .iter()
-            .map(|(k, r)| {
-                let figures = crate::replan_bench::ReplanFigures {
-                    readings: usize::try_from(number(r, "readings")?)?,
-                    replans: u32::try_from(number(r, "replans")?)?,
-                    max: number(r, "max")?,
-                    median: number(r, "median")?,
-                };
-                Ok((k.clone(), figures))
-            })
-            .collect::<Result<_>>()?;
-        Ok(BoardFigures {
-            board: v["board"]
-                .as_str()
-                .context("device-bench JSON: board is not a name")?
-                .to_owned(),
-            flash_bytes: number(v, "flash_bytes")?,
-            static_ram_bytes: number(v, "static_ram_bytes")?,
-            peak_stack_bytes: number(v, "peak_stack_bytes")?,
-            instructions: counts,
-            matches_host,
-            replan_instructions,
-        })
-    }
-
-    /// What `--check` refuses, as sentences: every budget of [`budgets::BUDGETS`] left (or not
-    /// measured), and every device plan that differs from the host's. Empty when all is well.
-    pub fn problems(&self) -> Vec<String> {
-        let mut out: Vec<String> = budgets::breaches(self)
-            .iter()
-            .map(ToString::to_string)
-            .collect();
-        for (name, same) in &self.matches_host {
-            if !same {
-                out.push(format!(
-                    "{}: the device's plan of {name} differs from the host's",
-                    self.board
-                ));
-            }
-        }
-        out
-    }
-}
 
 /// A scenario to plan: its name (file stem) and contents.
 pub struct NamedScenario {
@@ -317,46 +191,6 @@ pub fn measure_all(
         .collect()
 }
 
-/// The human-readable report.
-pub fn table(figures: &[BoardFigures]) -> String {
-    let mut s = String::new();
-    for f in figures {
-        s.push_str(&format!(
-            "{}: flash {} B ({:.1} KiB), static RAM {} B, peak stack {} B, RAM total {:.1} KiB\n",
-            f.board,
-            f.flash_bytes,
-            f.flash_bytes as f64 / 1024.0,
-            f.static_ram_bytes,
-            f.peak_stack_bytes,
-            (f.static_ram_bytes + f.peak_stack_bytes) as f64 / 1024.0
-        ));
-        for ((name, n), (_, same)) in f.instructions.iter().zip(&f.matches_host) {
-            s.push_str(&format!(
-                "  {name}: {n} instructions per plan ({:.2} M), plan {} the host's\n",
-                *n as f64 / 1e6,
-                if *same { "equals" } else { "DIFFERS from" }
-            ));
-        }
-        if f.replan_instructions.is_empty() {
-            s.push_str("  steering not measured (--plan-only)\n");
-        }
-        for (name, r) in &f.replan_instructions {
-            s.push_str(&format!(
-                "  {name} steered: {} readings, {} replans; per reading max {} (≈ {:.1} ms at \
-                 168 MHz), median {} instructions (≈ {:.0} readings/s at 168 MHz, one \
-                 instruction per cycle)\n",
-                r.readings,
-                r.replans,
-                r.max,
-                r.max as f64 / 168e3,
-                r.median,
-                168e6 / r.median.max(1) as f64
-            ));
-        }
-    }
-    s
-}
-
 /// `needle device-bench` options.
 #[derive(clap::Args)]
 pub struct Args {
@@ -422,11 +256,7 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     } else {
         write!(std::io::stdout(), "{}", table(&figures))?;
     }
-    let over: Vec<String> = figures.iter().flat_map(BoardFigures::problems).collect();
-    if args.check && !over.is_empty() {
-        bail!("{} check(s) failed:\n  {}", over.len(), over.join("\n  "));
-    }
-    for o in &over {
+    for o in verdict(&figures, args.check)? {
         eprintln!("warning: {o}");
     }
     Ok(())
@@ -456,56 +286,5 @@ mod tests {
             Cli::try_parse_from(["device-bench", "--budgets", "--root", "/nonexistent"]).unwrap();
         // Measuring would refuse a root without firmware/; printing the budgets needs none.
         assert!(run(&cli.args, &|_| unreachable!("no scenario is read")).is_ok());
-    }
-
-    #[test]
-    fn the_json_reads_back_as_the_figures_it_was_written_from() {
-        let figures = BoardFigures {
-            board: "stm32f4".into(),
-            flash_bytes: 127_496,
-            static_ram_bytes: 11_032,
-            peak_stack_bytes: 20_168,
-            instructions: vec![("paper".into(), 13_704_413), ("space".into(), 82_944_334)],
-            matches_host: vec![("paper".into(), true), ("space".into(), false)],
-            replan_instructions: vec![(
-                "paper".into(),
-                crate::replan_bench::ReplanFigures {
-                    readings: 537,
-                    replans: 410,
-                    max: 408_953,
-                    median: 261_697,
-                },
-            )],
-        };
-        let back = BoardFigures::from_json(&figures.to_json()).unwrap();
-        assert_eq!(back, figures);
-        // Within every budget, but the device's space plan differs from the host's.
-        assert_eq!(
-            back.problems(),
-            ["stm32f4: the device's plan of space differs from the host's"]
-        );
-        let mut broken = figures.to_json();
-        broken["flash_bytes"] = json!("many");
-        let error = BoardFigures::from_json(&broken).unwrap_err().to_string();
-        assert!(error.contains("flash_bytes"), "{error}");
-    }
-
-    #[test]
-    fn the_table_says_when_steering_was_not_measured() {
-        let figures = BoardFigures {
-            board: "mps2-an386".into(),
-            flash_bytes: 1,
-            static_ram_bytes: 2,
-            peak_stack_bytes: 3,
-            instructions: vec![("paper".into(), 14_000_000)],
-            matches_host: vec![("paper".into(), true)],
-            replan_instructions: Vec::new(),
-        };
-        let text = table(&[figures]);
-        assert!(
-            text.contains("paper: 14000000 instructions per plan"),
-            "{text}"
-        );
-        assert!(text.contains("steering not measured"), "{text}");
     }
 }
