@@ -1,7 +1,7 @@
 //! Developer tooling of needle-planner, kept out of the `needle` command's own code: what the
-//! firmware costs on the microcontroller ([`device_bench`], run as `needle device-bench`), the
-//! QEMU run it drives ([`qemu`]), reading the firmware image ([`elf`], with the `object` and
-//! `rustc-demangle` crates), where the counted instructions go ([`profile`]), and the firmware
+//! firmware costs on the microcontroller ([`device_bench`], run as `needle device-bench`; the
+//! [`figures`] it measures) and what it may cost ([`budgets`]), the QEMU run it drives
+//! ([`qemu`]), reading the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), where the counted instructions go ([`profile`]), and the firmware
 //! and plugin builds that device-bench and the `firmware_*` tests share
 //! ([`firmware_artifacts`]).
 //!
@@ -20,8 +20,10 @@
 
 #![deny(missing_docs)]
 
+pub mod budgets;
 pub mod device_bench;
 pub mod elf;
+pub mod figures;
 pub mod firmware_artifacts;
 pub mod profile;
 pub mod qemu;

@@ -10,7 +10,7 @@ use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
 use planner_core::Scenario;
 
 /// Instructions per reading over one closed-loop insertion.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ReplanFigures {
     /// Readings answered (link resends included).
     pub readings: usize,

@@ -52,7 +52,9 @@ impl Field {
     /// What the planner accepts for this input, for error messages.
     pub fn allowed(&self) -> &'static str {
         match self {
-            Field::CurvatureRadius => "more than 0 and at most 1000 mm",
+            Field::CurvatureRadius => {
+                "5 to 1000 mm (a bevel-tip needle bends with a radius of tens to hundreds of mm)"
+            }
             Field::MaxArc => "more than 0 and at most 360 degrees",
             Field::MaxLineLength => "0 (automatic) or more, in mm",
             Field::EntryPosition | Field::TargetPosition | Field::ObstacleCenter(_) => {

@@ -1,6 +1,6 @@
 //! Every kind of bad input gets its typed error (and never a panic).
 
-use planner_core::model::scenario::{Obstacle, Workspace};
+use planner_core::model::scenario::{Obstacle, Workspace, CURVATURE_RADIUS_RANGE_MM};
 use planner_core::{plan, Field, Form, PlanError, Scenario};
 
 fn err(s: &Scenario) -> PlanError {
@@ -153,6 +153,33 @@ fn scenarios_beyond_a_needle_workspace_are_refused() {
     let mut s = Scenario::paper();
     s.needle.curvature_radius = 1e6;
     assert_eq!(err(&s), PlanError::OutOfRange(Field::CurvatureRadius));
+}
+
+#[test]
+fn an_arc_radius_no_bevel_tip_needle_bends_with_is_refused_naming_the_key_and_range() {
+    let (least, most) = CURVATURE_RADIUS_RANGE_MM;
+    // The paper's 63.7 mm typed in metres, a radius just under the least, one just over the most.
+    for radius in [0.0637, least * 0.99, most * 1.01] {
+        let mut s = Scenario::paper();
+        s.needle.curvature_radius = radius;
+        assert_eq!(
+            err(&s),
+            PlanError::OutOfRange(Field::CurvatureRadius),
+            "{radius}"
+        );
+        let message = err(&s).to_string();
+        assert!(
+            message.starts_with("needle.curvature_radius is out of range: allowed is ")
+                && message.contains(&format!("{least} to {most} mm")),
+            "{message}"
+        );
+    }
+    // Both ends are accepted.
+    for radius in [least, most] {
+        let mut s = Scenario::paper();
+        s.needle.curvature_radius = radius;
+        assert_eq!(s.validate(), Ok(()), "{radius}");
+    }
 }
 
 #[test]

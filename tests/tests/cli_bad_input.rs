@@ -38,6 +38,13 @@ fn messages_say_which_input_and_what_is_allowed() {
     needle_fails_with(&text, &["plan", "{}"], "use at least 0.000172 mm");
     let text = paper().replace("position = [0.0, 0.0, 90.0]", "position = [0.0, 0.0, 1e12]");
     needle_fails_with(&text, &["plan", "{}"], "within 1000 mm of the origin");
+    // The paper's radius typed in metres would otherwise plan a 0.02 mm "arc".
+    let text = paper().replace("curvature_radius = 63.7", "curvature_radius = 0.0637");
+    needle_fails_with(
+        &text,
+        &["plan", "{}"],
+        "needle.curvature_radius is out of range: allowed is 5 to 1000 mm",
+    );
 }
 
 #[test]

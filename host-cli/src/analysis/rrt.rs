@@ -166,6 +166,119 @@ impl Grower<'_> {
         }
         best
     }
+
+    /// One sample: the target with probability `goal_bias`, else a point of the box `lo`..`hi`
+    /// (in the entry's plane in plane mode).
+    fn sample(&self, rng: &mut impl Draw, goal_bias: f64, target: V3, (lo, hi): (V3, V3)) -> V3 {
+        if rng.unit() < goal_bias {
+            return target;
+        }
+        let mut s = V3::zeros();
+        for k in 0..3 {
+            s[k] = rng.range(f64::from(lo[k]), f64::from(hi[k])) as f32;
+        }
+        if self.plane {
+            s.x = self.scenario.entry.position[0];
+        }
+        s
+    }
+
+    /// Grows node `near` by the untried primitive that ends closest to `sample`, marking it
+    /// tried; the new node's frame, or `None` when that primitive hits an obstacle.
+    fn grow(&self, tree: &mut Vec<Node>, near: usize, sample: V3, step: f32) -> Option<Frame> {
+        let from = tree[near].frame;
+        let mut options_here: Vec<(usize, Frame, f32)> = self
+            .primitives
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| tree[near].tried & (1 << k) == 0)
+            .map(|(k, &(kind, roll))| {
+                let start = from.rolled(roll);
+                let end = start.advanced(kind, step, self.radius);
+                (k, start, (end.p - sample).norm())
+            })
+            .collect();
+        options_here.sort_by(|a, b| a.2.total_cmp(&b.2));
+        let &(k, start, _) = options_here.first()?;
+        tree[near].tried |= 1 << k;
+        let (kind, roll) = self.primitives[k];
+        if !self.free(&start, kind, step) {
+            return None;
+        }
+        let frame = start.advanced(kind, step, self.radius);
+        tree.push(Node {
+            frame,
+            parent: near,
+            piece: Piece {
+                kind,
+                roll,
+                length: step,
+            },
+            tried: 0,
+        });
+        Some(frame)
+    }
+}
+
+/// The node nearest to `sample` with a primitive left to grow, if any.
+fn nearest_open(tree: &[Node], primitives: usize, sample: V3) -> Option<usize> {
+    tree.iter()
+        .enumerate()
+        .filter(|(_, n)| n.tried.count_ones() < primitives as u32)
+        .map(|(i, n)| (i, (n.frame.p - sample).norm_squared()))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}
+
+/// The pieces from the root to `leaf`, then `last`.
+fn path_to(tree: &[Node], leaf: usize, last: Piece) -> Vec<Piece> {
+    let mut pieces = vec![last];
+    let mut at = leaf;
+    while at != 0 {
+        pieces.push(tree[at].piece);
+        at = tree[at].parent;
+    }
+    pieces.reverse();
+    pieces
+}
+
+/// The primitives a node may grow: a line, and an arc at each bevel roll (the plane's two sides
+/// in plane mode, `rolls_3d` evenly spaced rolls in (-π, π] in 3-D).
+fn primitives(plane: bool, rolls_3d: usize) -> Vec<(SegmentKind, f32)> {
+    let rolls: Vec<f32> = if plane {
+        vec![0.0, core::f32::consts::PI]
+    } else {
+        let m = rolls_3d.clamp(2, 30);
+        (0..m)
+            .map(|k| core::f32::consts::TAU * k as f32 / m as f32)
+            .map(|r| {
+                if r > core::f32::consts::PI {
+                    r - core::f32::consts::TAU
+                } else {
+                    r
+                }
+            })
+            .collect()
+    };
+    let mut primitives = vec![(SegmentKind::Line, 0.0)];
+    primitives.extend(rolls.iter().map(|&r| (SegmentKind::Arc, r)));
+    primitives
+}
+
+fn check(options: &Options) -> Result<(), RrtError> {
+    if !(options.step > 0.0 && options.step.is_finite()) {
+        return Err(RrtError::Options("--step must be a positive number"));
+    }
+    if !(options.tolerance > 0.0 && options.tolerance.is_finite()) {
+        return Err(RrtError::Options("--tolerance must be a positive number"));
+    }
+    if options.iterations == 0 {
+        return Err(RrtError::Options("--iterations must be at least 1"));
+    }
+    if !(0.0..=1.0).contains(&options.goal_bias) {
+        return Err(RrtError::Options("the goal bias must lie in [0, 1]"));
+    }
+    Ok(())
 }
 
 fn bounds(scenario: &Scenario, margin: f32) -> (V3, V3) {
@@ -188,47 +301,19 @@ fn bounds(scenario: &Scenario, margin: f32) -> (V3, V3) {
 pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> {
     let clock = Instant::now();
     scenario.validate().map_err(RrtError::Scenario)?;
-    if !(options.step > 0.0 && options.step.is_finite()) {
-        return Err(RrtError::Options("--step must be a positive number"));
-    }
-    if !(options.tolerance > 0.0 && options.tolerance.is_finite()) {
-        return Err(RrtError::Options("--tolerance must be a positive number"));
-    }
-    if options.iterations == 0 {
-        return Err(RrtError::Options("--iterations must be at least 1"));
-    }
-    if !(0.0..=1.0).contains(&options.goal_bias) {
-        return Err(RrtError::Options("the goal bias must lie in [0, 1]"));
-    }
+    check(options)?;
     let plane = scenario.options.workspace == Workspace::PlaneYz;
-    let rolls: Vec<f32> = if plane {
-        vec![0.0, core::f32::consts::PI]
-    } else {
-        let m = options.rolls_3d.clamp(2, 30);
-        (0..m)
-            .map(|k| core::f32::consts::TAU * k as f32 / m as f32)
-            .map(|r| {
-                if r > core::f32::consts::PI {
-                    r - core::f32::consts::TAU
-                } else {
-                    r
-                }
-            })
-            .collect()
-    };
-    let mut primitives = vec![(SegmentKind::Line, 0.0)];
-    primitives.extend(rolls.iter().map(|&r| (SegmentKind::Arc, r)));
     let grower = Grower {
         scenario,
         radius: scenario.needle.curvature_radius,
         floor: scenario.options.min_clearance,
-        primitives,
+        primitives: primitives(plane, options.rolls_3d),
         plane,
     };
     let e = &scenario.entry;
     let first = insertion_frame(v3(e.position), &entry_basis(e.direction), 0.0, 0.0);
     let target = v3(scenario.target.position);
-    let (lo, hi) = bounds(scenario, 2.0 * options.step);
+    let sample_box = bounds(scenario, 2.0 * options.step);
     let mut rng = seeded(options.seed);
     let mut tree = vec![Node {
         frame: first,
@@ -242,13 +327,7 @@ pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> 
     }];
     let mut nearest = (first.p - target).norm();
     let finish = |tree: Vec<Node>, leaf: usize, last: Piece, iterations: usize| {
-        let mut pieces = vec![last];
-        let mut at = leaf;
-        while at != 0 {
-            pieces.push(tree[at].piece);
-            at = tree[at].parent;
-        }
-        pieces.reverse();
+        let pieces = path_to(&tree, leaf, last);
         Outcome {
             first,
             segments: merge(&pieces),
@@ -263,61 +342,14 @@ pub fn run(scenario: &Scenario, options: &Options) -> Result<Outcome, RrtError> 
         return Ok(finish(tree, 0, piece, 0));
     }
     for it in 1..=options.iterations {
-        let sample = if rng.unit() < options.goal_bias {
-            target
-        } else {
-            let mut s = V3::zeros();
-            for k in 0..3 {
-                s[k] = rng.range(f64::from(lo[k]), f64::from(hi[k])) as f32;
-            }
-            if plane {
-                s.x = e.position[0];
-            }
-            s
-        };
-        let Some(near) = tree
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| n.tried.count_ones() < grower.primitives.len() as u32)
-            .map(|(i, n)| (i, (n.frame.p - sample).norm_squared()))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i)
-        else {
+        let sample = grower.sample(&mut rng, options.goal_bias, target, sample_box);
+        let Some(near) = nearest_open(&tree, grower.primitives.len(), sample) else {
             break; // every node has grown every primitive
         };
-        let from = tree[near].frame;
-        let mut options_here: Vec<(usize, Frame, f32)> = grower
-            .primitives
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| tree[near].tried & (1 << k) == 0)
-            .map(|(k, &(kind, roll))| {
-                let start = from.rolled(roll);
-                let end = start.advanced(kind, options.step, grower.radius);
-                (k, start, (end.p - sample).norm())
-            })
-            .collect();
-        options_here.sort_by(|a, b| a.2.total_cmp(&b.2));
-        let Some(&(k, start, _)) = options_here.first() else {
+        let Some(frame) = grower.grow(&mut tree, near, sample, options.step) else {
             continue;
         };
-        tree[near].tried |= 1 << k;
-        let (kind, roll) = grower.primitives[k];
-        if !grower.free(&start, kind, options.step) {
-            continue;
-        }
-        let frame = start.advanced(kind, options.step, grower.radius);
         nearest = nearest.min((frame.p - target).norm());
-        tree.push(Node {
-            frame,
-            parent: near,
-            piece: Piece {
-                kind,
-                roll,
-                length: options.step,
-            },
-            tried: 0,
-        });
         let leaf = tree.len() - 1;
         if let Some((piece, _)) = grower.reach(&frame, options.step, options.tolerance, &target) {
             return Ok(finish(tree, leaf, piece, it));

@@ -3,6 +3,7 @@
 
 use super::svg::{form_colour, ticks, Svg};
 use super::sweep::{forms_seen, Point, Weight};
+use planner_core::{Form, FormOutcome};
 
 const W: f64 = 640.0;
 const H: f64 = 220.0;
@@ -90,11 +91,30 @@ fn panel(svg: &mut Svg, top: f64, x: &Axis, y: &Axis, label: &str, weight: Weigh
     );
 }
 
+/// Which of the two panels: F of the best form (with each form's own F), or its length L.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Panel {
+    Objective,
+    Length,
+}
+
+impl Panel {
+    fn value(self, b: &FormOutcome) -> f64 {
+        match self {
+            Panel::Objective => f64::from(b.objective),
+            Panel::Length => f64::from(b.length),
+        }
+    }
+}
+
+/// Where a (weight value, figure) pair is drawn in a panel.
+type Place<'a> = &'a dyn Fn(f64, f64) -> [f64; 2];
+
 /// The sweep picture as an SVG document.
 pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> String {
     let forms = forms_seen(points);
     let x = Axis::of(points.iter().map(|p| p.value), log);
-    let best: Vec<(f64, &planner_core::FormOutcome)> = points
+    let best: Vec<(f64, &FormOutcome)> = points
         .iter()
         .filter_map(|p| p.best().map(|b| (p.value, b)))
         .collect();
@@ -114,70 +134,80 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
     let ly = Axis::of(best.iter().map(|(_, b)| f64::from(b.length)), false);
     let mut svg = Svg::new(LEFT + W + 170.0, TOP + 2.0 * H + GAP + 60.0);
     svg.text([LEFT, 26.0], title, 14.0, "start", "title");
-    let label_every = if best.len() <= 25 { 1 } else { usize::MAX };
-    for (k, (axis, top, label)) in [(&fy, TOP, "F (best)"), (&ly, TOP + H + GAP, "L (mm)")]
-        .into_iter()
-        .enumerate()
-    {
+    let panels = [
+        (Panel::Objective, &fy, TOP, "F (best)"),
+        (Panel::Length, &ly, TOP + H + GAP, "L (mm)"),
+    ];
+    for (which, axis, top, label) in panels {
         panel(&mut svg, top, &x, axis, label, weight);
         let px = |v: f64, y: f64| [LEFT + x.at(v, W), top + H - axis.at(y, H)];
-        if k == 0 {
-            // Each form's own optimum, faint: where the best form switches, two curves cross.
-            for f in &forms {
-                let pts: Vec<[f64; 2]> = points
-                    .iter()
-                    .filter_map(|p| {
-                        let o = p.plan.as_ref().ok()?.forms.iter().find(|o| o.form == *f)?;
-                        o.feasible.then(|| px(p.value, f64::from(o.objective)))
-                    })
-                    .collect();
-                svg.polyline(
-                    &pts,
-                    "form-curve",
-                    &format!(
-                        "stroke:{};stroke-width:1;stroke-opacity:0.45",
-                        form_colour(f.index())
-                    ),
-                    &format!(r#"data-form="{f}""#),
-                );
-            }
+        if which == Panel::Objective {
+            form_curves(&mut svg, &forms, points, &px);
         }
-        let value = |b: &planner_core::FormOutcome| {
-            if k == 0 {
-                f64::from(b.objective)
-            } else {
-                f64::from(b.length)
-            }
-        };
-        let line: Vec<[f64; 2]> = best.iter().map(|(v, b)| px(*v, value(b))).collect();
-        svg.polyline(&line, "sweep-line", "stroke:#333;stroke-width:1.2", "");
-        let mut previous = None;
-        for (i, (v, b)) in best.iter().enumerate() {
-            let at = px(*v, value(b));
-            svg.raw(&format!(
-                r#"<circle class="sweep-point" data-form="{}" cx="{:.2}" cy="{:.2}" r="4" style="fill:{};stroke:#000;stroke-width:0.5"/>"#,
-                b.form,
-                at[0],
-                at[1],
-                form_colour(b.form.index())
-            ));
-            if i % label_every == 0 || previous != Some(b.form) {
-                svg.text(
-                    [at[0], at[1] - 8.0],
-                    &b.form.to_string(),
-                    9.0,
-                    "middle",
-                    "form-label",
-                );
-            }
-            previous = Some(b.form);
-        }
+        best_points(&mut svg, &best, which, &px);
     }
+    legend(&mut svg, &forms, &best, points.len());
+    svg.finish()
+}
+
+/// Each form's own optimum, faint: where the best form switches, two curves cross.
+fn form_curves(svg: &mut Svg, forms: &[Form], points: &[Point], px: Place) {
+    for f in forms {
+        let pts: Vec<[f64; 2]> = points
+            .iter()
+            .filter_map(|p| {
+                let o = p.plan.as_ref().ok()?.forms.iter().find(|o| o.form == *f)?;
+                o.feasible.then(|| px(p.value, f64::from(o.objective)))
+            })
+            .collect();
+        svg.polyline(
+            &pts,
+            "form-curve",
+            &format!(
+                "stroke:{};stroke-width:1;stroke-opacity:0.45",
+                form_colour(f.index())
+            ),
+            &format!(r#"data-form="{f}""#),
+        );
+    }
+}
+
+/// The best form's figure at each value: a line through points coloured by form, each labelled
+/// (only where the form changes when there are many).
+fn best_points(svg: &mut Svg, best: &[(f64, &FormOutcome)], which: Panel, px: Place) {
+    let label_every = if best.len() <= 25 { 1 } else { usize::MAX };
+    let line: Vec<[f64; 2]> = best.iter().map(|(v, b)| px(*v, which.value(b))).collect();
+    svg.polyline(&line, "sweep-line", "stroke:#333;stroke-width:1.2", "");
+    let mut previous = None;
+    for (i, (v, b)) in best.iter().enumerate() {
+        let at = px(*v, which.value(b));
+        svg.raw(&format!(
+            r#"<circle class="sweep-point" data-form="{}" cx="{:.2}" cy="{:.2}" r="4" style="fill:{};stroke:#000;stroke-width:0.5"/>"#,
+            b.form,
+            at[0],
+            at[1],
+            form_colour(b.form.index())
+        ));
+        if i % label_every == 0 || previous != Some(b.form) {
+            svg.text(
+                [at[0], at[1] - 8.0],
+                &b.form.to_string(),
+                9.0,
+                "middle",
+                "form-label",
+            );
+        }
+        previous = Some(b.form);
+    }
+}
+
+/// The forms that were best somewhere, how often, and the values without a plan.
+fn legend(svg: &mut Svg, forms: &[Form], best: &[(f64, &FormOutcome)], values: usize) {
     svg.group("legend");
     let lx = LEFT + W + 20.0;
     svg.text([lx, TOP + 4.0], "best form", 11.0, "start", "legend-title");
     let mut y = TOP + 22.0;
-    for f in &forms {
+    for f in forms {
         let wins = best.iter().filter(|(_, b)| b.form == *f).count();
         if wins == 0 {
             continue;
@@ -190,7 +220,7 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
         );
         svg.text(
             [lx + 16.0, y],
-            &format!("{f} (best at {wins} of {})", points.len()),
+            &format!("{f} (best at {wins} of {values})"),
             11.0,
             "start",
             "legend-entry",
@@ -205,7 +235,7 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
         "legend-note",
     );
     y += 24.0;
-    let failed = points.len() - best.len();
+    let failed = values - best.len();
     if failed > 0 {
         svg.text(
             [lx, y],
@@ -216,5 +246,4 @@ pub fn sweep_svg(weight: Weight, points: &[Point], log: bool, title: &str) -> St
         );
     }
     svg.end_group();
-    svg.finish()
 }

@@ -10,6 +10,15 @@ use serde::{Deserialize, Serialize};
 /// is tens of centimetres, and beyond this the path's sampled outputs would grow without bound.
 pub const MAX_EXTENT_MM: f32 = 1000.0;
 
+/// The arc radii a bevel-tip needle bends with in tissue (mm). Measured radii are tens to
+/// hundreds of millimetres: about 61.5 mm for a nitinol needle in a gel phantom (Webster et al.,
+/// "Nonholonomic modeling of needle steering", IJRR 25(5-6), 2006) and 50 mm to over 1000 mm across
+/// needles and tissues (Majewicz et al., "Behavior of tip-steerable needles in ex vivo and in vivo
+/// tissue", IEEE TBME 59(10), 2012). A radius outside this range is almost certainly a unit
+/// mistake (0.0637, the paper's radius typed in metres, would plan a 0.02 mm "arc"), so it is
+/// refused rather than planned.
+pub const CURVATURE_RADIUS_RANGE_MM: (f32, f32) = (5.0, MAX_EXTENT_MM);
+
 /// Obstacles a scenario can hold.
 pub const MAX_OBSTACLES: usize = 32;
 
@@ -283,7 +292,8 @@ impl Scenario {
     pub fn validate(&self) -> Result<(), PlanError> {
         let n = &self.needle;
         positive(Field::CurvatureRadius, n.curvature_radius)?;
-        if n.curvature_radius > MAX_EXTENT_MM {
+        let (least, most) = CURVATURE_RADIUS_RANGE_MM;
+        if !(least..=most).contains(&n.curvature_radius) {
             return Err(PlanError::OutOfRange(Field::CurvatureRadius));
         }
         positive(Field::MaxArc, n.max_arc_deg)?;

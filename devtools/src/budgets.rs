@@ -1,0 +1,326 @@
+//! The device budgets: what the firmware may cost on the microcontroller, in one table.
+//!
+//! `needle device-bench --check` enforces them ([`breaches`]), `needle device-bench --budgets`
+//! prints them ([`markdown_table`], the table docs/firmware.md shows, checked against it by a
+//! test), and the firmware tests read them from here. The check is a pure function of the
+//! measured figures, so it is tested without QEMU.
+
+use crate::figures::BoardFigures;
+use std::fmt;
+
+/// The figure of one board a budget limits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    /// Flash bytes of the image (`flash_bytes`).
+    Flash,
+    /// Static RAM plus the peak stack, in bytes (`static_ram_bytes + peak_stack_bytes`).
+    Ram,
+    /// Instructions of one plan of `examples/paper.toml` (`instructions.paper`).
+    PaperPlan,
+    /// Instructions of one plan of `examples/space.toml` (`instructions.space`).
+    SpacePlan,
+    /// Most instructions of one steering reading, over every steered scenario
+    /// (`replan_instructions.*.max`).
+    SteeringReading,
+}
+
+/// How a budget's figure is counted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// Bytes.
+    Bytes,
+    /// Guest instructions, counted exactly by the QEMU plugin.
+    Instructions,
+}
+
+/// One limit the firmware must stay within on every board.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Budget {
+    /// What the budget limits, as messages name it.
+    pub name: &'static str,
+    /// Which figure it reads.
+    pub quantity: Quantity,
+    /// The unit of `limit`.
+    pub unit: Unit,
+    /// The largest figure allowed (inclusive).
+    pub limit: u64,
+    /// What staying within it protects.
+    pub protects: &'static str,
+}
+
+/// The device budgets. One instruction per cycle at the stm32f4's 168 MHz turns instructions
+/// into time (a lower bound: flash wait states make an M4F average somewhat more).
+pub const BUDGETS: &[Budget] = &[
+    Budget {
+        name: "flash",
+        quantity: Quantity::Flash,
+        unit: Unit::Bytes,
+        limit: 128 * 1024,
+        protects:
+            "the image fits the small Cortex-M4F parts (128 KiB of flash, as an STM32F410RB), \
+                   not only the STM32F405's 1 MiB",
+    },
+    Budget {
+        name: "RAM (static + peak stack)",
+        quantity: Quantity::Ram,
+        unit: Unit::Bytes,
+        limit: 32 * 1024,
+        protects:
+            "the firmware runs in 32 KiB of SRAM (as an STM32F410RB), with no heap to run out of",
+    },
+    Budget {
+        name: "paper plan",
+        quantity: Quantity::PaperPlan,
+        unit: Unit::Instructions,
+        limit: 15_000_000,
+        protects:
+            "a plan of the paper's scenario in about 0.09 s at 168 MHz, before the needle moves",
+    },
+    Budget {
+        name: "space plan",
+        quantity: Quantity::SpacePlan,
+        unit: Unit::Instructions,
+        limit: 100_000_000,
+        protects: "a 3-D plan among five spheres in about 0.6 s at 168 MHz",
+    },
+    Budget {
+        name: "steering reading",
+        quantity: Quantity::SteeringReading,
+        unit: Unit::Instructions,
+        limit: 1_000_000,
+        protects:
+            "each tracker reading answered (estimate, and a replan when needed) in about 6 ms \
+                   at 168 MHz: a quarter of the 25 ms between a 40 Hz tracker's readings, and \
+                   2.4 times the worst reading measured (0.41 M)",
+    },
+];
+
+impl Unit {
+    /// `n` of this unit, for people: bytes with KiB, instructions with millions.
+    pub fn show(self, n: u64) -> String {
+        // Whole KiB and whole millions are shown whole (a remainder test, not `is_multiple_of`,
+        // which is newer than the workspace's Rust 1.85).
+        match self {
+            Unit::Bytes => match (n / 1024, n % 1024) {
+                (kib, 0) => format!("{n} B ({kib} KiB)"),
+                _ => format!("{n} B ({:.1} KiB)", n as f64 / 1024.0),
+            },
+            Unit::Instructions => match (n / 1_000_000, n % 1_000_000) {
+                (millions, 0) => format!("{millions} M instructions"),
+                _ => format!("{n} instructions ({:.2} M)", n as f64 / 1e6),
+            },
+        }
+    }
+}
+
+impl Budget {
+    /// The board's figure for this budget; `None` when the run did not measure it (the paper or
+    /// space scenario not among the files, steering left out).
+    pub fn figure(&self, board: &BoardFigures) -> Option<u64> {
+        let plan = |name: &str| {
+            board
+                .instructions
+                .iter()
+                .find(|(scenario, _)| scenario == name)
+                .map(|&(_, n)| n)
+        };
+        match self.quantity {
+            Quantity::Flash => Some(board.flash_bytes),
+            Quantity::Ram => Some(board.static_ram_bytes + board.peak_stack_bytes),
+            Quantity::PaperPlan => plan("paper"),
+            Quantity::SpacePlan => plan("space"),
+            Quantity::SteeringReading => board.replan_instructions.iter().map(|(_, r)| r.max).max(),
+        }
+    }
+}
+
+/// A budget a board did not keep.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Breach {
+    /// The board.
+    pub board: String,
+    /// The budget.
+    pub budget: &'static Budget,
+    /// Its figure, or `None` when it was not measured (a budget that cannot be checked fails).
+    pub figure: Option<u64>,
+}
+
+impl fmt::Display for Breach {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let b = self.budget;
+        match self.figure {
+            Some(n) => write!(
+                f,
+                "{}: {} over budget: {} > {} ({})",
+                self.board,
+                b.name,
+                b.unit.show(n),
+                b.unit.show(b.limit),
+                b.protects
+            ),
+            None => write!(
+                f,
+                "{}: {} not measured, so its budget of {} cannot be checked (measure \
+                 examples/paper.toml and examples/space.toml, with steering)",
+                self.board,
+                b.name,
+                b.unit.show(b.limit)
+            ),
+        }
+    }
+}
+
+/// Every budget of [`BUDGETS`] the board's figures leave, or cannot show kept.
+pub fn breaches(board: &BoardFigures) -> Vec<Breach> {
+    BUDGETS
+        .iter()
+        .filter_map(|budget| {
+            let figure = budget.figure(board);
+            figure.is_none_or(|n| n > budget.limit).then(|| Breach {
+                board: board.board.clone(),
+                budget,
+                figure,
+            })
+        })
+        .collect()
+}
+
+/// The lines around the budgets table in docs/firmware.md.
+pub const DOC_MARKERS: (&str, &str) = (
+    "<!-- `needle device-bench --budgets` prints this table; a test compares them -->",
+    "<!-- end of the budgets table -->",
+);
+
+/// The budgets as a Markdown table (`needle device-bench --budgets`, docs/firmware.md).
+pub fn markdown_table() -> String {
+    let mut s = String::from("| budget | at most | protects |\n| --- | --- | --- |\n");
+    for b in BUDGETS {
+        s.push_str(&format!(
+            "| {} | {} | {} |\n",
+            b.name,
+            b.unit.show(b.limit),
+            b.protects
+        ));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::replan_bench::ReplanFigures;
+
+    /// The figures measured on the stm32f4 (`needle device-bench --json`), within every budget.
+    fn within() -> BoardFigures {
+        BoardFigures {
+            board: "stm32f4".into(),
+            flash_bytes: 127_496,
+            static_ram_bytes: 11_032,
+            peak_stack_bytes: 20_168,
+            instructions: vec![("paper".into(), 13_704_413), ("space".into(), 82_944_334)],
+            matches_host: vec![("paper".into(), true), ("space".into(), true)],
+            replan_instructions: ["paper", "space"]
+                .iter()
+                .zip([408_953, 337_696])
+                .map(|(name, max)| {
+                    let r = ReplanFigures {
+                        readings: 537,
+                        replans: 410,
+                        max,
+                        median: 74_090,
+                    };
+                    (name.to_string(), r)
+                })
+                .collect(),
+        }
+    }
+
+    /// The figures with `quantity`'s one more than its budget allows.
+    fn over(quantity: Quantity) -> BoardFigures {
+        let mut f = within();
+        let budget = BUDGETS.iter().find(|b| b.quantity == quantity).unwrap();
+        let above = budget.limit + 1;
+        match quantity {
+            Quantity::Flash => f.flash_bytes = above,
+            Quantity::Ram => f.peak_stack_bytes = above - f.static_ram_bytes,
+            Quantity::PaperPlan => f.instructions[0].1 = above,
+            Quantity::SpacePlan => f.instructions[1].1 = above,
+            Quantity::SteeringReading => f.replan_instructions[1].1.max = above,
+        }
+        f
+    }
+
+    #[test]
+    fn figures_within_every_budget_pass() {
+        assert_eq!(breaches(&within()), []);
+        // A figure equal to its limit is within it.
+        let mut f = within();
+        f.flash_bytes = 128 * 1024;
+        assert_eq!(breaches(&f), []);
+    }
+
+    #[test]
+    fn each_budget_exceeded_alone_fails_naming_that_budget() {
+        let quantities = [
+            Quantity::Flash,
+            Quantity::Ram,
+            Quantity::PaperPlan,
+            Quantity::SpacePlan,
+            Quantity::SteeringReading,
+        ];
+        assert_eq!(quantities.len(), BUDGETS.len(), "a budget left untested");
+        for quantity in quantities {
+            let found = breaches(&over(quantity));
+            assert_eq!(found.len(), 1, "{quantity:?}: {found:?}");
+            let breach = &found[0];
+            assert_eq!(breach.budget.quantity, quantity);
+            let message = breach.to_string();
+            assert!(
+                message.starts_with(&format!("stm32f4: {} over budget: ", breach.budget.name)),
+                "{message}"
+            );
+            assert!(
+                message.contains(&breach.budget.unit.show(breach.budget.limit)),
+                "{message}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_budget_left_unmeasured_fails_rather_than_passes() {
+        let mut f = within();
+        f.instructions.retain(|(name, _)| name != "space");
+        f.replan_instructions.clear();
+        let names: Vec<&str> = breaches(&f).iter().map(|b| b.budget.name).collect();
+        assert_eq!(names, ["space plan", "steering reading"]);
+        assert!(breaches(&f)[0].to_string().contains("not measured"));
+    }
+
+    #[test]
+    fn the_firmware_doc_shows_this_table() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/firmware.md");
+        let doc = std::fs::read_to_string(path).expect("docs/firmware.md");
+        let (begin, end) = DOC_MARKERS;
+        let block = doc
+            .split_once(begin)
+            .and_then(|(_, rest)| rest.split_once(end))
+            .map(|(block, _)| block.trim_start_matches('\n'));
+        assert_eq!(
+            block,
+            Some(markdown_table().as_str()),
+            "docs/firmware.md's budgets table differs from `needle device-bench --budgets`: \
+             paste its output between {begin} and {end}"
+        );
+    }
+
+    #[test]
+    fn limits_are_shown_in_their_unit() {
+        assert_eq!(Unit::Bytes.show(131_072), "131072 B (128 KiB)");
+        assert_eq!(Unit::Bytes.show(127_496), "127496 B (124.5 KiB)");
+        assert_eq!(Unit::Instructions.show(15_000_000), "15 M instructions");
+        assert_eq!(
+            Unit::Instructions.show(13_704_929),
+            "13704929 instructions (13.70 M)"
+        );
+    }
+}

@@ -1,0 +1,264 @@
+//! The figures `needle device-bench` measures on one board, what they come to against the
+//! budgets (`--check`), and their JSON and text forms. Plain data: nothing here runs QEMU.
+
+use crate::budgets;
+use crate::replan_bench::ReplanFigures;
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Map, Value};
+
+/// Figures of one board.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BoardFigures {
+    /// Board name.
+    pub board: String,
+    /// See [`elf::Footprint`].
+    pub flash_bytes: u64,
+    /// See [`elf::Footprint`].
+    pub static_ram_bytes: u64,
+    /// Deepest stack use over all the runs (bytes).
+    pub peak_stack_bytes: u64,
+    /// Scenario name and instructions executed for its plan.
+    pub instructions: Vec<(String, u64)>,
+    /// Scenario name and whether the device's plan equals the host's bit for bit.
+    pub matches_host: Vec<(String, bool)>,
+    /// Scenario name and the instructions per steering reading of one closed-loop insertion.
+    pub replan_instructions: Vec<(String, ReplanFigures)>,
+}
+
+impl BoardFigures {
+    /// The JSON object of `needle device-bench --json`.
+    pub fn to_json(&self) -> Value {
+        let map = |v: &[(String, u64)]| {
+            v.iter()
+                .map(|(k, n)| (k.clone(), json!(n)))
+                .collect::<Map<_, _>>()
+        };
+        let same = self
+            .matches_host
+            .iter()
+            .map(|(k, b)| (k.clone(), json!(b)))
+            .collect::<Map<_, _>>();
+        json!({
+            "board": self.board,
+            "flash_bytes": self.flash_bytes,
+            "static_ram_bytes": self.static_ram_bytes,
+            "peak_stack_bytes": self.peak_stack_bytes,
+            "instructions": map(&self.instructions),
+            "matches_host": same,
+            "replan_instructions": self
+                .replan_instructions
+                .iter()
+                .map(|(k, r)| {
+                    let v = json!({
+                        "max": r.max,
+                        "median": r.median,
+                        "readings": r.readings,
+                        "replans": r.replans,
+                    });
+                    (k.clone(), v)
+                })
+                .collect::<Map<_, _>>(),
+        })
+    }
+
+    /// Reads back one object of `needle device-bench --json` (what [`Self::to_json`] wrote).
+    pub fn from_json(v: &Value) -> Result<BoardFigures> {
+        let number = |v: &Value, key: &str| {
+            v[key]
+                .as_u64()
+                .with_context(|| format!("device-bench JSON: {key} is not a count"))
+        };
+        let object = |key: &str| {
+            v[key]
+                .as_object()
+                .with_context(|| format!("device-bench JSON: {key} is not an object"))
+        };
+        let counts = object("instructions")?
+            .iter()
+            .map(|(k, n)| {
+                let n = n.as_u64().with_context(|| {
+                    format!("device-bench JSON: instructions.{k} is not a count")
+                })?;
+                Ok((k.clone(), n))
+            })
+            .collect::<Result<_>>()?;
+        let matches_host = object("matches_host")?
+            .iter()
+            .map(|(k, b)| {
+                let same = b.as_bool().context("device-bench JSON: matches_host")?;
+                Ok((k.clone(), same))
+            })
+            .collect::<Result<_>>()?;
+        let replan_instructions = object("replan_instructions")?
+            .iter()
+            .map(|(k, r)| {
+                let figures = ReplanFigures {
+                    readings: usize::try_from(number(r, "readings")?)?,
+                    replans: u32::try_from(number(r, "replans")?)?,
+                    max: number(r, "max")?,
+                    median: number(r, "median")?,
+                };
+                Ok((k.clone(), figures))
+            })
+            .collect::<Result<_>>()?;
+        Ok(BoardFigures {
+            board: v["board"]
+                .as_str()
+                .context("device-bench JSON: board is not a name")?
+                .to_owned(),
+            flash_bytes: number(v, "flash_bytes")?,
+            static_ram_bytes: number(v, "static_ram_bytes")?,
+            peak_stack_bytes: number(v, "peak_stack_bytes")?,
+            instructions: counts,
+            matches_host,
+            replan_instructions,
+        })
+    }
+
+    /// What `--check` refuses, as sentences: every budget of [`budgets::BUDGETS`] left (or not
+    /// measured), and every device plan that differs from the host's. Empty when all is well.
+    pub fn problems(&self) -> Vec<String> {
+        let mut out: Vec<String> = budgets::breaches(self)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        for (name, same) in &self.matches_host {
+            if !same {
+                out.push(format!(
+                    "{}: the device's plan of {name} differs from the host's",
+                    self.board
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// What the measured figures come to: with `check`, an error listing every problem (so
+/// `needle device-bench --check` exits non-zero on any), else the problems, to print as warnings.
+pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
+    let problems: Vec<String> = figures.iter().flat_map(BoardFigures::problems).collect();
+    if check && !problems.is_empty() {
+        bail!(
+            "{} check(s) failed:\n  {}",
+            problems.len(),
+            problems.join("\n  ")
+        );
+    }
+    Ok(problems)
+}
+
+/// The human-readable report.
+pub fn table(figures: &[BoardFigures]) -> String {
+    let mut s = String::new();
+    for f in figures {
+        s.push_str(&format!(
+            "{}: flash {} B ({:.1} KiB), static RAM {} B, peak stack {} B, RAM total {:.1} KiB\n",
+            f.board,
+            f.flash_bytes,
+            f.flash_bytes as f64 / 1024.0,
+            f.static_ram_bytes,
+            f.peak_stack_bytes,
+            (f.static_ram_bytes + f.peak_stack_bytes) as f64 / 1024.0
+        ));
+        for ((name, n), (_, same)) in f.instructions.iter().zip(&f.matches_host) {
+            s.push_str(&format!(
+                "  {name}: {n} instructions per plan ({:.2} M), plan {} the host's\n",
+                *n as f64 / 1e6,
+                if *same { "equals" } else { "DIFFERS from" }
+            ));
+        }
+        if f.replan_instructions.is_empty() {
+            s.push_str("  steering not measured (--plan-only)\n");
+        }
+        for (name, r) in &f.replan_instructions {
+            s.push_str(&format!(
+                "  {name} steered: {} readings, {} replans; per reading max {} (≈ {:.1} ms at \
+                 168 MHz), median {} instructions (≈ {:.0} readings/s at 168 MHz, one \
+                 instruction per cycle)\n",
+                r.readings,
+                r.replans,
+                r.max,
+                r.max as f64 / 168e3,
+                r.median,
+                168e6 / r.median.max(1) as f64
+            ));
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn check_refuses_a_250_kib_image_and_without_it_warns() {
+        let mut big = figures_within_budgets();
+        big.flash_bytes = 250 * 1024;
+        let all = [figures_within_budgets(), big];
+        let error = verdict(&all, true).unwrap_err().to_string();
+        assert!(
+            error.starts_with("1 check(s) failed:\n  stm32f4: flash over budget: 256000 B"),
+            "{error}"
+        );
+        assert_eq!(verdict(&all, false).unwrap().len(), 1);
+        assert_eq!(verdict(&all[..1], true).unwrap(), Vec::<String>::new());
+    }
+
+    fn figures_within_budgets() -> BoardFigures {
+        BoardFigures {
+            board: "stm32f4".into(),
+            flash_bytes: 127_496,
+            static_ram_bytes: 11_032,
+            peak_stack_bytes: 20_168,
+            instructions: vec![("paper".into(), 13_704_413), ("space".into(), 82_944_334)],
+            matches_host: vec![("paper".into(), true), ("space".into(), true)],
+            replan_instructions: vec![(
+                "paper".into(),
+                ReplanFigures {
+                    readings: 537,
+                    replans: 410,
+                    max: 408_953,
+                    median: 261_697,
+                },
+            )],
+        }
+    }
+
+    #[test]
+    fn the_json_reads_back_as_the_figures_it_was_written_from() {
+        let mut figures = figures_within_budgets();
+        figures.matches_host[1].1 = false;
+        let back = BoardFigures::from_json(&figures.to_json()).unwrap();
+        assert_eq!(back, figures);
+        // Within every budget, but the device's space plan differs from the host's.
+        assert_eq!(
+            back.problems(),
+            ["stm32f4: the device's plan of space differs from the host's"]
+        );
+        let mut broken = figures.to_json();
+        broken["flash_bytes"] = json!("many");
+        let error = BoardFigures::from_json(&broken).unwrap_err().to_string();
+        assert!(error.contains("flash_bytes"), "{error}");
+    }
+
+    #[test]
+    fn the_table_says_when_steering_was_not_measured() {
+        let figures = BoardFigures {
+            board: "mps2-an386".into(),
+            flash_bytes: 1,
+            static_ram_bytes: 2,
+            peak_stack_bytes: 3,
+            instructions: vec![("paper".into(), 14_000_000)],
+            matches_host: vec![("paper".into(), true)],
+            replan_instructions: Vec::new(),
+        };
+        let text = table(&[figures]);
+        assert!(
+            text.contains("paper: 14000000 instructions per plan"),
+            "{text}"
+        );
+        assert!(text.contains("steering not measured"), "{text}");
+    }
+}
