@@ -15,8 +15,11 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
     if !emulator_ready("firmware_stays_within_its_budgets_on_both_boards") {
         return;
     }
+    // The README's example, as written: it must check the budgets and print the figures.
+    let args = needle_e2e::readme::example_args("device-bench");
+    assert!(args.iter().any(|a| a == "--check") && args.iter().any(|a| a == "--json"));
     let out = needle()
-        .args(["device-bench", "--json"])
+        .args(&args)
         .output()
         .expect("run needle device-bench");
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -1,12 +1,13 @@
 //! The README's promises, kept: every `needle` subcommand has an example in its command table,
 //! every example there and in the first session runs as written (from a working directory that
 //! sees the repository's `examples/` and `tests/`, the device commands against
-//! `hil-sim --tcp 127.0.0.1:7878` as the README starts it), the paper table it prints is what
-//! `needle plan` prints, and the scenario it shows plans.
+//! `hil-sim --tcp 127.0.0.1:7878` as the README starts it; `device-bench`'s, which runs both boards
+//! in QEMU, is run by the firmware budgets test), the paper table it prints is what `needle plan`
+//! prints, and the scenario it shows plans.
 
-mod firmware_support;
 mod wire_support;
 
+use needle_e2e::readme::{fenced_blocks, table_examples, text as readme};
 use needle_e2e::{needle_bin, workspace};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -14,49 +15,6 @@ use wire_support::SimProcess;
 
 /// The address the README's device examples use.
 const README_DEVICE: &str = "127.0.0.1:7878";
-
-fn readme() -> String {
-    std::fs::read_to_string(workspace().join("README.md")).expect("read README.md")
-}
-
-/// The README's fenced blocks: (language, lines).
-fn fenced_blocks(text: &str) -> Vec<(String, Vec<String>)> {
-    let mut blocks = Vec::new();
-    let mut open: Option<(String, Vec<String>)> = None;
-    for line in text.lines() {
-        match (open.take(), line.strip_prefix("```")) {
-            (None, Some(lang)) => open = Some((lang.trim().to_string(), Vec::new())),
-            (Some(block), Some(_)) => blocks.push(block),
-            (Some((lang, mut lines)), None) => {
-                lines.push(line.to_string());
-                open = Some((lang, lines));
-            }
-            (None, None) => {}
-        }
-    }
-    blocks
-}
-
-/// The example of each row of the command table: (subcommand, example).
-fn table_examples(text: &str) -> Vec<(String, String)> {
-    let section = text
-        .split("\n## Commands")
-        .nth(1)
-        .and_then(|s| s.split("\n## ").next())
-        .expect("README has a Commands section");
-    section
-        .lines()
-        .filter(|l| l.starts_with("| `"))
-        .filter_map(|l| {
-            let cells: Vec<&str> = l.split(" | ").collect();
-            let command = cells.first()?.trim_start_matches("| ").trim_matches('`');
-            let example = cells.last()?.trim_end_matches(" |").trim_matches('`');
-            example
-                .starts_with("needle ")
-                .then(|| (command.to_string(), example.to_string()))
-        })
-        .collect()
-}
 
 /// `needle`'s subcommands, as its help lists them.
 fn subcommands() -> Vec<String> {
@@ -150,10 +108,10 @@ fn every_example_in_the_readme_runs_as_written() {
     assert!(text.contains(&start), "the README starts hil-sim as {start}");
     let _device = SimProcess::start(&["--tcp", README_DEVICE]);
     let dir = scratch("examples");
-    let emulator = firmware_support::emulator_ready("every_example_in_the_readme_runs_as_written");
     let mut ran = 0;
     for line in every_example(&text) {
-        if line.starts_with("needle device-bench") && !emulator {
+        // QEMU's run of both boards is long: the firmware budgets test runs this example.
+        if line.starts_with("needle device-bench") {
             continue;
         }
         run_example(&line, &dir);
