@@ -195,7 +195,7 @@ const KNOWN_BASINS: usize = 24;
 
 /// The SQP from `x`, stopped early in a basin `known` holds, which it adds to.
 fn refine(p: &Problem, x: &Vars, known: &mut Basins, effort: &mut Effort) -> Option<LocalSolution> {
-    let sol = sqp::solve(p, x, known.as_mut_view())?;
+    let sol = sqp::solve(p, x, known.as_mut_view()).ok()?;
     effort.iterations += sol.iterations;
     effort.evaluations += sol.evaluations;
     Some(sol)
@@ -391,7 +391,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
         target_error: verdict.target_error,
         insertion,
         segments,
-        kkt_residual: sol.step_norm,
+        kkt_residual: sol.kkt_residual,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }
