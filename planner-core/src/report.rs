@@ -137,14 +137,16 @@ pub type FormOutcomes = heapless::Vec<FormOutcome, FORM_COUNT>;
 pub struct PlanReport {
     /// One outcome per form tried, in catalogue order.
     pub forms: FormOutcomes,
-    /// Index into `forms` of the feasible outcome with the lowest objective.
-    pub best: u8,
+    /// Index into `forms` of the feasible outcome with the lowest objective; `None` when no form
+    /// is feasible (the target is unreachable with the selected forms: `forms` says how each
+    /// ended).
+    pub best: Option<u8>,
 }
 
 impl PlanReport {
-    /// The overall best outcome.
+    /// The overall best outcome, if any form is feasible.
     pub fn best(&self) -> Option<&FormOutcome> {
-        self.forms.get(usize::from(self.best))
+        self.forms.get(usize::from(self.best?))
     }
 
     /// Total optimiser iterations.

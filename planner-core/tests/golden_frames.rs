@@ -106,8 +106,11 @@ fn fixed_plan() -> ScheduledPlan {
         max_twist_deg: 360.0,
     };
     ScheduledPlan {
-        report: PlanReport { forms, best: 0 },
-        schedule: Ok(schedule),
+        report: PlanReport {
+            forms,
+            best: Some(0),
+        },
+        schedule: Some(Ok(schedule)),
     }
 }
 

@@ -30,7 +30,7 @@ pub fn simulate_on_device(
         .context("planning on the device")?
         .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
     match &planned_there.schedule {
-        Ok(s) if *s == prepared.schedule => {}
+        Some(Ok(s)) if *s == prepared.schedule => {}
         _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
     }
     let planned = Planned::of(scenario, &prepared.outcome);
