@@ -30,6 +30,14 @@ enum Row {
     General(u8),
 }
 
+/// The coefficients of one constraint row of the KKT system.
+enum Coefficients<'a> {
+    /// A general row.
+    Dense(&'a Vars),
+    /// `sign` times unit vector `k` (`Unit(k, sign)`).
+    Unit(usize, f32),
+}
+
 /// A QP instance.
 #[derive(Clone, Debug)]
 pub struct Qp {
@@ -253,31 +261,29 @@ impl Qp {
             rhs[i] = -(hp + self.g[i]);
         }
         for r in 0..self.m_eq + working.len {
-            let row = if r < self.m_eq {
-                None
+            let coefficients = if r < self.m_eq {
+                Coefficients::Dense(&self.eq[r])
             } else {
-                Some(self.rows[working.rows[r - self.m_eq]])
-            };
-            let general = match row {
-                None => Some(&self.eq[r]),
-                Some(Row::General(g)) => Some(&self.general[usize::from(g)]),
-                Some(Row::Plus(_) | Row::Minus(_)) => None,
-            };
-            if let Some(a) = general {
-                for j in 0..n {
-                    k[n + r][j] = a[j];
-                    k[j][n + r] = -a[j];
+                match self.rows[working.rows[r - self.m_eq]] {
+                    Row::General(g) => Coefficients::Dense(&self.general[usize::from(g)]),
+                    Row::Plus(at) => Coefficients::Unit(usize::from(at), 1.0),
+                    Row::Minus(at) => Coefficients::Unit(usize::from(at), -1.0),
                 }
-            } else if let Some(Row::Plus(at) | Row::Minus(at)) = row {
-                let one = if matches!(row, Some(Row::Plus(_))) {
-                    1.0f32
-                } else {
-                    -1.0
-                };
-                for j in 0..n {
-                    let a = if j == usize::from(at) { one } else { 0.0 };
-                    k[n + r][j] = a;
-                    k[j][n + r] = -a;
+            };
+            // Row n + r holds the constraint, column n + r its negation (the -Aᵀ block).
+            match coefficients {
+                Coefficients::Dense(a) => {
+                    for j in 0..n {
+                        k[n + r][j] = a[j];
+                        k[j][n + r] = -a[j];
+                    }
+                }
+                Coefficients::Unit(at, sign) => {
+                    for j in 0..n {
+                        let a = if j == at { sign } else { 0.0 };
+                        k[n + r][j] = a;
+                        k[j][n + r] = -a;
+                    }
                 }
             }
         }
