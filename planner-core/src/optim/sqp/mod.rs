@@ -124,18 +124,14 @@ pub fn solve_within(
     run(p, x0, None, max_iterations)
 }
 
-/// `x0` restored onto the target and evaluated, if that gives a feasible start.
-fn feasible_start(p: &Problem, x0: &Vars, evals: &mut u32) -> Result<Value, SolveFailure> {
+/// `x0` restored onto the target.
+fn restored_start(p: &Problem, x0: &Vars, evals: &mut u32) -> Result<Vars, SolveFailure> {
     let mut x = *x0;
-    if !restore(p, &mut x, evals) {
-        return Err(SolveFailure::StartOffTarget);
+    if restore(p, &mut x, evals) {
+        Ok(x)
+    } else {
+        Err(SolveFailure::StartOffTarget)
     }
-    let start = p.value(&x);
-    *evals += 1;
-    if !start.admissible(p) {
-        return Err(SolveFailure::StartInadmissible);
-    }
-    Ok(start)
 }
 
 /// The SQP; its accepted iterates go to `memory`.
@@ -147,7 +143,14 @@ fn run(
 ) -> Result<LocalSolution, SolveFailure> {
     let max_iterations = max_iterations.min(MAX_ITERATIONS);
     let mut evals = 0u32;
-    let start = feasible_start(p, x0, &mut evals)?;
+    let x = restored_start(p, x0, &mut evals)?;
+    // Evaluated where it is kept: a `Value` holds the whole path, and copies of it cost more
+    // than the rest of a short run's bookkeeping on the device.
+    let start = p.value(&x);
+    evals += 1;
+    if !start.admissible(p) {
+        return Err(SolveFailure::StartInadmissible);
+    }
     // Two buffers: the current point and the line search's trial point (an accepted trial
     // becomes current by flipping `ci`, not by copying).
     let mut vals = [start.clone(), start];
@@ -157,7 +160,8 @@ fn run(
     let mut status = SolveStatus::BudgetExhausted;
     let mut iterations = 0;
     let mut step_norm = f32::INFINITY;
-    let mut multipliers = Multipliers::none();
+    // The last QP solved (its multipliers go into the reported residual).
+    let mut last_qp: Option<(QpSolution, QpRows)> = None;
     let mut qp = Qp::new(n, hessian::initial(p), cur_d.grad);
     while iterations < max_iterations {
         iterations += 1;
@@ -170,11 +174,11 @@ fn run(
             step_norm = 0.0;
             break;
         }
-        let Some((sol, rows)) = step_qp(&mut qp, p, cur, &cur_d) else {
+        let Some(solved) = step_qp(&mut qp, p, cur, &cur_d) else {
             status = SolveStatus::QpFailed;
             break;
         };
-        multipliers = Multipliers::of(p, &sol, &rows);
+        let (sol, rows) = &*last_qp.insert(solved);
         let slope;
         (slope, step_norm) = slope_and_size(&cur_d.grad, &sol.p, n);
         if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
@@ -191,15 +195,18 @@ fn run(
         if let Some(m) = memory.as_mut() {
             m.passed(&trial.x, trial.objective);
         }
-        update_hessian(&mut qp.h, p, (cur, trial), &mut cur_d, &sol, &rows);
+        update_hessian(&mut qp.h, p, (cur, trial), &mut cur_d, sol, rows);
         ci = 1 - ci;
     }
-    let [a, b] = vals;
-    let eval = if ci == 0 { a } else { b };
+    let multipliers = match &last_qp {
+        Some((sol, rows)) => Multipliers::of(p, sol, rows),
+        None => Multipliers::none(),
+    };
     // `cur_d` holds the derivatives at the reported point.
-    let kkt_residual = residual::residual_at(p, &eval, &cur_d, &multipliers);
+    let kkt_residual = residual::residual_at(p, &vals[ci], &cur_d, &multipliers);
+    let [a, b] = vals;
     Ok(LocalSolution {
-        eval,
+        eval: if ci == 0 { a } else { b },
         status,
         iterations,
         evaluations: evals,
