@@ -46,6 +46,7 @@ pub fn measure<T: Transport>(
     let schedule = planned
         .schedule
         .clone()
+        .context("the plan has no feasible form to schedule")?
         .map_err(|e| anyhow!("no schedule: {e}"))?;
     let best = planned
         .report

@@ -122,23 +122,24 @@ fn load(args: &PlanArgs) -> Result<Scenario> {
 }
 
 /// Prints a plan as `plan` and `send` do: the table (and with `--schedule` the schedule's), or
-/// the JSON report with `best.schedule`.
+/// the JSON report with `best.schedule` (`best` is `null` when no form is feasible, and there is
+/// no schedule).
 fn print_plan(
     args: &PlanArgs,
     scenario: &Scenario,
     report: &PlanReport,
-    schedule: &Schedule,
+    schedule: Option<&Schedule>,
     stats: Stats,
 ) -> Result<()> {
     if args.json {
         writeln!(
             std::io::stdout(),
             "{}",
-            plan_json(scenario, report, Some(schedule), stats)
+            plan_json(scenario, report, schedule, stats)
         )?;
     } else {
         write!(std::io::stdout(), "{}", plan_table(report, stats))?;
-        if args.schedule {
+        if let Some(schedule) = schedule.filter(|_| args.schedule) {
             write!(
                 std::io::stdout(),
                 "{}",
@@ -149,6 +150,15 @@ fn print_plan(
     Ok(())
 }
 
+/// A printed report without a best form is still a failed plan: the command says why on stderr
+/// and exits 1.
+fn reachable(report: &PlanReport) -> Result<()> {
+    match report.best() {
+        Some(_) => Ok(()),
+        None => Err(anyhow!(planner_core::PlanError::Unreachable)),
+    }
+}
+
 fn plan(args: &PlanArgs) -> Result<()> {
     let scenario = load(args)?;
     let start = Instant::now();
@@ -156,26 +166,39 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let stats = Stats {
         time_us: start.elapsed().as_micros() as u64,
     };
-    let schedule = planned
-        .schedule
-        .as_ref()
-        .map_err(|e| anyhow!("no motor schedule for the best path: {e}"))?;
+    let schedule = match &planned.schedule {
+        Some(made) => Some(
+            made.as_ref()
+                .map_err(|e| anyhow!("no motor schedule for the best path: {e}"))?,
+        ),
+        None => None,
+    };
     print_plan(args, &scenario, &planned.report, schedule, stats)?;
     if let Some(out) = &args.plot {
         analysis::write_plan_plot(&args.file, args.approx, &scenario, &planned.report, out)?;
     }
-    Ok(())
+    reachable(&planned.report)
 }
 
 fn send(args: &SendArgs) -> Result<()> {
     let scenario = load(&args.plan)?;
     let (result, device) = device::send::plan_on_device(&scenario, &args.link)?;
     let planned = result.context("planning failed")?;
-    let schedule = device::verify::verified_schedule(&scenario, &planned)?;
     let stats = Stats {
         time_us: device.time_us,
     };
-    print_plan(&args.plan, &scenario, &planned.report, schedule, stats)?;
+    if planned.report.best().is_none() {
+        print_plan(&args.plan, &scenario, &planned.report, None, stats)?;
+        return reachable(&planned.report);
+    }
+    let schedule = device::verify::verified_schedule(&scenario, &planned)?;
+    print_plan(
+        &args.plan,
+        &scenario,
+        &planned.report,
+        Some(schedule),
+        stats,
+    )?;
     Ok(())
 }
 

@@ -108,6 +108,7 @@ impl core::fmt::Display for Field {
 /// Why a scenario cannot be planned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum PlanError {
     /// A number is NaN or infinite.
     NotFinite(Field),
@@ -146,7 +147,10 @@ pub enum PlanError {
     },
     /// Plane mode was asked for but the entry, its direction or the target leave the y-z plane.
     NotInPlane(Field),
-    /// No selected form gives a collision-free path that reaches the target.
+    /// No selected form gives a collision-free path that reaches the target. The planner does not
+    /// return it (a plan with no feasible form is a [`crate::PlanReport`] without a best, which
+    /// keeps every form's outcome); it is the error a caller reports for such a plan, as `needle
+    /// plan` does.
     Unreachable,
 }
 

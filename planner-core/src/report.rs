@@ -3,16 +3,32 @@
 use crate::model::form::{Form, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
 use serde::{Deserialize, Serialize};
 
-/// How a form's optimisation ended.
+/// How the solve that produced a form's reported path ended (for a feasible form), or that the
+/// form has none. Every status but `Infeasible` comes with the path and its `kkt_residual`, which
+/// says how nearly the first-order conditions hold there.
+///
+/// On the wire and in `plan --json` a status is its variant: new ones are only ever appended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SolveStatus {
-    /// The KKT conditions hold to the solver's tolerance.
+    /// The SQP's stop test passed: its QP step (largest change of any variable) fell below 1e-5,
+    /// or the step no longer promised a decrease of the objective beyond f32 resolution.
     Converged,
-    /// The iteration budget ran out; the best feasible point found is reported.
+    /// The iteration budget ran out; the last iterate (feasible, on target) is reported.
     BudgetExhausted,
     /// No collision-free path of this form reaches the target within the bounds.
     Infeasible,
+    /// No trial point along the QP's descent direction lowered the objective while staying on
+    /// the target and clear of the obstacles: stationary to f32 resolution, or held by a
+    /// constraint the QP's linearisation does not see (`kkt_residual` tells which).
+    LineSearchStalled,
+    /// The QP of a step could not be solved even with fewer clearance rows and a fresh Hessian;
+    /// the last iterate is reported.
+    QpFailed,
+    /// The run came within a basin of a local solution an earlier start of the same problem had
+    /// found, no worse than this point, and stopped there: it would have followed the earlier
+    /// descent.
+    KnownBasin,
 }
 
 /// The insertion posture: the nominal axis turned about the entry frame's first axis, then its second.
@@ -69,8 +85,13 @@ pub struct FormOutcome {
     pub insertion: Insertion,
     /// The segments, entry first.
     pub segments: Segments,
-    /// KKT residual of the reported solve: the infinity norm of the last SQP step (radians or
-    /// radius-lengths); near zero when it converged.
+    /// First-order (KKT) residual at the reported path, in the form's scaled variables (insertion
+    /// angles and bevels in radians, lengths in arc radii): the larger of stationarity
+    /// ‖∇F − Σ λⱼ ∇eⱼ − Σ μᵢ ∇cᵢ‖∞ and complementarity maxᵢ |μᵢ cᵢ| (a multiplier μᵢ < 0 counts
+    /// as |μᵢ|), where eⱼ = 0 are the end-point rows, cᵢ ≥ 0 the bounds, the tilt cone and the
+    /// clearances above the optimiser's floor (mm), all at the reported point, and λ, μ the
+    /// multipliers of the last QP the run solved (zero if it solved none). Zero at a KKT point;
+    /// NaN for an infeasible form.
     pub kkt_residual: f32,
     /// Optimiser iterations spent on this form (all starts).
     pub iterations: u32,
@@ -116,14 +137,16 @@ pub type FormOutcomes = heapless::Vec<FormOutcome, FORM_COUNT>;
 pub struct PlanReport {
     /// One outcome per form tried, in catalogue order.
     pub forms: FormOutcomes,
-    /// Index into `forms` of the feasible outcome with the lowest objective.
-    pub best: u8,
+    /// Index into `forms` of the feasible outcome with the lowest objective; `None` when no form
+    /// is feasible (the target is unreachable with the selected forms: `forms` says how each
+    /// ended).
+    pub best: Option<u8>,
 }
 
 impl PlanReport {
-    /// The overall best outcome.
+    /// The overall best outcome, if any form is feasible.
     pub fn best(&self) -> Option<&FormOutcome> {
-        self.forms.get(usize::from(self.best))
+        self.forms.get(usize::from(self.best?))
     }
 
     /// Total optimiser iterations.

@@ -64,34 +64,35 @@ impl PlanSession {
         self.outcomes.last()
     }
 
-    /// Plans what is left and picks the best feasible form.
-    pub fn finish(mut self) -> Result<PlanReport, PlanError> {
+    /// Plans what is left and picks the best feasible form (none when no form is feasible: the
+    /// report still tells how every form ended).
+    pub fn finish(mut self) -> PlanReport {
         self.conclude()
     }
 
     /// Plans what is left, picks the best feasible form and builds its motor schedule (what a
     /// device answers).
-    pub fn finish_scheduled(mut self) -> Result<ScheduledPlan, PlanError> {
-        let report = self.conclude()?;
-        Ok(ScheduledPlan::new(&self.scenario, report))
+    pub fn finish_scheduled(mut self) -> ScheduledPlan {
+        let report = self.conclude();
+        ScheduledPlan::new(&self.scenario, report)
     }
 
     /// Builds the best planned form's motor schedule from the forms planned so far, planning
     /// none: what a device answers once [`PlanSession::step`] has returned `None`. Leaving the
     /// solver out keeps its frames off the stack under the device's result encoding.
-    pub fn scheduled_so_far(mut self) -> Result<ScheduledPlan, PlanError> {
-        let report = self.report_so_far()?;
-        Ok(ScheduledPlan::new(&self.scenario, report))
+    pub fn scheduled_so_far(mut self) -> ScheduledPlan {
+        let report = self.report_so_far();
+        ScheduledPlan::new(&self.scenario, report)
     }
 
     /// Plans what is left and moves the outcomes into the report of the best feasible form.
-    fn conclude(&mut self) -> Result<PlanReport, PlanError> {
+    fn conclude(&mut self) -> PlanReport {
         while self.step().is_some() {}
         self.report_so_far()
     }
 
     /// Moves the outcomes planned so far into the report of the best feasible one.
-    fn report_so_far(&mut self) -> Result<PlanReport, PlanError> {
+    fn report_so_far(&mut self) -> PlanReport {
         let mut best: Option<usize> = None;
         for (i, o) in self.outcomes.iter().enumerate() {
             let better = match best {
@@ -102,22 +103,20 @@ impl PlanSession {
                 best = Some(i);
             }
         }
-        match best {
-            Some(b) => Ok(PlanReport {
-                forms: core::mem::take(&mut self.outcomes),
-                best: b as u8,
-            }),
-            None => Err(PlanError::Unreachable),
+        PlanReport {
+            forms: core::mem::take(&mut self.outcomes),
+            best: best.map(|b| b as u8),
         }
     }
 }
 
-/// Plans every selected form of `scenario` and returns the per-form table and the best plan.
+/// Plans every selected form of `scenario` and returns the per-form table and the best plan (if
+/// any form is feasible). `Err` only for a scenario that cannot be planned (invalid input).
 pub fn plan(scenario: &Scenario) -> Result<PlanReport, PlanError> {
-    PlanSession::new(scenario.clone())?.finish()
+    Ok(PlanSession::new(scenario.clone())?.finish())
 }
 
 /// Plans `scenario` and builds the best form's motor schedule: exactly what a device answers.
 pub fn plan_scheduled(scenario: &Scenario) -> Result<ScheduledPlan, PlanError> {
-    PlanSession::new(scenario.clone())?.finish_scheduled()
+    Ok(PlanSession::new(scenario.clone())?.finish_scheduled())
 }

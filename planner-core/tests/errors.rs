@@ -1,7 +1,7 @@
 //! Every kind of bad input gets its typed error (and never a panic).
 
 use planner_core::model::scenario::{Obstacle, Workspace, CURVATURE_RADIUS_RANGE_MM};
-use planner_core::{plan, Field, Form, PlanError, Scenario};
+use planner_core::{plan, plan_scheduled, Field, Form, PlanError, Scenario, SolveStatus};
 
 fn err(s: &Scenario) -> PlanError {
     plan(s).unwrap_err()
@@ -102,7 +102,7 @@ fn plane_mode_needs_a_planar_scenario() {
 }
 
 #[test]
-fn an_enclosed_target_is_unreachable() {
+fn an_enclosed_target_gives_a_report_without_a_best_form() {
     let mut s = Scenario::paper();
     s.obstacles.clear();
     // A ring of circles around the target, touching each other, leaves no way in.
@@ -115,7 +115,17 @@ fn an_enclosed_target_is_unreachable() {
             })
             .unwrap();
     }
-    assert_eq!(err(&s), PlanError::Unreachable);
+    // Not an error: the report has no best, and every form says it found no feasible path.
+    let report = plan(&s).unwrap();
+    assert_eq!(report.best, None);
+    assert!(report.best().is_none());
+    assert!(!report.forms.is_empty());
+    assert!(report
+        .forms
+        .iter()
+        .all(|o| !o.feasible && o.status == SolveStatus::Infeasible));
+    let planned = plan_scheduled(&s).unwrap();
+    assert_eq!(planned.schedule, None);
 }
 
 #[test]

@@ -106,12 +106,17 @@ fn fixed_plan() -> ScheduledPlan {
         max_twist_deg: 360.0,
     };
     ScheduledPlan {
-        report: PlanReport { forms, best: 0 },
-        schedule: Ok(schedule),
+        report: PlanReport {
+            forms,
+            best: Some(0),
+        },
+        schedule: Some(Ok(schedule)),
     }
 }
 
 /// The frames of a whole exchange for the paper's scenario, one `name hex` line each.
+// Test code: one exchange, read top to bottom as it happens on the wire.
+#[allow(clippy::too_many_lines)]
 fn exchange() -> String {
     let scenario = Scenario::paper();
     let request = postcard::to_stdvec(&PlanRequest::new(&scenario)).unwrap();

@@ -237,3 +237,35 @@ fn the_device_refuses_bad_scenarios_with_the_same_typed_errors_as_the_host() {
     assert!(matches!(host, PlanError::ToleranceTooFine { .. }));
     assert_eq!(plan_on_service(&fine).err(), Some(host));
 }
+
+#[test]
+fn the_device_answers_an_unreachable_target_with_every_form_and_no_best() {
+    use planner_core::model::scenario::Obstacle;
+    use planner_core::SolveStatus;
+    // Only a straight line, and a sphere on the way: no form reaches the target.
+    let mut s = Scenario::paper();
+    s.options.max_control_degree = 1;
+    s.obstacles
+        .push(Obstacle {
+            center: [0.0, 0.0, 70.0],
+            radius: 15.0,
+        })
+        .unwrap();
+    let mut lines_only = planner_core::model::form::FormSet(0);
+    lines_only.insert(planner_core::Form::parse("L").unwrap());
+    s.options.forms = lines_only;
+    let on_device = plan_on_service(&s).expect("a finished plan, not an error");
+    assert_eq!(on_device.report.best, None);
+    assert_eq!(on_device.schedule, None);
+    assert!(!on_device.report.forms.is_empty());
+    assert!(on_device
+        .report
+        .forms
+        .iter()
+        .all(|o| !o.feasible && o.status == SolveStatus::Infeasible));
+    // Exactly what the host plans (compared encoded: the absent numbers are NaN).
+    assert_eq!(
+        postcard::to_stdvec(&on_device).unwrap(),
+        postcard::to_stdvec(&planner_core::plan_scheduled(&s).unwrap()).unwrap()
+    );
+}

@@ -43,11 +43,19 @@ pub fn check_plan(s: &Scenario) -> Result<(), String> {
             }
             match planned.report.best() {
                 Some(best) if best.feasible => {}
+                None if planned.report.forms.iter().all(|o| !o.feasible) => {
+                    // Unreachable: every form's outcome is reported, and there is nothing to
+                    // execute.
+                    return match planned.schedule {
+                        None => Ok(()),
+                        Some(s) => Err(format!("a plan with no best form has a schedule: {s:?}")),
+                    };
+                }
                 other => return Err(format!("the best form is not feasible: {other:?}")),
             }
             let schedule = match planned.schedule.as_ref() {
-                Ok(schedule) => schedule,
-                Err(e) => return Err(format!("a plan without a schedule: {e:?}")),
+                Some(Ok(schedule)) => schedule,
+                other => return Err(format!("a plan without a schedule: {other:?}")),
             };
             let check = nominal::check(s, schedule);
             if !check.feasible {

@@ -334,3 +334,56 @@ fn a_bad_driver_setting_names_the_key() {
     b.as_object_mut().unwrap().remove("stats");
     assert_eq!(a, b);
 }
+
+/// The paper's scenario with a big sphere in front of the target and only straight lines allowed:
+/// no form can reach it.
+fn blocked_lines_only() -> TempScenario {
+    let text = std::fs::read_to_string(example("paper"))
+        .unwrap()
+        .replace("[planner]\n", "[planner]\nforms = [\"L\"]\n");
+    TempScenario::new(&format!(
+        "{text}\n[[obstacles]]\ncenter = [0.0, 0.0, 70.0]\nradius = 15.0\n"
+    ))
+}
+
+#[test]
+fn a_plan_with_no_feasible_form_prints_every_form_and_no_best_and_exits_1() {
+    let scenario = blocked_lines_only();
+    let out = needle()
+        .args(["plan", scenario.0.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the target is unreachable"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let v: Value = serde_json::from_slice(&out.stdout).expect("the JSON report on stdout");
+    assert!(v["best"].is_null(), "{}", v["best"]);
+    let forms = v["forms"].as_array().unwrap();
+    assert_eq!(forms.len(), 1);
+    assert_eq!(forms[0]["form"], "L");
+    assert_eq!(forms[0]["feasible"], false);
+    assert_eq!(forms[0]["status"], "Infeasible");
+    assert!(
+        forms[0]["evaluations"].as_u64().unwrap() > 0,
+        "the form was tried"
+    );
+    assert!(v["stats"]["time_us"].is_number());
+
+    let out = needle()
+        .args(["plan", scenario.0.to_str().unwrap(), "--schedule"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        table.contains("form") && table.contains("Infeasible"),
+        "{table}"
+    );
+    assert!(
+        !table.contains("best:") && !table.contains("schedule ("),
+        "{table}"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the target is unreachable"), "{err}");
+}

@@ -1,8 +1,9 @@
 //! Plans do not drift: `needle plan --json` of the examples and of five random scenarios equals,
 //! number for number, what main printed when they were last blessed (tests/data/golden/*.plan.json;
-//! first before the restructuring, last when the SQP began to remember earlier descents: a change
-//! that moves plan bits on purpose re-blesses them and says by how much F moved, in
-//! docs/optimality.md).
+//! first before the restructuring, last when `kkt_residual` became the first-order residual at
+//! the reported path, which moved that key only: a change that moves plan bits on purpose
+//! re-blesses them with `needle plan FILE --json > tests/data/golden/NAME.plan.json` and says by
+//! how much F moved, in docs/optimality.md).
 //!
 //! Every key of the stored output must come back with exactly the same value; keys added later
 //! (new outputs) are allowed, and `stats.time_us` is a measurement, so it is not compared.

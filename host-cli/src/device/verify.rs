@@ -12,6 +12,8 @@ pub fn verified_schedule<'a>(scenario: &Scenario, plan: &'a ScheduledPlan) -> Re
     let device = plan
         .schedule
         .as_ref()
+        .context("the device sent no motor schedule: its report names no best form")?
+        .as_ref()
         .map_err(|e| anyhow!("the device sent no motor schedule for its plan: {e}"))?;
     let best = plan
         .report
@@ -110,14 +112,14 @@ mod tests {
         let (s, p) = paper();
         assert_eq!(
             verified_schedule(&s, &p).unwrap(),
-            p.schedule.as_ref().unwrap()
+            p.schedule.as_ref().unwrap().as_ref().unwrap()
         );
     }
 
     #[test]
     fn a_schedule_that_misses_the_target_is_refused() {
         let (s, mut p) = paper();
-        let sched = p.schedule.as_mut().unwrap();
+        let sched = p.schedule.as_mut().unwrap().as_mut().unwrap();
         if let Op::Insert { length_mm } = &mut sched.steps[0].op {
             *length_mm += 1.0;
         }
@@ -129,7 +131,7 @@ mod tests {
     #[test]
     fn a_schedule_one_bit_off_is_refused_by_name() {
         let (s, mut p) = paper();
-        let sched = p.schedule.as_mut().unwrap();
+        let sched = p.schedule.as_mut().unwrap().as_mut().unwrap();
         sched.duration_s = f32::from_bits(sched.duration_s.to_bits() + 1);
         let e = verified_schedule(&s, &p).unwrap_err().to_string();
         assert!(e.contains("differs") && e.contains("duration_s"), "{e}");
@@ -138,7 +140,10 @@ mod tests {
     #[test]
     fn a_missing_schedule_is_refused() {
         let (s, mut p) = paper();
-        p.schedule = Err(planner_core::execute::schedule::ScheduleError::NoPath);
+        p.schedule = Some(Err(planner_core::execute::schedule::ScheduleError::NoPath));
+        let e = verified_schedule(&s, &p).unwrap_err().to_string();
+        assert!(e.contains("no motor schedule"), "{e}");
+        p.schedule = None;
         let e = verified_schedule(&s, &p).unwrap_err().to_string();
         assert!(e.contains("no motor schedule"), "{e}");
     }

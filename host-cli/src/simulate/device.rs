@@ -38,7 +38,7 @@ pub fn on_device(
         .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
     let schedule = &setup.prepared.schedule;
     match &planned_there.schedule {
-        Ok(s) if s == schedule => {}
+        Some(Ok(s)) if s == schedule => {}
         _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
     }
     setup.collect(keep, |items| {

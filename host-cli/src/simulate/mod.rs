@@ -33,7 +33,7 @@ pub fn prepare(scenario: &Scenario) -> Result<Prepared> {
     let outcome = report
         .best()
         .cloned()
-        .ok_or_else(|| anyhow!("no form has a feasible path: nothing to simulate"))?;
+        .ok_or_else(|| anyhow!(planner_core::PlanError::Unreachable))?;
     let schedule = schedule(scenario, &outcome)
         .map_err(|e| anyhow!("cannot schedule the {} path: {e:?}", outcome.form))?;
     Ok(Prepared { outcome, schedule })

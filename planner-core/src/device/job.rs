@@ -108,7 +108,7 @@ impl Core {
     fn finish(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
         if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle) {
             // Called once `step` found no form left.
-            let result = session.scheduled_so_far();
+            let result: PlanResult = Ok(session.scheduled_so_far());
             self.stats.plans += 1;
             self.store_result(id, up, &result, tx);
         }

@@ -11,10 +11,10 @@ use serde::{Deserialize, Serialize};
 pub struct ScheduledPlan {
     /// Every form tried and the best named.
     pub report: PlanReport,
-    /// What the driver executes for the best form, or why it cannot (a report always names a
-    /// feasible best form and the driver is validated with the scenario, so this is `Ok` for any
-    /// report the planner makes).
-    pub schedule: Result<Schedule, ScheduleError>,
+    /// What the driver executes for the best form, or why it cannot; `None` when the report has
+    /// no best form (the driver is validated with the scenario, so this is `Some(Ok(_))` for any
+    /// report with a best form the planner makes).
+    pub schedule: Option<Result<Schedule, ScheduleError>>,
 }
 
 impl ScheduledPlan {
@@ -26,13 +26,10 @@ impl ScheduledPlan {
     ///
     /// let scenario = Scenario::paper();
     /// let planned = ScheduledPlan::new(&scenario, plan(&scenario).unwrap());
-    /// assert!(planned.schedule.unwrap().duration_s > 0.0);
+    /// assert!(planned.schedule.unwrap().unwrap().duration_s > 0.0);
     /// ```
     pub fn new(scenario: &Scenario, report: PlanReport) -> ScheduledPlan {
-        let schedule = match report.best() {
-            Some(best) => schedule(scenario, best),
-            None => Err(ScheduleError::NoPath),
-        };
+        let schedule = report.best().map(|best| schedule(scenario, best));
         ScheduledPlan { report, schedule }
     }
 }

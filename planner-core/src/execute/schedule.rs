@@ -90,6 +90,7 @@ pub struct Schedule {
 /// Why no schedule can be made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum ScheduleError {
     /// The outcome has no feasible path to execute.
     NoPath,
@@ -105,6 +106,15 @@ impl core::fmt::Display for ScheduleError {
             ScheduleError::NoPath => f.write_str("the plan has no feasible path to execute"),
             ScheduleError::Driver(e) => write!(f, "unusable driver setting: {e}"),
             ScheduleError::Capacity => write!(f, "more than {MAX_STEPS} steps"),
+        }
+    }
+}
+
+impl core::error::Error for ScheduleError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            ScheduleError::Driver(e) => Some(e),
+            _ => None,
         }
     }
 }

@@ -158,7 +158,7 @@ mod tests {
         for (sides, x0) in turned {
             let p = Problem::new(&s, form, sides);
             let mut store: heapless::Vec<(Vars, f32), 24> = heapless::Vec::new();
-            let Some(first) = sqp::solve(&p, &x0, store.as_mut_view()) else {
+            let Ok(first) = sqp::solve(&p, &x0, store.as_mut_view()) else {
                 continue;
             };
             // The run's iterates far from its end come first, then its solution.
@@ -168,6 +168,7 @@ mod tests {
             assert!(f > first.eval.objective);
             let again = sqp::solve(&p, &on_the_way, store.as_mut_view()).unwrap();
             assert_eq!((again.iterations, again.step_norm), (1, 0.0));
+            assert_eq!(again.status, crate::SolveStatus::KnownBasin);
             assert!(again.eval.objective >= first.eval.objective);
             let mut empty: heapless::Vec<(Vars, f32), 24> = heapless::Vec::new();
             let alone = sqp::solve(&p, &on_the_way, empty.as_mut_view()).unwrap();

@@ -10,7 +10,7 @@ use crate::model::form::{Form, SegmentKind};
 use crate::model::kinematics::{entry_basis, insertion_frame, V3};
 use crate::model::scenario::{Scenario, Workspace};
 use crate::optim::problem::{Problem, Vars};
-use crate::optim::sqp::{self, LocalSolution};
+use crate::optim::sqp::{self, LocalSolution, SolveFailure};
 use crate::report::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::search::escape::escape;
 use crate::search::seeds::{sweep, SeedSink};
@@ -194,11 +194,19 @@ type Basins = heapless::Vec<(Vars, f32), KNOWN_BASINS>;
 const KNOWN_BASINS: usize = 24;
 
 /// The SQP from `x`, stopped early in a basin `known` holds, which it adds to.
-fn refine(p: &Problem, x: &Vars, known: &mut Basins, effort: &mut Effort) -> Option<LocalSolution> {
-    let sol = sqp::solve(p, x, known.as_mut_view())?;
-    effort.iterations += sol.iterations;
-    effort.evaluations += sol.evaluations;
-    Some(sol)
+/// A start that cannot be made feasible is skipped; its effort is not counted.
+fn refine(
+    p: &Problem,
+    x: &Vars,
+    known: &mut Basins,
+    effort: &mut Effort,
+) -> Result<LocalSolution, SolveFailure> {
+    let sol = sqp::solve(p, x, known.as_mut_view());
+    if let Ok(sol) = &sol {
+        effort.iterations += sol.iterations;
+        effort.evaluations += sol.evaluations;
+    }
+    sol
 }
 
 /// Plans one form of `scenario`; `previous` holds the outcomes of forms already planned.
@@ -307,8 +315,8 @@ fn space_form(
 }
 
 /// Keeps the lower of `best` and `sol`.
-fn keep_lower(best: &mut Option<LocalSolution>, sol: Option<LocalSolution>) {
-    if let Some(sol) = sol {
+fn keep_lower(best: &mut Option<LocalSolution>, sol: Result<LocalSolution, SolveFailure>) {
+    if let Ok(sol) = sol {
         if best
             .as_ref()
             .is_none_or(|b| sol.eval.objective < b.eval.objective)
@@ -391,7 +399,7 @@ fn report(p: &Problem, sol: &LocalSolution, effort: &Effort) -> FormOutcome {
         target_error: verdict.target_error,
         insertion,
         segments,
-        kkt_residual: sol.step_norm,
+        kkt_residual: sol.kkt_residual,
         iterations: effort.iterations,
         evaluations: effort.evaluations,
     }

@@ -197,7 +197,7 @@ fn attempt(
         }
     }
     let sol = solve_within(&p, &x0, input.iterations);
-    let Some(sol) = sol else {
+    let Ok(sol) = sol else {
         spent.0 += 1;
         return None;
     };

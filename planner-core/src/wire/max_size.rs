@@ -122,7 +122,7 @@ impl MaxSize for FormOutcome {
         + 2 * u32::MAX_SIZE;
 }
 impl MaxSize for PlanReport {
-    const MAX_SIZE: usize = crate::report::FormOutcomes::MAX_SIZE + u8::MAX_SIZE;
+    const MAX_SIZE: usize = crate::report::FormOutcomes::MAX_SIZE + <Option<u8>>::MAX_SIZE;
 }
 impl MaxSize for Op {
     // Variant tag, then the widest variant: `InsertSpin { length_mm: f32, turns: u32 }`.
@@ -143,5 +143,5 @@ impl MaxSize for ScheduleError {
 }
 impl MaxSize for ScheduledPlan {
     const MAX_SIZE: usize =
-        PlanReport::MAX_SIZE + <Result<Schedule, ScheduleError> as MaxSize>::MAX_SIZE;
+        PlanReport::MAX_SIZE + <Option<Result<Schedule, ScheduleError>> as MaxSize>::MAX_SIZE;
 }

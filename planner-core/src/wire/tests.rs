@@ -51,7 +51,10 @@ fn worst_outcome() -> FormOutcome {
 fn worst_report() -> PlanReport {
     let mut forms = crate::report::FormOutcomes::new();
     while forms.push(worst_outcome()).is_ok() {}
-    PlanReport { forms, best: 255 }
+    PlanReport {
+        forms,
+        best: Some(255),
+    }
 }
 
 /// Every step the widest (a spin with the most turns), every number present.
@@ -99,7 +102,7 @@ fn bounds_are_exact_for_worst_case_values() {
     assert_eq!(encoded_len(&driver), ScheduleError::MAX_SIZE);
     let planned = ScheduledPlan {
         report: worst_report(),
-        schedule: Ok(worst_schedule()),
+        schedule: Some(Ok(worst_schedule())),
     };
     assert_eq!(encoded_len(&planned), ScheduledPlan::MAX_SIZE);
     let result: PlanResult = Ok(planned);

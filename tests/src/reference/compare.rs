@@ -125,7 +125,8 @@ pub fn compare(
 pub struct ScenarioReport {
     /// Per form: the planner's outcome, the reference's optimum and their comparison.
     pub forms: Vec<(FormOutcome, Option<RefSolution>, Comparison)>,
-    /// `plan` failed (Unreachable when no form is feasible).
+    /// `plan` refused the scenario (a plan with no feasible form is not an error: its forms are
+    /// compared like any others).
     pub plan_error: Option<planner_core::PlanError>,
 }
 

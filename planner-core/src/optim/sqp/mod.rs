@@ -1,0 +1,324 @@
+//! A bounded feasible-path SQP for one form.
+//!
+//! The iterate always reaches the target: after every trial step the end-point equality is
+//! restored by min-norm Gauss–Newton ([`restore`]), so the merit function is the objective itself
+//! and the QP only needs the tangent step (Aₑ p = 0). Bounds, the tilt cone and the nearest
+//! clearances enter the QP linearised; the risk term 1/d keeps iterates away from obstacles.
+//! The Hessian of the Lagrangian is a damped BFGS approximation (Powell's damping keeps it
+//! positive definite). Work is bounded: at most [`MAX_ITERATIONS`] iterations, each with at most
+//! [`MAX_BACKTRACKS`] trial points, each restored in at most [`MAX_RESTORE`] Gauss–Newton steps.
+//!
+//! Every way a run can end from a feasible start is an `Ok` [`LocalSolution`] whose status says
+//! which, with the first-order residual at the reported point ([`residual`]) to judge it by;
+//! `Err` ([`SolveFailure`]) only when there is no feasible start to report.
+
+mod hessian;
+mod residual;
+mod restore;
+mod rows;
+#[cfg(test)]
+mod tests;
+
+use crate::optim::basins::{Known, Memory, STATIONARY};
+use crate::optim::objective::{Derivatives, Value};
+use crate::optim::problem::{Problem, Vars, MAX_VARS};
+use crate::optim::qp::{Qp, QpSolution, MAX_ROWS};
+use crate::report::SolveStatus;
+use residual::Multipliers;
+pub use restore::{restore, restore_with};
+pub(crate) use rows::{push_nearest_clearances, push_step_limits};
+use rows::{tangent_qp, QpRows};
+
+/// Iteration budget of one local solve.
+pub const MAX_ITERATIONS: u32 = 40;
+/// Trial points per line search.
+pub const MAX_BACKTRACKS: u32 = 8;
+/// Gauss–Newton steps per restoration.
+pub const MAX_RESTORE: u32 = 8;
+/// Largest change of any variable in one step (radians or radius-lengths).
+const TRUST: f32 = 0.5;
+/// Clearance rows given to the QP: the nearest obstacles only.
+pub(crate) const QP_CLEARANCES: usize = MAX_ROWS - 2 * MAX_VARS - 1;
+
+/// Result of a local solve.
+#[derive(Clone, Debug)]
+pub struct LocalSolution {
+    /// The best point (feasible, on target).
+    pub eval: Value,
+    /// How the run ended (never [`SolveStatus::Infeasible`]: a run starts feasible and stays so).
+    pub status: SolveStatus,
+    /// Iterations taken.
+    pub iterations: u32,
+    /// Evaluations made (full and restoration).
+    pub evaluations: u32,
+    /// Infinity norm of the last QP step (zero when the run stopped in a known basin before
+    /// solving one): what the stop test and the basin memory judge.
+    pub step_norm: f32,
+    /// The first-order residual at `eval` with the last QP's multipliers (see [`residual`]).
+    pub kkt_residual: f32,
+}
+
+/// Why a local solve has nothing to report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SolveFailure {
+    /// Restoration could not bring the start onto the target within its steps and the bounds
+    /// (or met a value that is not finite on the way).
+    StartOffTarget,
+    /// The restored start touches an obstacle, leaves the tilt cone or has an objective that is
+    /// not finite: the feasible-path SQP has no feasible point to descend from.
+    StartInadmissible,
+}
+
+impl core::fmt::Display for SolveFailure {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            SolveFailure::StartOffTarget => "the start cannot be moved onto the target",
+            SolveFailure::StartInadmissible => {
+                "the start, moved onto the target, is not collision-free within the bounds"
+            }
+        })
+    }
+}
+
+impl core::error::Error for SolveFailure {}
+
+/// Runs the SQP from `x0` (restored onto the target first). `known` holds local solutions already
+/// found for this problem, and the iterates that led there: a run that enters the basin of one
+/// of them stops there (status [`SolveStatus::KnownBasin`], its objective no better than the
+/// known one's; see [`crate::optim::basins`]). A run that ends stationary adds its solution and
+/// its iterates.
+pub fn solve(p: &Problem, x0: &Vars, known: &mut Known) -> Result<LocalSolution, SolveFailure> {
+    let mut memory = Memory::start(known);
+    let sol = match run(p, x0, Some(&mut memory), MAX_ITERATIONS) {
+        Ok(sol) => sol,
+        Err(failure) => {
+            memory.forget();
+            return Err(failure);
+        }
+    };
+    if ended_stationary(sol.status) && sol.step_norm < STATIONARY {
+        memory.settle(&sol.eval.x, sol.eval.objective, p.n);
+    } else {
+        // One stopped by its budget may lie on a slope that a later start would descend further.
+        memory.forget();
+    }
+    Ok(sol)
+}
+
+/// Whether a run that ended with `status` stopped where no descent is left to it.
+fn ended_stationary(status: SolveStatus) -> bool {
+    matches!(
+        status,
+        SolveStatus::Converged | SolveStatus::LineSearchStalled | SolveStatus::KnownBasin
+    )
+}
+
+/// [`solve`] with at most `max_iterations` iterations and nothing known (a replan's fixed
+/// budget).
+pub fn solve_within(
+    p: &Problem,
+    x0: &Vars,
+    max_iterations: u32,
+) -> Result<LocalSolution, SolveFailure> {
+    run(p, x0, None, max_iterations)
+}
+
+/// `x0` restored onto the target.
+fn restored_start(p: &Problem, x0: &Vars, evals: &mut u32) -> Result<Vars, SolveFailure> {
+    let mut x = *x0;
+    if restore(p, &mut x, evals) {
+        Ok(x)
+    } else {
+        Err(SolveFailure::StartOffTarget)
+    }
+}
+
+/// The SQP; its accepted iterates go to `memory`.
+fn run(
+    p: &Problem,
+    x0: &Vars,
+    mut memory: Option<&mut Memory>,
+    max_iterations: u32,
+) -> Result<LocalSolution, SolveFailure> {
+    let max_iterations = max_iterations.min(MAX_ITERATIONS);
+    let mut evals = 0u32;
+    let x = restored_start(p, x0, &mut evals)?;
+    // Evaluated where it is kept: a `Value` holds the whole path, and copies of it cost more
+    // than the rest of a short run's bookkeeping on the device.
+    let start = p.value(&x);
+    evals += 1;
+    if !start.admissible(p) {
+        return Err(SolveFailure::StartInadmissible);
+    }
+    // Two buffers: the current point and the line search's trial point (an accepted trial
+    // becomes current by flipping `ci`, not by copying).
+    let mut vals = [start.clone(), start];
+    let mut ci = 0usize;
+    let mut cur_d = p.derivatives(&vals[0]);
+    let n = p.n;
+    let mut status = SolveStatus::BudgetExhausted;
+    let mut iterations = 0;
+    let mut step_norm = f32::INFINITY;
+    // The last QP solved (its multipliers go into the reported residual).
+    let mut last_qp: Option<(QpSolution, QpRows)> = None;
+    let mut qp = Qp::new(n, hessian::initial(p), cur_d.grad);
+    while iterations < max_iterations {
+        iterations += 1;
+        let cur = &vals[ci];
+        if memory
+            .as_ref()
+            .is_some_and(|m| m.holds(&cur.x, cur.objective, n))
+        {
+            status = SolveStatus::KnownBasin;
+            step_norm = 0.0;
+            break;
+        }
+        let Some(solved) = step_qp(&mut qp, p, cur, &cur_d) else {
+            status = SolveStatus::QpFailed;
+            break;
+        };
+        let (sol, rows) = &*last_qp.insert(solved);
+        let slope;
+        (slope, step_norm) = slope_and_size(&cur_d.grad, &sol.p, n);
+        if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
+            status = SolveStatus::Converged;
+            break;
+        }
+        let (cur, trial) = current_and_trial(&mut vals, ci);
+        if !line_search(p, cur, trial, &sol.p, slope, &mut evals) {
+            // No decrease along a descent direction: stationary to f32 resolution, or held by a
+            // constraint the QP's linearisation does not see.
+            status = SolveStatus::LineSearchStalled;
+            break;
+        }
+        if let Some(m) = memory.as_mut() {
+            m.passed(&trial.x, trial.objective);
+        }
+        update_hessian(&mut qp.h, p, (cur, trial), &mut cur_d, sol, rows);
+        ci = 1 - ci;
+    }
+    let multipliers = match &last_qp {
+        Some((sol, rows)) => Multipliers::of(p, sol, rows),
+        None => Multipliers::none(),
+    };
+    // `cur_d` holds the derivatives at the reported point.
+    let kkt_residual = residual::residual_at(p, &vals[ci], &cur_d, &multipliers);
+    let [a, b] = vals;
+    Ok(LocalSolution {
+        eval: if ci == 0 { a } else { b },
+        status,
+        iterations,
+        evaluations: evals,
+        step_norm,
+        kkt_residual,
+    })
+}
+
+/// The QP of the tangent step at `cur`. In a passage between obstacles the linearised clearances
+/// can be dependent (a singular working set): the QP is then retried with fewer of them, since
+/// the line search keeps every clearance anyway. A quasi-Newton matrix that has soaked up the
+/// huge curvature of 1/d in a thin passage can make even that QP singular in f32: it is then
+/// reset to the model Hessian (and stays so for the next steps).
+fn step_qp(
+    qp: &mut Qp,
+    p: &Problem,
+    cur: &Value,
+    cur_d: &Derivatives,
+) -> Option<(QpSolution, QpRows)> {
+    for attempt in 0..2 {
+        if attempt == 1 {
+            qp.h = hessian::model_hessian(p, cur, cur_d);
+        }
+        for clear_limit in [QP_CLEARANCES, 1, 0] {
+            let rows = tangent_qp(qp, p, cur, cur_d, clear_limit);
+            if let Ok(sol) = qp.solve() {
+                return Some((sol, rows));
+            }
+        }
+    }
+    None
+}
+
+/// The directional derivative of the objective along `step`, and the step's infinity norm.
+fn slope_and_size(grad: &Vars, step: &Vars, n: usize) -> (f32, f32) {
+    let mut slope = 0.0;
+    let mut size = 0.0f32;
+    for k in 0..n {
+        slope += grad[k] * step[k];
+        size = crate::fmath::max(size, libm::fabsf(step[k]));
+    }
+    (slope, size)
+}
+
+/// The current point `vals[ci]` and the other buffer, for the trial point.
+fn current_and_trial(vals: &mut [Value; 2], ci: usize) -> (&Value, &mut Value) {
+    let (first, second) = vals.split_at_mut(1);
+    if ci == 0 {
+        (&first[0], &mut second[0])
+    } else {
+        (&second[0], &mut first[0])
+    }
+}
+
+/// Backtracking (Armijo) line search on the restored objective along `step` from `cur`, whose
+/// directional derivative is `slope`. Leaves the accepted point in `trial` and says whether one
+/// was found.
+fn line_search(
+    p: &Problem,
+    cur: &Value,
+    trial: &mut Value,
+    step: &Vars,
+    slope: f32,
+    evals: &mut u32,
+) -> bool {
+    let mut t = 1.0f32;
+    for _ in 0..MAX_BACKTRACKS {
+        let mut xt = cur.x;
+        for k in 0..p.n {
+            xt[k] = crate::fmath::clamp(cur.x[k] + t * step[k], p.lower[k], p.upper[k]);
+        }
+        if restore_with(p, &mut xt, evals, &mut trial.geo) {
+            p.value_of_drawn(&xt, trial);
+            *evals += 1;
+            if trial.admissible(p) && trial.objective <= cur.objective + 1e-4 * t * slope {
+                return true;
+            }
+        }
+        t *= 0.5;
+    }
+    false
+}
+
+/// The BFGS update of `h` for the accepted step from `cur` to `next`, with the multipliers of
+/// the QP `sol` (rows `rows`) in the Lagrangian; leaves `next`'s derivatives in `cur_d` (on
+/// entry `cur`'s).
+fn update_hessian(
+    h: &mut [Vars; MAX_VARS],
+    p: &Problem,
+    (cur, next): (&Value, &Value),
+    cur_d: &mut Derivatives,
+    sol: &QpSolution,
+    rows: &QpRows,
+) {
+    let n = p.n;
+    let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = rows.clearances[..rows.n_clear]
+        .iter()
+        .map(|&(o, row)| (o, sol.mult[row]))
+        .collect();
+    let tilt_mult = if p.has_tilt() {
+        sol.mult[rows.tilt]
+    } else {
+        0.0
+    };
+    let g_old = hessian::lagrangian_grad(p, &cur.x, cur_d, &sol.eq_mult, &clear, tilt_mult);
+    p.derivatives_into(next, cur_d);
+    let g_new = hessian::lagrangian_grad(p, &next.x, cur_d, &sol.eq_mult, &clear, tilt_mult);
+    let mut s = [0.0f32; MAX_VARS];
+    let mut y = [0.0f32; MAX_VARS];
+    for k in 0..n {
+        s[k] = next.x[k] - cur.x[k];
+        y[k] = g_new[k] - g_old[k];
+    }
+    hessian::bfgs_update(h, &s, &y, n);
+}
