@@ -53,5 +53,8 @@ pub fn example_args(command: &str) -> Vec<String> {
         .into_iter()
         .find(|(c, _)| c == command)
         .unwrap_or_else(|| panic!("README: no example of `needle {command}`"));
-    line.split_whitespace().skip(1).map(str::to_string).collect()
+    line.split_whitespace()
+        .skip(1)
+        .map(str::to_string)
+        .collect()
 }

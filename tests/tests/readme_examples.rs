@@ -97,7 +97,10 @@ fn every_subcommand_has_an_example_in_the_command_table() {
         })
         .collect();
     for command in subcommands() {
-        assert!(documented.contains(&command), "README: no example of `needle {command}`");
+        assert!(
+            documented.contains(&command),
+            "README: no example of `needle {command}`"
+        );
     }
 }
 
@@ -105,7 +108,10 @@ fn every_subcommand_has_an_example_in_the_command_table() {
 fn every_example_in_the_readme_runs_as_written() {
     let text = readme();
     let start = format!("hil-sim --tcp {README_DEVICE} &");
-    assert!(text.contains(&start), "the README starts hil-sim as {start}");
+    assert!(
+        text.contains(&start),
+        "the README starts hil-sim as {start}"
+    );
     let _device = SimProcess::start(&["--tcp", README_DEVICE]);
     let dir = scratch("examples");
     let mut ran = 0;
@@ -133,7 +139,11 @@ fn the_readme_paper_table_is_what_plan_prints() {
     let printed: Vec<&str> = printed.lines().collect();
     assert!(shown.len() > 10, "the table and the best plan");
     for (i, line) in shown.iter().skip(1).enumerate() {
-        assert_eq!(Some(&line.as_str()), printed.get(i), "README's line {i} of the plan");
+        assert_eq!(
+            Some(&line.as_str()),
+            printed.get(i),
+            "README's line {i} of the plan"
+        );
     }
 }
 
