@@ -6,6 +6,7 @@
 //! measured figures, so it is tested without QEMU.
 
 use crate::figures::BoardFigures;
+use anyhow::{bail, Result};
 use std::fmt;
 
 /// The figure of one board a budget limits.
@@ -205,10 +206,63 @@ pub fn markdown_table() -> String {
     s
 }
 
+/// What `--check` refuses, as sentences: every budget of [`BUDGETS`] left (or not
+/// measured), and every device plan that differs from the host's. Empty when all is well.
+pub fn problems(figures: &BoardFigures) -> Vec<String> {
+    let mut out: Vec<String> = breaches(figures).iter().map(ToString::to_string).collect();
+    for (name, same) in &figures.matches_host {
+        if !same {
+            out.push(format!(
+                "{}: the device's plan of {name} differs from the host's",
+                figures.board
+            ));
+        }
+    }
+    out
+}
+
+/// What the measured figures come to: with `check`, an error listing every problem (so
+/// `needle device-bench --check` exits non-zero on any), else the problems, to print as warnings.
+pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
+    let problems: Vec<String> = figures.iter().flat_map(problems).collect();
+    if check && !problems.is_empty() {
+        bail!(
+            "{} check(s) failed:\n  {}",
+            problems.len(),
+            problems.join("\n  ")
+        );
+    }
+    Ok(problems)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::replan_bench::ReplanFigures;
+
+    #[test]
+    fn check_refuses_a_250_kib_image_and_without_it_warns() {
+        let mut big = within();
+        big.flash_bytes = 250 * 1024;
+        let all = [within(), big];
+        let error = verdict(&all, true).unwrap_err().to_string();
+        assert!(
+            error.starts_with("1 check(s) failed:\n  stm32f4: flash over budget: 256000 B"),
+            "{error}"
+        );
+        assert_eq!(verdict(&all, false).unwrap().len(), 1);
+        assert_eq!(verdict(&all[..1], true).unwrap(), Vec::<String>::new());
+    }
+
+    #[test]
+    fn a_device_plan_that_differs_from_the_hosts_is_a_problem() {
+        let mut figures = within();
+        figures.matches_host[1].1 = false;
+        assert_eq!(
+            problems(&figures),
+            ["stm32f4: the device's plan of space differs from the host's"]
+        );
+    }
 
     /// The figures measured on the stm32f4 (`needle device-bench --json`), within every budget.
     fn within() -> BoardFigures {

@@ -9,7 +9,8 @@
 use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
 use crate::{budgets, elf, profile, qemu};
 // The figures and their verdict live in `figures`; here they are measured.
-pub use crate::figures::{table, verdict, BoardFigures};
+pub use crate::budgets::verdict;
+pub use crate::figures::{table, BoardFigures};
 use anyhow::{bail, Context, Result};
 use needle_link::{Client, ClientConfig};
 use planner_core::wire::PlanResult;

@@ -1,9 +1,8 @@
 //! The figures `needle device-bench` measures on one board, what they come to against the
 //! budgets (`--check`), and their JSON and text forms. Plain data: nothing here runs QEMU.
 
-use crate::budgets;
 use crate::replan_bench::ReplanFigures;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use serde_json::{json, Map, Value};
 
 /// Figures of one board.
@@ -114,38 +113,6 @@ impl BoardFigures {
             replan_instructions,
         })
     }
-
-    /// What `--check` refuses, as sentences: every budget of [`budgets::BUDGETS`] left (or not
-    /// measured), and every device plan that differs from the host's. Empty when all is well.
-    pub fn problems(&self) -> Vec<String> {
-        let mut out: Vec<String> = budgets::breaches(self)
-            .iter()
-            .map(ToString::to_string)
-            .collect();
-        for (name, same) in &self.matches_host {
-            if !same {
-                out.push(format!(
-                    "{}: the device's plan of {name} differs from the host's",
-                    self.board
-                ));
-            }
-        }
-        out
-    }
-}
-
-/// What the measured figures come to: with `check`, an error listing every problem (so
-/// `needle device-bench --check` exits non-zero on any), else the problems, to print as warnings.
-pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
-    let problems: Vec<String> = figures.iter().flat_map(BoardFigures::problems).collect();
-    if check && !problems.is_empty() {
-        bail!(
-            "{} check(s) failed:\n  {}",
-            problems.len(),
-            problems.join("\n  ")
-        );
-    }
-    Ok(problems)
 }
 
 /// The human-readable report.
@@ -192,20 +159,6 @@ pub fn table(figures: &[BoardFigures]) -> String {
 mod tests {
     use super::*;
 
-    #[test]
-    fn check_refuses_a_250_kib_image_and_without_it_warns() {
-        let mut big = figures_within_budgets();
-        big.flash_bytes = 250 * 1024;
-        let all = [figures_within_budgets(), big];
-        let error = verdict(&all, true).unwrap_err().to_string();
-        assert!(
-            error.starts_with("1 check(s) failed:\n  stm32f4: flash over budget: 256000 B"),
-            "{error}"
-        );
-        assert_eq!(verdict(&all, false).unwrap().len(), 1);
-        assert_eq!(verdict(&all[..1], true).unwrap(), Vec::<String>::new());
-    }
-
     fn figures_within_budgets() -> BoardFigures {
         BoardFigures {
             board: "stm32f4".into(),
@@ -232,11 +185,6 @@ mod tests {
         figures.matches_host[1].1 = false;
         let back = BoardFigures::from_json(&figures.to_json()).unwrap();
         assert_eq!(back, figures);
-        // Within every budget, but the device's space plan differs from the host's.
-        assert_eq!(
-            back.problems(),
-            ["stm32f4: the device's plan of space differs from the host's"]
-        );
         let mut broken = figures.to_json();
         broken["flash_bytes"] = json!("many");
         let error = BoardFigures::from_json(&broken).unwrap_err().to_string();

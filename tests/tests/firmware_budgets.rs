@@ -71,7 +71,7 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
                 budget.unit.show(budget.limit)
             );
         }
-        problems.extend(b.problems());
+        problems.extend(needle_devtools::budgets::problems(b));
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
