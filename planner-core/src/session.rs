@@ -52,7 +52,7 @@ impl PlanSession {
     /// }
     /// assert_eq!(words.len(), forms);
     /// assert_eq!((words[0].as_str(), words[1].as_str()), ("R", "L"));
-    /// let report = session.finish().unwrap();
+    /// let report = session.finish();
     /// assert_eq!(report.best().unwrap().form.word().as_str(), "RL");
     /// ```
     pub fn step(&mut self) -> Option<&FormOutcome> {
