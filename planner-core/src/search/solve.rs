@@ -213,12 +213,27 @@ fn refine(
 pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> FormOutcome {
     let mut effort = Effort::default();
     let extensions = extension_starts(scenario, form, previous);
-    let planned = planned_without(form, previous);
+    let search = FormSearch {
+        scenario,
+        form,
+        planned_without: planned_without(form, previous),
+        extensions: &extensions,
+    };
     if scenario.options.workspace == Workspace::PlaneYz {
-        plane_form(scenario, form, planned, &extensions, &mut effort)
+        plane_form(&search, &mut effort)
     } else {
-        space_form(scenario, form, planned, &extensions, &mut effort)
+        space_form(&search, &mut effort)
     }
+}
+
+/// What the search of one form starts from.
+struct FormSearch<'a> {
+    scenario: &'a Scenario,
+    form: Form,
+    /// Bit i set: the form without its line i was planned already (its sweep is left out).
+    planned_without: u8,
+    /// Starts carried over from the shorter forms already planned, by side assignment.
+    extensions: &'a [(u8, Vars)],
 }
 
 /// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
@@ -238,13 +253,13 @@ fn choose(chosen: &mut heapless::Vec<SidedSeed, PLANE_REFINED>, seed: SidedSeed)
 /// Plane mode: every side assignment is its own problem. Each is swept into its own shortlist
 /// (its near misses escaped when it has room), the best seeds of all of them are refined
 /// together, and each side assignment's extension starts are refined as well.
-fn plane_form(
-    scenario: &Scenario,
-    form: Form,
-    planned_without: u8,
-    extensions: &[(u8, Vars)],
-    effort: &mut Effort,
-) -> FormOutcome {
+fn plane_form(search: &FormSearch, effort: &mut Effort) -> FormOutcome {
+    let FormSearch {
+        scenario,
+        form,
+        planned_without,
+        extensions,
+    } = *search;
     let groups = 1u16 << form.arc_count();
     let mut chosen: heapless::Vec<SidedSeed, PLANE_REFINED> = heapless::Vec::new();
     for sides in 0..groups {
@@ -286,13 +301,13 @@ fn plane_form(
 /// 3-D: every seed plane poses the same problem, so the seeds of all planes compete for one
 /// shortlist (seeds of neighbouring planes often lie in one basin) and the solutions found are
 /// shared.
-fn space_form(
-    scenario: &Scenario,
-    form: Form,
-    planned_without: u8,
-    extensions: &[(u8, Vars)],
-    effort: &mut Effort,
-) -> FormOutcome {
+fn space_form(search: &FormSearch, effort: &mut Effort) -> FormOutcome {
+    let FormSearch {
+        scenario,
+        form,
+        planned_without,
+        extensions,
+    } = *search;
     let p = Problem::new(scenario, form, 0);
     let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
     for k in 0..SPACE_PLANES {
