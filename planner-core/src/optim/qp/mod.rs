@@ -90,6 +90,17 @@ pub enum QpError {
     Budget,
 }
 
+impl QpSolution {
+    /// All zero: a buffer for [`Qp::solve_into`].
+    pub fn empty() -> Self {
+        QpSolution {
+            p: [0.0; MAX_VARS],
+            eq_mult: [0.0; MAX_EQ],
+            mult: [0.0; MAX_ROWS],
+        }
+    }
+}
+
 impl core::fmt::Display for QpError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
@@ -215,6 +226,7 @@ impl Qp {
 
     /// aᵢ · v: for an axis row the one product that is not zero (the sum of the others' ±0 does
     /// not change it).
+    #[inline]
     fn row_dot(&self, i: usize, v: &Vars) -> f32 {
         match self.rows[i] {
             Row::General(g) => dot(&self.general[usize::from(g)], v, self.n),
@@ -327,23 +339,28 @@ impl Qp {
         blocking
     }
 
-    /// The solution at `p` with the multipliers `sol` of the working set's KKT system.
-    fn solution(&self, p: Vars, working: &Working, sol: &[f32; KKT]) -> QpSolution {
+    /// Writes into `out` the solution at `p` with the multipliers `sol` of the working set's KKT
+    /// system.
+    fn write_solution(&self, p: &Vars, working: &Working, sol: &[f32; KKT], out: &mut QpSolution) {
         let n = self.n;
-        let mut out = QpSolution {
-            p,
-            eq_mult: [0.0; MAX_EQ],
-            mult: [0.0; MAX_ROWS],
-        };
+        out.p = *p;
+        out.eq_mult = [0.0; MAX_EQ];
+        out.mult = [0.0; MAX_ROWS];
         out.eq_mult[..self.m_eq].copy_from_slice(&sol[n..n + self.m_eq]);
         for w in 0..working.len {
             out.mult[working.rows[w]] = sol[n + self.m_eq + w];
         }
-        out
     }
 
     /// Solves the QP from p = 0.
     pub fn solve(&mut self) -> Result<QpSolution, QpError> {
+        let mut out = QpSolution::empty();
+        self.solve_into(&mut out).map(|()| out)
+    }
+
+    /// [`Qp::solve`] into `out` (left as it was on `Err`): a caller that keeps the solution
+    /// saves moving it out of a `Result`, which the device pays for in every SQP step.
+    pub fn solve_into(&mut self, out: &mut QpSolution) -> Result<(), QpError> {
         let n = self.n;
         let mut p = [0.0f32; MAX_VARS];
         let mut working = Working::empty();
@@ -385,7 +402,10 @@ impl Qp {
                 }
             }
             match worst {
-                None => return Ok(self.solution(p, &working, &rhs)),
+                None => {
+                    self.write_solution(&p, &working, &rhs, out);
+                    return Ok(());
+                }
                 Some((w, _)) => working.drop_at(w),
             }
         }

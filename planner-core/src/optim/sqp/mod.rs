@@ -90,20 +90,17 @@ impl core::error::Error for SolveFailure {}
 /// its iterates.
 pub fn solve(p: &Problem, x0: &Vars, known: &mut Known) -> Result<LocalSolution, SolveFailure> {
     let mut memory = Memory::start(known);
-    let sol = match run(p, x0, Some(&mut memory), MAX_ITERATIONS) {
-        Ok(sol) => sol,
-        Err(failure) => {
-            memory.forget();
-            return Err(failure);
+    // Judged by reference and returned as it came: a `LocalSolution` holds a whole path, and
+    // moving it out of the `Result` and back in costs a copy on the device.
+    let sol = run(p, x0, Some(&mut memory), MAX_ITERATIONS);
+    match &sol {
+        Ok(s) if ended_stationary(s.status) && s.step_norm < STATIONARY => {
+            memory.settle(&s.eval.x, s.eval.objective, p.n);
         }
-    };
-    if ended_stationary(sol.status) && sol.step_norm < STATIONARY {
-        memory.settle(&sol.eval.x, sol.eval.objective, p.n);
-    } else {
         // One stopped by its budget may lie on a slope that a later start would descend further.
-        memory.forget();
+        _ => memory.forget(),
     }
-    Ok(sol)
+    sol
 }
 
 /// Whether a run that ended with `status` stopped where no descent is left to it.
@@ -124,16 +121,6 @@ pub fn solve_within(
     run(p, x0, None, max_iterations)
 }
 
-/// `x0` restored onto the target.
-fn restored_start(p: &Problem, x0: &Vars, evals: &mut u32) -> Result<Vars, SolveFailure> {
-    let mut x = *x0;
-    if restore(p, &mut x, evals) {
-        Ok(x)
-    } else {
-        Err(SolveFailure::StartOffTarget)
-    }
-}
-
 /// The SQP; its accepted iterates go to `memory`.
 fn run(
     p: &Problem,
@@ -143,7 +130,12 @@ fn run(
 ) -> Result<LocalSolution, SolveFailure> {
     let max_iterations = max_iterations.min(MAX_ITERATIONS);
     let mut evals = 0u32;
-    let x = restored_start(p, x0, &mut evals)?;
+    // Restored in place: on the device, a `Result` around the variables cost three unaligned
+    // copies of them per solve.
+    let mut x = *x0;
+    if !restore(p, &mut x, &mut evals) {
+        return Err(SolveFailure::StartOffTarget);
+    }
     // Evaluated where it is kept: a `Value` holds the whole path, and copies of it cost more
     // than the rest of a short run's bookkeeping on the device.
     let start = p.value(&x);
@@ -160,8 +152,15 @@ fn run(
     let mut status = SolveStatus::BudgetExhausted;
     let mut iterations = 0;
     let mut step_norm = f32::INFINITY;
-    // The last QP solved (its multipliers go into the reported residual).
-    let mut last_qp: Option<(QpSolution, QpRows)> = None;
+    // The last QP solved (its multipliers go into the reported residual), in buffers that every
+    // step overwrites: moving a step's solution through `Option`s cost the device more than the
+    // residual.
+    // A failed QP leaves `sol` as it was but has rebuilt its rows: the rows are double-buffered
+    // so that those of the solution in `sol` survive it (`rows[ri]`).
+    let mut sol = QpSolution::empty();
+    let mut rows = [QpRows::empty(), QpRows::empty()];
+    let mut ri = 0usize;
+    let mut solved_any = false;
     let mut qp = Qp::new(n, hessian::initial(p), cur_d.grad);
     while iterations < max_iterations {
         iterations += 1;
@@ -174,11 +173,12 @@ fn run(
             step_norm = 0.0;
             break;
         }
-        let Some(solved) = step_qp(&mut qp, p, cur, &cur_d) else {
+        if !step_qp(&mut qp, p, cur, &cur_d, (&mut sol, &mut rows[1 - ri])) {
             status = SolveStatus::QpFailed;
             break;
-        };
-        let (sol, rows) = &*last_qp.insert(solved);
+        }
+        ri = 1 - ri;
+        solved_any = true;
         let slope;
         (slope, step_norm) = slope_and_size(&cur_d.grad, &sol.p, n);
         if step_norm < 1e-5 || slope > -1e-6 * (1.0 + libm::fabsf(cur.objective)) {
@@ -195,12 +195,13 @@ fn run(
         if let Some(m) = memory.as_mut() {
             m.passed(&trial.x, trial.objective);
         }
-        update_hessian(&mut qp.h, p, (cur, trial), &mut cur_d, sol, rows);
+        update_hessian(&mut qp.h, p, (cur, trial), &mut cur_d, &sol, &rows[ri]);
         ci = 1 - ci;
     }
-    let multipliers = match &last_qp {
-        Some((sol, rows)) => Multipliers::of(p, sol, rows),
-        None => Multipliers::none(),
+    let multipliers = if solved_any {
+        Multipliers::of(p, &sol, &rows[ri])
+    } else {
+        Multipliers::none()
     };
     // `cur_d` holds the derivatives at the reported point.
     let kkt_residual = residual::residual_at(p, &vals[ci], &cur_d, &multipliers);
@@ -215,29 +216,33 @@ fn run(
     })
 }
 
-/// The QP of the tangent step at `cur`. In a passage between obstacles the linearised clearances
-/// can be dependent (a singular working set): the QP is then retried with fewer of them, since
-/// the line search keeps every clearance anyway. A quasi-Newton matrix that has soaked up the
-/// huge curvature of 1/d in a thin passage can make even that QP singular in f32: it is then
-/// reset to the model Hessian (and stays so for the next steps).
+/// The QP of the tangent step at `cur`, solved into `out` (its rows written there even when no
+/// attempt succeeds); whether it was. In a passage between
+/// obstacles the linearised clearances can be dependent (a singular working set): the QP is then
+/// retried with fewer of them, since the line search keeps every clearance anyway. A
+/// quasi-Newton matrix that has soaked up the huge curvature of 1/d in a thin passage can make
+/// even that QP singular in f32: it is then reset to the model Hessian (and stays so for the
+/// next steps).
 fn step_qp(
     qp: &mut Qp,
     p: &Problem,
     cur: &Value,
     cur_d: &Derivatives,
-) -> Option<(QpSolution, QpRows)> {
+    out: (&mut QpSolution, &mut QpRows),
+) -> bool {
+    let (sol, rows) = out;
     for attempt in 0..2 {
         if attempt == 1 {
             qp.h = hessian::model_hessian(p, cur, cur_d);
         }
         for clear_limit in [QP_CLEARANCES, 1, 0] {
-            let rows = tangent_qp(qp, p, cur, cur_d, clear_limit);
-            if let Ok(sol) = qp.solve() {
-                return Some((sol, rows));
+            tangent_qp(qp, p, cur, cur_d, clear_limit, rows);
+            if qp.solve_into(sol).is_ok() {
+                return true;
             }
         }
     }
-    None
+    false
 }
 
 /// The directional derivative of the objective along `step`, and the step's infinity norm.

@@ -62,96 +62,88 @@ impl Multipliers {
     }
 }
 
-/// One constraint as the residual sees it.
-pub(super) struct Term<'a> {
-    /// Its gradient.
-    pub gradient: Gradient<'a>,
-    /// Its multiplier.
-    pub multiplier: f32,
-    /// Its value c(x) for an inequality c(x) ≥ 0; `None` for an equality.
-    pub inequality: Option<f32>,
-}
-
-/// A constraint's gradient: a row, or ± a unit vector (a bound).
-pub(super) enum Gradient<'a> {
-    /// A dense gradient.
-    Row(&'a Vars),
-    /// `sign` times unit vector `k`.
-    Axis(usize, f32),
-}
-
-/// max(stationarity, complementarity) of the first `n` variables for the objective gradient
-/// `grad` and the constraints `terms` (see the module's documentation).
-pub(super) fn kkt_residual<'a>(
+/// The residual accumulated constraint by constraint (see the module's documentation): the
+/// Lagrangian's gradient so far and the worst complementarity so far.
+pub(super) struct Residual {
     n: usize,
-    grad: &Vars,
-    terms: impl IntoIterator<Item = Term<'a>>,
-) -> f32 {
-    let mut lagrangian = *grad;
-    let mut complementarity = 0.0f32;
-    for term in terms {
-        let mu = term.multiplier;
-        match term.gradient {
-            Gradient::Row(a) => {
-                for k in 0..n {
-                    lagrangian[k] -= mu * a[k];
-                }
-            }
-            Gradient::Axis(k, sign) => lagrangian[k] -= mu * sign,
-        }
-        if let Some(c) = term.inequality {
-            let wrong_sign = crate::fmath::max(-mu, 0.0);
-            // A zero multiplier owes nothing, however far the constraint is from its floor.
-            let product = if mu == 0.0 { 0.0 } else { libm::fabsf(mu * c) };
-            complementarity =
-                crate::fmath::max(complementarity, crate::fmath::max(product, wrong_sign));
+    lagrangian: Vars,
+    complementarity: f32,
+}
+
+impl Residual {
+    /// The first `n` variables, objective gradient `grad`, no constraint yet.
+    pub(super) fn new(n: usize, grad: &Vars) -> Self {
+        Residual {
+            n,
+            lagrangian: *grad,
+            complementarity: 0.0,
         }
     }
-    let stationarity = lagrangian
-        .iter()
-        .take(n)
-        .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
-    crate::fmath::max(stationarity, complementarity)
+
+    /// An equality with gradient `a` and multiplier `mu`.
+    pub(super) fn equality(&mut self, a: &Vars, mu: f32) {
+        for k in 0..self.n {
+            self.lagrangian[k] -= mu * a[k];
+        }
+    }
+
+    /// An inequality c(x) ≥ 0 with gradient `a`, multiplier `mu` and value `c`.
+    pub(super) fn inequality(&mut self, a: &Vars, mu: f32, c: f32) {
+        self.equality(a, mu);
+        self.owe(mu, c);
+    }
+
+    /// The bound `sign` · xₖ ≥ … (gradient `sign` times unit vector `k`), multiplier `mu`, value
+    /// `c`.
+    pub(super) fn bound(&mut self, k: usize, sign: f32, mu: f32, c: f32) {
+        self.lagrangian[k] -= mu * sign;
+        self.owe(mu, c);
+    }
+
+    fn owe(&mut self, mu: f32, c: f32) {
+        let wrong_sign = crate::fmath::max(-mu, 0.0);
+        // A zero multiplier owes nothing, however far the constraint is from its floor.
+        let product = if mu == 0.0 { 0.0 } else { libm::fabsf(mu * c) };
+        self.complementarity =
+            crate::fmath::max(self.complementarity, crate::fmath::max(product, wrong_sign));
+    }
+
+    /// max(stationarity, complementarity).
+    pub(super) fn value(&self) -> f32 {
+        let stationarity = self
+            .lagrangian
+            .iter()
+            .take(self.n)
+            .fold(0.0f32, |m, v| crate::fmath::max(m, libm::fabsf(*v)));
+        crate::fmath::max(stationarity, self.complementarity)
+    }
 }
 
 /// The KKT residual of problem `p` at `at` (first derivatives `d`) with the multipliers `m`.
+/// Written as plain loops: on the device an iterator chain of constraint terms cost several
+/// times as much; kept out of the SQP's loop (it runs once per solve).
+#[inline(never)]
 pub(super) fn residual_at(p: &Problem, at: &Value, d: &Derivatives, m: &Multipliers) -> f32 {
     let x = &at.x;
-    let tilt_grad = p.tilt_margin_grad(x);
-    let end = (0..p.m_eq).map(|r| Term {
-        gradient: Gradient::Row(&d.jac[r]),
-        multiplier: m.end[r],
-        inequality: None,
-    });
-    let bounds = (0..p.n).flat_map(|k| {
-        [
-            Term {
-                gradient: Gradient::Axis(k, 1.0),
-                multiplier: m.lower[k],
-                inequality: Some(x[k] - p.lower[k]),
-            },
-            Term {
-                gradient: Gradient::Axis(k, -1.0),
-                multiplier: m.upper[k],
-                inequality: Some(p.upper[k] - x[k]),
-            },
-        ]
-    });
-    let tilt = p.has_tilt().then(|| Term {
-        gradient: Gradient::Row(&tilt_grad),
-        multiplier: m.tilt,
-        inequality: Some(p.tilt_margin(x)),
-    });
-    let clearances = (0..p.scenario.obstacles.len()).map(|o| Term {
-        gradient: Gradient::Row(&d.clearance_grad[o]),
-        multiplier: m.clearance[o],
-        inequality: Some(at.clearance[o] - p.min_clearance),
-    });
-    kkt_residual(
-        p.n,
-        &d.grad,
-        end.chain(bounds).chain(tilt).chain(clearances),
-    )
+    let mut r = Residual::new(p.n, &d.grad);
+    for (row, mu) in d.jac.iter().zip(m.end).take(p.m_eq) {
+        r.equality(row, mu);
+    }
+    for k in 0..p.n {
+        r.bound(k, 1.0, m.lower[k], x[k] - p.lower[k]);
+        r.bound(k, -1.0, m.upper[k], p.upper[k] - x[k]);
+    }
+    if p.has_tilt() {
+        r.inequality(&p.tilt_margin_grad(x), m.tilt, p.tilt_margin(x));
+    }
+    for o in 0..p.scenario.obstacles.len() {
+        r.inequality(
+            &d.clearance_grad[o],
+            m.clearance[o],
+            at.clearance[o] - p.min_clearance,
+        );
+    }
+    r.value()
 }
 
 #[cfg(test)]
@@ -166,14 +158,9 @@ mod tests {
 
     /// min x² + y² subject to x + y − 2 ≥ 0: the optimum is (1, 1) with μ = 2.
     fn residual_of_the_disc_problem(x: f32, y: f32, mu: f32) -> f32 {
-        let grad = vars(&[2.0 * x, 2.0 * y]);
-        let row = vars(&[1.0, 1.0]);
-        let term = Term {
-            gradient: Gradient::Row(&row),
-            multiplier: mu,
-            inequality: Some(x + y - 2.0),
-        };
-        kkt_residual(2, &grad, [term])
+        let mut r = Residual::new(2, &vars(&[2.0 * x, 2.0 * y]));
+        r.inequality(&vars(&[1.0, 1.0]), mu, x + y - 2.0);
+        r.value()
     }
 
     #[test]
@@ -190,33 +177,22 @@ mod tests {
     fn a_multiplier_of_the_wrong_sign_counts() {
         // At (1, 1) with μ = −0.5: stationarity |2 + 0.5| = 2.5, and the sign violation 0.5.
         assert_eq!(residual_of_the_disc_problem(1.0, 1.0, -0.5), 2.5);
-        let grad = vars(&[0.0]);
-        let term = Term {
-            gradient: Gradient::Axis(0, 1.0),
-            multiplier: -0.25,
-            inequality: Some(0.0),
-        };
+        let mut r = Residual::new(1, &vars(&[0.0]));
+        r.bound(0, 1.0, -0.25, 0.0);
         // Stationarity 0.25 (0 + 0.25) and the wrong sign 0.25.
-        assert_eq!(kkt_residual(1, &grad, [term]), 0.25);
+        assert_eq!(r.value(), 0.25);
     }
 
     #[test]
     fn equalities_and_bounds_enter_stationarity() {
         // min −x subject to x ≤ 1 (the row −e₀, multiplier 1) and y = 0 (multiplier 0): zero.
-        let grad = vars(&[-1.0, 0.0]);
-        let eq = vars(&[0.0, 1.0]);
-        let terms = [
-            Term {
-                gradient: Gradient::Axis(0, -1.0),
-                multiplier: 1.0,
-                inequality: Some(0.0),
-            },
-            Term {
-                gradient: Gradient::Row(&eq),
-                multiplier: 0.0,
-                inequality: None,
-            },
-        ];
-        assert_eq!(kkt_residual(2, &grad, terms), 0.0);
+        let mut r = Residual::new(2, &vars(&[-1.0, 0.0]));
+        r.bound(0, -1.0, 1.0, 0.0);
+        r.equality(&vars(&[0.0, 1.0]), 0.0);
+        assert_eq!(r.value(), 0.0);
+        // Without the bound's multiplier the gradient is left: stationarity 1.
+        let mut r = Residual::new(2, &vars(&[-1.0, 0.0]));
+        r.equality(&vars(&[0.0, 1.0]), 0.0);
+        assert_eq!(r.value(), 1.0);
     }
 }

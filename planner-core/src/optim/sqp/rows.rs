@@ -19,22 +19,33 @@ pub(super) struct QpRows {
     pub tilt: usize,
 }
 
+impl QpRows {
+    /// No rows: a buffer for [`tangent_qp`].
+    pub(super) fn empty() -> Self {
+        QpRows {
+            bounds: 0,
+            clearances: [(0, 0); QP_CLEARANCES],
+            n_clear: 0,
+            tilt: 0,
+        }
+    }
+}
+
 /// The QP of the tangent step at `cur`: bounds within the trust box, the tilt cone (3-D) and the
-/// `clear_limit` nearest clearances, linearised; the Hessian is the one in `qp`.
+/// `clear_limit` nearest clearances, linearised; the Hessian is the one in `qp`. Which rows are
+/// which is written into `rows`.
 pub(super) fn tangent_qp(
     qp: &mut Qp,
     p: &Problem,
     cur: &Value,
     cur_d: &Derivatives,
     clear_limit: usize,
-) -> QpRows {
+    rows: &mut QpRows,
+) {
     qp.reset_rows(p.n, &cur_d.grad);
-    let mut rows = QpRows {
-        bounds: qp.m,
-        clearances: [(0, 0); QP_CLEARANCES],
-        n_clear: 0,
-        tilt: push_step_limits(qp, p, &cur.x, cur_d),
-    };
+    rows.bounds = qp.m;
+    rows.n_clear = 0;
+    rows.tilt = push_step_limits(qp, p, &cur.x, cur_d);
     push_nearest_clearances(
         qp,
         p,
@@ -47,7 +58,6 @@ pub(super) fn tangent_qp(
             rows.n_clear += 1;
         },
     );
-    rows
 }
 
 /// Pushes the rows every step at `x` keeps: the end point fixed (Aₑ p = 0), each variable within
