@@ -1,14 +1,14 @@
 //! Plans do not drift: `needle plan --json` of the examples and of five random scenarios equals,
 //! number for number, what main printed when they were last blessed (tests/data/golden/*.plan.json;
 //! first before the restructuring, last when `kkt_residual` became the first-order residual at
-//! the reported path, which moved that key only: a change that moves plan bits on purpose
-//! re-blesses them with `needle plan FILE --json > tests/data/golden/NAME.plan.json` and says by
-//! how much F moved, in docs/optimality.md).
+//! the reported path, which moved that key only). A change that moves plan bits on purpose
+//! re-blesses them with `GOLDEN_BLESS=1 cargo test -p needle-e2e --test golden_plans` and says
+//! what moved and by how much F moved, in docs/optimality.md.
 //!
 //! Every key of the stored output must come back with exactly the same value; keys added later
 //! (new outputs) are allowed, and `stats.time_us` is a measurement, so it is not compared.
 
-use needle_e2e::{example, needle_json, workspace};
+use needle_e2e::{example, needle, needle_json, workspace};
 use serde_json::Value;
 use std::path::PathBuf;
 
@@ -58,9 +58,17 @@ fn differences(path: &str, stored: &Value, now: &Value, out: &mut Vec<String>) {
 }
 
 fn assert_unchanged(scenario: PathBuf, stored: &str) {
+    let args = ["plan", scenario.to_str().unwrap(), "--json"];
+    if std::env::var_os("GOLDEN_BLESS").is_some() {
+        // needle's own text: serde_json does not round-trip every float it parses.
+        let out = needle().args(args).output().expect("run needle");
+        assert!(out.status.success(), "needle {args:?}");
+        std::fs::write(golden(stored), out.stdout).expect("golden output written");
+        return;
+    }
+    let now = needle_json(&args);
     let text = std::fs::read_to_string(golden(stored)).expect("golden output");
     let before: Value = serde_json::from_str(&text).expect("golden JSON");
-    let now = needle_json(&["plan", scenario.to_str().unwrap(), "--json"]);
     let mut diff = Vec::new();
     differences("", &before, &now, &mut diff);
     assert!(
