@@ -53,8 +53,9 @@ pub struct Problem<'a> {
     pub vers_max_tilt: f32,
     /// The entry frame (columns b1, b2, b3; b3 the nominal axis).
     pub basis: Matrix3<f32>,
-    /// A continuation's fixed start (the tip in tissue): no insertion angles, and a bevel
-    /// variable before every arc, the first one included (the rotation done where the tip is).
+    /// A fixed start: the entry on its axis when the tilt bound is zero, or a continuation's tip
+    /// in tissue. No insertion angles then; in 3-D a bevel variable before every arc, the first
+    /// one included (the rotation done where the path starts).
     pub start: Option<Frame>,
     /// End-point tolerance the optimiser solves to (mm): a hundredth of the scenario's, at most
     /// 1 um, but never finer than f32 resolves at these coordinates (worked out once: every
@@ -89,7 +90,17 @@ impl<'a> Problem<'a> {
         let max_line = scenario.max_line_length() / radius * BOUND_SHRINK;
         let mut lower = [0.0; MAX_VARS];
         let mut upper = [0.0; MAX_VARS];
-        let angles = if plane { 1 } else { 2 };
+        let basis = entry_basis(scenario.entry.direction);
+        let entry = v3(scenario.entry.position);
+        // A tilt bound of zero (a template or a guide) fixes the posture: the path starts on the
+        // axis, with no angle variables and no cone row (a cone of zero width is a degenerate
+        // constraint the QP cannot hold).
+        let start = (tilt == 0.0).then(|| insertion_frame(entry, &basis, 0.0, 0.0));
+        let angles = match (start.is_some(), plane) {
+            (true, _) => 0,
+            (false, true) => 1,
+            (false, false) => 2,
+        };
         for k in 0..angles {
             lower[k] = -tilt;
             upper[k] = tilt;
@@ -141,12 +152,12 @@ impl<'a> Problem<'a> {
                 .max(CLEARANCE_FLOOR),
             cos_max_tilt: crate::fmath::cos(tilt),
             vers_max_tilt: versine(tilt),
-            basis: entry_basis(scenario.entry.direction),
-            start: None,
+            basis,
+            start,
             equality_tolerance: (scenario.target.tolerance * 0.01)
                 .min(1e-3)
                 .max(scenario.resolution()),
-            entry: v3(scenario.entry.position),
+            entry,
             target: v3(scenario.target.position),
         }
     }
@@ -176,8 +187,9 @@ impl<'a> Problem<'a> {
         p
     }
 
-    /// Number of insertion-angle variables: 2 in 3-D, 1 in the plane, 0 for a continuation.
-    fn angle_count(&self) -> usize {
+    /// Number of insertion-angle variables: 2 in 3-D, 1 in the plane, 0 for a fixed posture or
+    /// a continuation.
+    pub fn angle_count(&self) -> usize {
         match (self.start.is_some(), self.plane) {
             (true, _) => 0,
             (false, true) => 1,
@@ -204,6 +216,19 @@ impl<'a> Problem<'a> {
             .filter(|&j| self.form.kind(j) == SegmentKind::Arc)
             .count();
         Some(self.angle_count() + self.form.len() + arcs_before)
+    }
+
+    /// Whether the insertion heading is fixed: a tilt bound of zero, or a continuation.
+    pub fn heading_fixed(&self) -> bool {
+        self.start.is_some()
+    }
+
+    /// Writes the insertion angles `theta1`, `theta2` into `x`, as far as `x` has them.
+    pub fn set_angles(&self, x: &mut Vars, theta1: f32, theta2: f32) {
+        let count = self.angle_count();
+        for (k, v) in x.iter_mut().zip([theta1, theta2]).take(count) {
+            *k = v;
+        }
     }
 
     /// theta1, theta2 of `x`.

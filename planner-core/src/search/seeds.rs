@@ -397,9 +397,7 @@ impl FreeGrid {
         if hi < self.headings {
             Some(-HEADING_SPAN + self.heading_step * (hi as f32 + 0.5))
         } else {
-            plane
-                .tilt_bound_headings
-                .and_then(|b| b.get(hi - self.headings).copied())
+            plane.tilt_bound_headings.get(hi - self.headings).copied()
         }
     }
 }

@@ -15,6 +15,7 @@ use crate::report::{FormOutcome, Insertion, SegmentPlan, Segments, SolveStatus};
 use crate::search::escape::escape;
 use crate::search::seeds::{sweep, SeedSink};
 use crate::search::starts::{extension_starts, planned_without};
+use crate::search::sweep_plane::seed_plane_turns;
 
 /// Seed planes tried in 3-D (turns of the plane about the entry-target line over half a turn).
 pub const SPACE_PLANES: usize = 8;
@@ -310,8 +311,9 @@ fn space_form(search: &FormSearch, effort: &mut Effort) -> FormOutcome {
     } = *search;
     let p = Problem::new(scenario, form, 0);
     let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
-    for k in 0..SPACE_PLANES {
-        let psi = core::f32::consts::PI * k as f32 / SPACE_PLANES as f32;
+    let mut turns = [0.0f32; SPACE_PLANES];
+    let planes = seed_plane_turns(&p, SPACE_PLANES, &mut turns);
+    for &psi in &turns[..planes] {
         for sides in 0..(1u16 << form.arc_count()) {
             effort.evaluations += sweep(&p, psi, sides as u8, planned_without, &mut list);
         }

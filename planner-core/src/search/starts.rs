@@ -47,10 +47,11 @@ pub(crate) fn extension_starts(
             }
             let p = Problem::new(scenario, form, sides);
             let mut x = [0.0; crate::optim::problem::MAX_VARS];
-            x[0] = o.insertion.theta1_deg.to_radians();
-            if !p.plane {
-                x[1] = o.insertion.theta2_deg.to_radians();
-            }
+            p.set_angles(
+                &mut x,
+                o.insertion.theta1_deg.to_radians(),
+                o.insertion.theta2_deg.to_radians(),
+            );
             for i in 0..form.len() {
                 x[p.length_var(i)] = lengths[i] / p.radius;
                 if let Some(k) = p.bevel_var(i) {

@@ -74,6 +74,101 @@ pub(super) fn pieces(p: &Problem, side: &[f32; MAX_CONTROL_DEGREE], skipped: u8)
 /// counts as a near miss.
 pub const NEAR_MISS: f32 = 4.0;
 
+/// How far (1 - cos) a seed's heading may stray from the axis when the heading is fixed: seeds
+/// are rounded onto the target by the solver, and the fixed posture is exact there.
+pub(super) const AXIS_SLACK: f32 = 1e-6;
+
+/// sin of the largest angle between the chord and a fixed axis at which every seed plane is taken
+/// to hold the axis (the angle [`AXIS_SLACK`] allows a seed's heading).
+const AXIS_OFF_CHORD: f32 = 1.4e-3;
+
+/// The largest versine of the tilt (1 - cos) a seed's heading may have. Tilts are compared as
+/// versines: near the axis, cos rounds away the fraction of a degree that matters.
+fn vers_tilt_allowed(p: &Problem) -> f32 {
+    if p.heading_fixed() {
+        AXIS_SLACK
+    } else {
+        p.vers_max_tilt
+    }
+}
+
+/// 1 - cos of the angle between unit vectors whose difference is `d`: |d|² / 2.
+fn versine_between(d: (f32, f32, f32)) -> f32 {
+    0.5 * (d.0 * d.0 + d.1 * d.1 + d.2 * d.2)
+}
+
+/// The entry-target line and the direction the seed planes are turned from.
+struct ChordFrame {
+    /// Unit vector from the entry to the target.
+    chord: V3,
+    /// A unit vector across the chord: the normal of the plane at turn 0.
+    a: V3,
+    /// Entry to target (mm).
+    dist: f32,
+}
+
+impl ChordFrame {
+    fn of(p: &Problem) -> Self {
+        let e = p.scenario.entry.position;
+        let t = p.scenario.target.position;
+        let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
+        let dist = crate::fmath::sqrt(d.dot(&d));
+        let chord = d / dist;
+        let b1: V3 = p.basis.column(0).into();
+        let b2: V3 = p.basis.column(1).into();
+        let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
+            b1
+        } else {
+            b2
+        };
+        let a = pick - chord * pick.dot(&chord);
+        let a = a / crate::fmath::sqrt(a.dot(&a));
+        ChordFrame { chord, a, dist }
+    }
+}
+
+/// The turns about the chord of the planes a 3-D form's seeds are swept in: `count` planes
+/// evenly over half a turn, unless the tilt cone is narrower than the chord's angle from the
+/// axis; then only the planes within the band that crosses the cone are of use, and the `count`
+/// planes are spread over that band (one plane, the one holding the axis, when the heading is
+/// fixed).
+pub(super) fn seed_plane_turns(p: &Problem, count: usize, out: &mut [f32]) -> usize {
+    let ChordFrame { chord, a, .. } = ChordFrame::of(p);
+    let b3: V3 = p.basis.column(2).into();
+    // The plane at turn psi has normal n = a cos psi + (chord x a) sin psi, and crosses the cone
+    // when |n . b3| <= sin(max tilt): n . b3 = R cos(psi - psi0).
+    let (u, v) = (a.dot(&b3), chord.cross(&a).dot(&b3));
+    let off_axis = crate::fmath::sqrt(u * u + v * v);
+    let sin_tilt = crate::fmath::sqrt(crate::fmath::max(
+        1.0 - p.cos_max_tilt * p.cos_max_tilt,
+        0.0,
+    ));
+    let count = count.min(out.len());
+    let every_plane_crosses = if p.heading_fixed() {
+        off_axis <= AXIS_OFF_CHORD
+    } else {
+        sin_tilt >= off_axis
+    };
+    if every_plane_crosses {
+        for (k, o) in out.iter_mut().enumerate().take(count) {
+            *o = core::f32::consts::PI * k as f32 / count as f32;
+        }
+        return count;
+    }
+    let holds_axis = crate::fmath::atan2(v, u) + core::f32::consts::FRAC_PI_2;
+    if p.heading_fixed() || count < 2 {
+        if let Some(o) = out.first_mut() {
+            *o = holds_axis;
+        }
+        return out.len().min(1);
+    }
+    let band = crate::fmath::asin(crate::fmath::clamp(sin_tilt / off_axis, 0.0, 1.0));
+    for (k, o) in out.iter_mut().enumerate().take(count) {
+        *o = holds_axis + band * (2.0 * k as f32 / (count - 1) as f32 - 1.0);
+    }
+    count
+}
+
 /// The plane of a sweep and the arcs' sides.
 pub(super) struct SweepPlane {
     /// Unit vector from the entry to the target.
@@ -84,10 +179,11 @@ pub(super) struct SweepPlane {
     /// Entry to target (mm).
     pub(super) dist: f32,
     pub(super) sides: [f32; MAX_CONTROL_DEGREE],
-    /// The in-plane headings on the tilt bound (just inside), if the plane crosses it.
-    pub(super) tilt_bound_headings: Option<[f32; 2]>,
-    /// Components of the nominal insertion axis along the chord and `m`.
-    pub(super) axis: (f32, f32),
+    /// The in-plane headings on the tilt bound (just inside), if the plane crosses it; with the
+    /// heading fixed, the axis alone, if the plane holds it.
+    pub(super) tilt_bound_headings: heapless::Vec<f32, 2>,
+    /// Components of the nominal insertion axis along the chord, `m` and the normal.
+    pub(super) axis: (f32, f32, f32),
     /// Each obstacle's centre in plane coordinates and its squared height over the plane.
     pub(super) obstacles: [(f32, f32, f32); MAX_OBSTACLES],
 }
@@ -96,31 +192,30 @@ impl SweepPlane {
     /// The plane through the entry and the target turned by `psi` about the chord.
     pub(super) fn new(p: &Problem, psi: f32, sides: u8) -> Self {
         let e = p.scenario.entry.position;
-        let t = p.scenario.target.position;
-        let d = V3::new(t[0] - e[0], t[1] - e[1], t[2] - e[2]);
-        let dist = crate::fmath::sqrt(d.dot(&d));
-        let chord = d / dist;
-        let b1: V3 = p.basis.column(0).into();
-        let b2: V3 = p.basis.column(1).into();
+        let ChordFrame { chord, a, dist } = ChordFrame::of(p);
         let b3: V3 = p.basis.column(2).into();
-        let pick = if libm::fabsf(chord.dot(&b1)) < 0.9 {
-            b1
-        } else {
-            b2
-        };
-        let a = pick - chord * pick.dot(&chord);
-        let a = a / crate::fmath::sqrt(a.dot(&a));
         let (sn, cs) = crate::fmath::sincos(psi);
         let normal = a * cs + chord.cross(&a) * sn;
         let m = normal.cross(&chord);
         // heading . b3 = A cos h + B sin h = R cos(h - phi) meets cos(max tilt) at phi +- w.
-        let (ca, cb) = (chord.dot(&b3), m.dot(&b3));
+        let (ca, cb, cn) = (chord.dot(&b3), m.dot(&b3), normal.dot(&b3));
         let reach = crate::fmath::sqrt(ca * ca + cb * cb);
-        let tilt_bound_headings = (reach > p.cos_max_tilt).then(|| {
-            let phi = crate::fmath::atan2(cb, ca);
-            let w = crate::fmath::acos(p.cos_max_tilt / reach) * (1.0 - 1e-4);
-            [phi - w, phi + w]
-        });
+        let mut tilt_bound_headings = heapless::Vec::new();
+        let phi = crate::fmath::atan2(cb, ca);
+        if p.heading_fixed() {
+            if reach >= 1.0 - AXIS_SLACK {
+                // Capacity 2.
+                let _ = tilt_bound_headings.push(phi);
+            }
+        } else {
+            // reach cos w = cos(max tilt), in versines: vers w = (vers max - (1 - reach)) / reach,
+            // with 1 - reach = cn² / (1 + reach).
+            let vers_w = (p.vers_max_tilt - cn * cn / (1.0 + reach)) / reach;
+            if vers_w > 0.0 {
+                let w = 2.0 * crate::fmath::asin(crate::fmath::sqrt(0.5 * vers_w)) * (1.0 - 1e-4);
+                let _ = tilt_bound_headings.extend_from_slice(&[phi - w, phi + w]);
+            }
+        }
         let mut obstacles = [(0.0, 0.0, 0.0); MAX_OBSTACLES];
         for (o, ob) in obstacles.iter_mut().zip(&p.scenario.obstacles) {
             let c = V3::new(
@@ -138,14 +233,16 @@ impl SweepPlane {
             dist,
             sides: segment_sides(p, sides),
             tilt_bound_headings,
-            axis: (ca, cb),
+            axis: (ca, cb, cn),
             obstacles,
         }
     }
 
-    /// Whether the in-plane `heading` lies inside the tilt cone.
+    /// Whether the in-plane `heading` lies inside the tilt cone (with the heading fixed: on the
+    /// axis, to within [`AXIS_SLACK`]).
     pub(super) fn within_tilt(&self, p: &Problem, (sn, cs): (f32, f32)) -> bool {
-        self.axis.0 * cs + self.axis.1 * sn >= p.cos_max_tilt
+        let (ca, cb, cn) = self.axis;
+        versine_between((ca - cs, cb - sn, cn)) <= vers_tilt_allowed(p)
     }
 
     /// D and the smallest clearance of the planar path (as [`Problem::score`]: D is infinite once
@@ -204,16 +301,14 @@ impl SweepPlane {
         let b1: V3 = basis.column(0).into();
         let b2: V3 = basis.column(1).into();
         let b3: V3 = basis.column(2).into();
-        if heading.dot(&b3) < p.cos_max_tilt {
+        let off = heading - b3;
+        if versine_between((off.x, off.y, off.z)) > vers_tilt_allowed(p) {
             return None;
         }
         let mut x = [0.0f32; MAX_VARS];
         let theta2 = crate::fmath::asin(crate::fmath::clamp(heading.dot(&b1), -1.0, 1.0));
         let theta1 = crate::fmath::atan2(-heading.dot(&b2), heading.dot(&b3));
-        x[0] = theta1;
-        if !p.plane {
-            x[1] = theta2;
-        }
+        p.set_angles(&mut x, theta1, theta2);
         for i in 0..p.form.len() {
             let k = p.length_var(i);
             let u = path.lengths[i] / p.radius;
@@ -225,7 +320,10 @@ impl SweepPlane {
         if !p.plane {
             // Roll the bevel so that e1 is the plane normal (the bevel faces the right of the
             // heading), then flip by pi whenever the next arc bends to the other side.
-            let f0 = insertion_frame(V3::zeros(), basis, theta1, theta2);
+            let f0 = match p.start {
+                Some(fixed) => fixed,
+                None => insertion_frame(V3::zeros(), basis, theta1, theta2),
+            };
             let base = crate::fmath::atan2(self.normal.dot(&f0.e2()), self.normal.dot(&f0.e1()));
             let mut facing_left = false;
             let mut first = true;
