@@ -81,6 +81,9 @@ impl Residual {
     }
 
     /// An equality with gradient `a` and multiplier `mu`.
+    // One copy of the row loop for every constraint: it runs a few times per solve, and
+    // unrolled at each call it cost the firmware a kilobyte of flash.
+    #[inline(never)]
     pub(super) fn equality(&mut self, a: &Vars, mu: f32) {
         for k in 0..self.n {
             self.lagrangian[k] -= mu * a[k];
@@ -100,6 +103,7 @@ impl Residual {
         self.owe(mu, c);
     }
 
+    #[inline(never)]
     fn owe(&mut self, mu: f32, c: f32) {
         let wrong_sign = crate::fmath::max(-mu, 0.0);
         // A zero multiplier owes nothing, however far the constraint is from its floor.
