@@ -236,7 +236,7 @@ pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::replan_bench::ReplanFigures;
 
@@ -265,7 +265,7 @@ mod tests {
     }
 
     /// The figures measured on the stm32f4 (`needle device-bench --json`), within every budget.
-    fn within() -> BoardFigures {
+    pub(crate) fn within() -> BoardFigures {
         BoardFigures {
             board: "stm32f4".into(),
             flash_bytes: 127_496,

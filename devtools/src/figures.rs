@@ -158,30 +158,11 @@ pub fn table(figures: &[BoardFigures]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn figures_within_budgets() -> BoardFigures {
-        BoardFigures {
-            board: "stm32f4".into(),
-            flash_bytes: 127_496,
-            static_ram_bytes: 11_032,
-            peak_stack_bytes: 20_168,
-            instructions: vec![("paper".into(), 13_704_413), ("space".into(), 82_944_334)],
-            matches_host: vec![("paper".into(), true), ("space".into(), true)],
-            replan_instructions: vec![(
-                "paper".into(),
-                ReplanFigures {
-                    readings: 537,
-                    replans: 410,
-                    max: 408_953,
-                    median: 261_697,
-                },
-            )],
-        }
-    }
+    use crate::budgets::tests::within;
 
     #[test]
     fn the_json_reads_back_as_the_figures_it_was_written_from() {
-        let mut figures = figures_within_budgets();
+        let mut figures = within();
         figures.matches_host[1].1 = false;
         let back = BoardFigures::from_json(&figures.to_json()).unwrap();
         assert_eq!(back, figures);

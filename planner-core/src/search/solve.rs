@@ -221,9 +221,9 @@ pub fn solve_form(scenario: &Scenario, form: Form, previous: &[FormOutcome]) -> 
         extensions: &extensions,
     };
     if scenario.options.workspace == Workspace::PlaneYz {
-        plane_form(&search, &mut effort)
+        search.plane(&mut effort)
     } else {
-        space_form(&search, &mut effort)
+        search.space(&mut effort)
     }
 }
 
@@ -237,6 +237,80 @@ struct FormSearch<'a> {
     extensions: &'a [(u8, Vars)],
 }
 
+impl FormSearch<'_> {
+    /// Plane mode: every side assignment is its own problem. Each is swept into its own shortlist
+    /// (its near misses escaped when it has room), the best seeds of all of them are refined
+    /// together, and each side assignment's extension starts are refined as well.
+    fn plane(&self, effort: &mut Effort) -> FormOutcome {
+        let groups = 1u16 << self.form.arc_count();
+        let mut chosen: heapless::Vec<SidedSeed, PLANE_REFINED> = heapless::Vec::new();
+        for sides in 0..groups {
+            let p = Problem::new(self.scenario, self.form, sides as u8);
+            let mut list = Shortlist::new(p.n, REFINED_PER_GROUP, NEAR_MISSES_PER_GROUP);
+            if chosen.is_full() {
+                list.ceiling = chosen.iter().map(|s| s.0).fold(f32::NEG_INFINITY, f32::max);
+            }
+            effort.evaluations += sweep(&p, 0.0, sides as u8, self.planned_without, &mut list);
+            list.escape_near_misses(&p, effort);
+            for (f, x) in list.items.iter() {
+                choose(&mut chosen, (*f, sides as u8, *x));
+            }
+        }
+        sort_by_objective(&mut chosen, |s| s.0);
+        let mut best: Option<(Problem, LocalSolution)> = None;
+        for sides in 0..groups {
+            let sides = sides as u8;
+            let seeds = chosen.iter().filter(|s| s.1 == sides).map(|s| &s.2);
+            let extra = self
+                .extensions
+                .iter()
+                .filter(|s| s.0 == sides)
+                .map(|s| &s.1);
+            let mut starts = extra.chain(seeds).peekable();
+            if starts.peek().is_none() {
+                continue;
+            }
+            let p = Problem::new(self.scenario, self.form, sides);
+            let mut known = Basins::new();
+            let mut group_best: Option<LocalSolution> = None;
+            for x in starts {
+                keep_lower(&mut group_best, refine(&p, x, &mut known, effort));
+            }
+            consider(p, group_best, &mut best);
+        }
+        match best {
+            Some((p, sol)) => report(&p, &sol, effort),
+            None => infeasible(self.form, effort),
+        }
+    }
+
+    /// 3-D: every seed plane poses the same problem, so the seeds of all planes compete for one
+    /// shortlist (seeds of neighbouring planes often lie in one basin) and the solutions found are
+    /// shared.
+    fn space(&self, effort: &mut Effort) -> FormOutcome {
+        let p = Problem::new(self.scenario, self.form, 0);
+        let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
+        let mut turns = [0.0f32; SPACE_PLANES];
+        let planes = seed_plane_turns(&p, SPACE_PLANES, &mut turns);
+        for &psi in &turns[..planes] {
+            for sides in 0..(1u16 << self.form.arc_count()) {
+                effort.evaluations += sweep(&p, psi, sides as u8, self.planned_without, &mut list);
+            }
+        }
+        list.escape_near_misses(&p, effort);
+        let mut known = Basins::new();
+        let mut best: Option<LocalSolution> = None;
+        let starts = list.sorted().iter().map(|(_, x)| x);
+        for x in self.extensions.iter().map(|(_, x)| x).chain(starts) {
+            keep_lower(&mut best, refine(&p, x, &mut known, effort));
+        }
+        match best {
+            Some(sol) => report(&p, &sol, effort),
+            None => infeasible(self.form, effort),
+        }
+    }
+}
+
 /// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
 pub const PLANE_REFINED: usize = 8;
 
@@ -248,86 +322,6 @@ fn choose(chosen: &mut heapless::Vec<SidedSeed, PLANE_REFINED>, seed: SidedSeed)
     if make_room(chosen.as_mut_view(), PLANE_REFINED, seed.0, |s| s.0) {
         // Room was made.
         let _ = chosen.push(seed);
-    }
-}
-
-/// Plane mode: every side assignment is its own problem. Each is swept into its own shortlist
-/// (its near misses escaped when it has room), the best seeds of all of them are refined
-/// together, and each side assignment's extension starts are refined as well.
-fn plane_form(search: &FormSearch, effort: &mut Effort) -> FormOutcome {
-    let FormSearch {
-        scenario,
-        form,
-        planned_without,
-        extensions,
-    } = *search;
-    let groups = 1u16 << form.arc_count();
-    let mut chosen: heapless::Vec<SidedSeed, PLANE_REFINED> = heapless::Vec::new();
-    for sides in 0..groups {
-        let p = Problem::new(scenario, form, sides as u8);
-        let mut list = Shortlist::new(p.n, REFINED_PER_GROUP, NEAR_MISSES_PER_GROUP);
-        if chosen.is_full() {
-            list.ceiling = chosen.iter().map(|s| s.0).fold(f32::NEG_INFINITY, f32::max);
-        }
-        effort.evaluations += sweep(&p, 0.0, sides as u8, planned_without, &mut list);
-        list.escape_near_misses(&p, effort);
-        for (f, x) in list.items.iter() {
-            choose(&mut chosen, (*f, sides as u8, *x));
-        }
-    }
-    sort_by_objective(&mut chosen, |s| s.0);
-    let mut best: Option<(Problem, LocalSolution)> = None;
-    for sides in 0..groups {
-        let sides = sides as u8;
-        let seeds = chosen.iter().filter(|s| s.1 == sides).map(|s| &s.2);
-        let extra = extensions.iter().filter(|s| s.0 == sides).map(|s| &s.1);
-        let mut starts = extra.chain(seeds).peekable();
-        if starts.peek().is_none() {
-            continue;
-        }
-        let p = Problem::new(scenario, form, sides);
-        let mut known = Basins::new();
-        let mut group_best: Option<LocalSolution> = None;
-        for x in starts {
-            keep_lower(&mut group_best, refine(&p, x, &mut known, effort));
-        }
-        consider(p, group_best, &mut best);
-    }
-    match best {
-        Some((p, sol)) => report(&p, &sol, effort),
-        None => infeasible(form, effort),
-    }
-}
-
-/// 3-D: every seed plane poses the same problem, so the seeds of all planes compete for one
-/// shortlist (seeds of neighbouring planes often lie in one basin) and the solutions found are
-/// shared.
-fn space_form(search: &FormSearch, effort: &mut Effort) -> FormOutcome {
-    let FormSearch {
-        scenario,
-        form,
-        planned_without,
-        extensions,
-    } = *search;
-    let p = Problem::new(scenario, form, 0);
-    let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
-    let mut turns = [0.0f32; SPACE_PLANES];
-    let planes = seed_plane_turns(&p, SPACE_PLANES, &mut turns);
-    for &psi in &turns[..planes] {
-        for sides in 0..(1u16 << form.arc_count()) {
-            effort.evaluations += sweep(&p, psi, sides as u8, planned_without, &mut list);
-        }
-    }
-    list.escape_near_misses(&p, effort);
-    let mut known = Basins::new();
-    let mut best: Option<LocalSolution> = None;
-    let starts = list.sorted().iter().map(|(_, x)| x);
-    for x in extensions.iter().map(|(_, x)| x).chain(starts) {
-        keep_lower(&mut best, refine(&p, x, &mut known, effort));
-    }
-    match best {
-        Some(sol) => report(&p, &sol, effort),
-        None => infeasible(form, effort),
     }
 }
 
