@@ -11,8 +11,13 @@ use core::f64::consts::PI;
 use needle_cli::random::{seeded, Draw};
 use planner_core::SegmentKind;
 
-/// Mean length of one edge (mm): short enough to thread between spheres a few millimetres apart.
-const STEP: f64 = 5.0;
+/// Shortest and longest edge (mm), drawn log-uniformly: short edges thread between spheres a
+/// millimetre apart, long ones reach round the far side of a cluster in few nodes.
+const SHORTEST_STEP: f64 = 1.0;
+const LONGEST_STEP: f64 = 40.0;
+/// Share of samples drawn from the wide box (a needle's loop round the target reaches up to two
+/// arc diameters away); the others fill the box round the entry and the target.
+const WIDE_SHARE: f64 = 0.2;
 /// Share of samples that are the target itself.
 const GOAL_BIAS: f64 = 0.1;
 /// Share of edges that continue the last segment (no roll, same kind): a path has at most N
@@ -60,8 +65,8 @@ struct Tree<'a> {
     limits: &'a Limits,
     nodes: Vec<Node>,
     best: Option<(usize, Connection, f64)>,
-    lo: V3,
-    hi: V3,
+    /// The box round the entry and the target, and the wide one (corners).
+    boxes: [(V3, V3); 2],
 }
 
 /// Grows the tree for `iterations` iterations from `seed` and returns the shortest path it
@@ -69,15 +74,17 @@ struct Tree<'a> {
 pub fn grow(limits: &Limits, iterations: usize, seed: u64) -> Option<TreePath> {
     let mut rng = seeded(seed);
     let (e, t) = (limits.entry, limits.target);
-    let pad = (0.5 * (t - e).norm()).max(20.0);
-    let lo = V3::new(e.x.min(t.x), e.y.min(t.y), e.z.min(t.z)) - V3::new(pad, pad, pad);
-    let hi = V3::new(e.x.max(t.x), e.y.max(t.y), e.z.max(t.z)) + V3::new(pad, pad, pad);
+    let lo = V3::new(e.x.min(t.x), e.y.min(t.y), e.z.min(t.z));
+    let hi = V3::new(e.x.max(t.x), e.y.max(t.y), e.z.max(t.z));
+    let padded = |pad: f64| (lo - V3::new(pad, pad, pad), hi + V3::new(pad, pad, pad));
     let mut tree = Tree {
         limits,
         nodes: Vec::new(),
         best: None,
-        lo,
-        hi,
+        boxes: [
+            padded((0.5 * (t - e).norm()).max(20.0)),
+            padded(4.0 * limits.rho),
+        ],
     };
     let aimed = limits.aimed_posture(t);
     tree.add_root(aimed);
@@ -109,16 +116,13 @@ impl Tree<'_> {
         if rng.unit() < GOAL_BIAS {
             return self.limits.target;
         }
+        let (lo, hi) = self.boxes[usize::from(rng.unit() < WIDE_SHARE)];
         let x = if self.limits.plane {
             self.limits.entry.x
         } else {
-            rng.range(self.lo.x, self.hi.x)
+            rng.range(lo.x, hi.x)
         };
-        V3::new(
-            x,
-            rng.range(self.lo.y, self.hi.y),
-            rng.range(self.lo.z, self.hi.z),
-        )
+        V3::new(x, rng.range(lo.y, hi.y), rng.range(lo.z, hi.z))
     }
 
     fn add_root(&mut self, posture: (f64, f64)) {
@@ -192,7 +196,7 @@ impl Tree<'_> {
             }
         };
         let g = l.roll(&f, roll);
-        let mut len = rng.range(0.2, 1.8) * STEP;
+        let mut len = (rng.range(SHORTEST_STEP.ln(), LONGEST_STEP.ln())).exp();
         if kind == SegmentKind::Arc {
             // Stop turning once the heading points at the sample.
             let aim = v.dot(g.e2).atan2(v.dot(g.e3));
@@ -206,7 +210,7 @@ impl Tree<'_> {
             l.bound(kind)
         };
         len = len.min(room);
-        let shortest = 0.1 * len;
+        let shortest = (0.1 * len).min(SHORTEST_STEP);
         while l.clearance_of(&g, kind, len) < l.clearance {
             len *= 0.5;
             if len < shortest {
