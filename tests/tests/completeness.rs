@@ -294,10 +294,16 @@ fn wide_headings_are_planned_whenever_sampled() {
 }
 
 #[test]
-#[ignore = "seed 0: the planner's best RRRL is 77.584 mm, the sampler's RRRL 77.539 mm (which \
-            the planner's own check accepts)"]
 fn ten_degree_headings_are_planned_whenever_sampled() {
     assert_complete(10.0, 0..5);
+}
+
+/// At the 10 degree bound the planner's best is a 407.167 mm RRRR loop (two 166.67 mm arcs);
+/// the sampler finds RRL or RRRL paths of about 73 mm, which the planner's own check accepts.
+#[test]
+#[ignore = "tilt 10 seed 43: the planner's best is a 407 mm loop, the sampler's path 73 mm"]
+fn ten_degree_seed_43_is_not_a_loop() {
+    assert_complete(10.0, [43]);
 }
 
 #[test]
