@@ -128,3 +128,125 @@ fn arc_then_line(l: &Limits, g: &Frame) -> Option<(f64, f64)> {
         .min_by(|x, y| x.0.total_cmp(&y.0))
         .map(|(a, line)| (a * rho, line.max(0.0)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::frame::V3;
+    use needle_cli::random::{seeded, Draw};
+    use planner_core::Scenario;
+
+    fn open_limits(plane: bool) -> Limits {
+        let mut s = Scenario::paper();
+        s.obstacles.clear();
+        s.options.max_control_degree = 4;
+        if !plane {
+            s.options.workspace = planner_core::model::scenario::Workspace::Space;
+        }
+        Limits::new(&s)
+    }
+
+    /// Follows `pieces` from `f` with the frame's own kinematics.
+    fn end_of(l: &Limits, f: &Frame, pieces: &[SampledSegment]) -> V3 {
+        pieces
+            .iter()
+            .fold(*f, |g, p| l.roll(&g, p.roll).arc_or_line(p, l.rho))
+            .p
+    }
+
+    trait Advance {
+        fn arc_or_line(&self, p: &SampledSegment, rho: f64) -> Frame;
+    }
+    impl Advance for Frame {
+        fn arc_or_line(&self, p: &SampledSegment, rho: f64) -> Frame {
+            match p.kind {
+                SegmentKind::Arc => self.arc(p.length, rho),
+                SegmentKind::Line => self.line(p.length),
+            }
+        }
+    }
+
+    #[test]
+    fn both_forms_end_on_targets_around_random_frames() {
+        let mut l = open_limits(false);
+        let mut rng = seeded(11);
+        let mut found = 0;
+        for _ in 0..500 {
+            let (t1, t2) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let f = l.insertion(t1, t2).roll(rng.range(-3.0, 3.0));
+            // Ahead of the tip and off its heading by less than the arc radius: outside the
+            // circle the arc bends along, so within reach.
+            let (a, b) = (rng.range(-40.0, 40.0), rng.range(-40.0, 40.0));
+            l.target = f.p + f.e3 * rng.range(70.0, 150.0) + f.e1 * a + f.e2 * b;
+            if let Some(c) = connect(&l, &f, Tail::START) {
+                found += 1;
+                assert!((end_of(&l, &f, &c.pieces) - l.target).norm() < 1e-9);
+                let sum: f64 = c.pieces.iter().map(|p| p.length).sum();
+                assert!((sum - c.length).abs() < 1e-12);
+                assert!(c.length >= (l.target - f.p).norm() - 1e-9);
+            }
+        }
+        assert_eq!(found, 500);
+    }
+
+    #[test]
+    fn a_line_then_an_arc_ends_on_the_target() {
+        let mut l = open_limits(false);
+        let mut rng = seeded(13);
+        for _ in 0..500 {
+            let f = l.insertion(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let (a, b) = (rng.range(-60.0, 60.0), rng.range(-60.0, 60.0));
+            l.target = f.p + f.e3 * rng.range(70.0, 150.0) + f.e1 * a + f.e2 * b;
+            let v = l.target - f.p;
+            let along = v.dot(f.e3);
+            let perp = v - f.e3 * along;
+            let (line, arc) = line_then_arc(&l, along, perp.norm()).expect("ahead, within reach");
+            let roll = f.roll_towards(perp.unit());
+            let pieces = [
+                piece(SegmentKind::Line, 0.0, line),
+                piece(SegmentKind::Arc, roll, arc),
+            ];
+            assert!((end_of(&l, &f, &pieces) - l.target).norm() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn plane_connections_stay_in_the_plane() {
+        let mut l = open_limits(true);
+        let mut rng = seeded(12);
+        let mut found = 0;
+        for _ in 0..200 {
+            let f = l.insertion(rng.range(-0.5, 0.5), 0.0);
+            l.target = f.p + f.e3 * rng.range(70.0, 150.0) + f.e2 * rng.range(-40.0, 40.0);
+            if let Some(c) = connect(&l, &f, Tail::START) {
+                found += 1;
+                assert!(c
+                    .pieces
+                    .iter()
+                    .all(|p| p.roll == 0.0 || p.roll == core::f64::consts::PI));
+                assert!((end_of(&l, &f, &c.pieces) - l.target).norm() < 1e-9);
+            }
+        }
+        assert_eq!(found, 200);
+    }
+
+    #[test]
+    fn a_connection_past_n_segments_is_refused() {
+        let mut l = open_limits(false);
+        let f = l.insertion(0.0, 0.0);
+        let full = Tail {
+            kind: Some(SegmentKind::Arc),
+            run: 10.0,
+            count: 3,
+        };
+        // Off to the side of e1: a roll, an arc and a line are two more segments, one too many
+        // after three.
+        l.target = f.p + V3::new(30.0, 0.0, 80.0);
+        assert!(connect(&l, &f, full).is_none());
+        assert!(connect(&l, &f, Tail { count: 2, ..full }).is_some());
+        // On the bevel's side already: the arc goes on without a roll, only the line is new.
+        l.target = f.p + V3::new(0.0, 30.0, 80.0);
+        let c = connect(&l, &f, full).expect("the arc continues");
+        assert_eq!(c.pieces[0].roll, 0.0);
+    }
+}

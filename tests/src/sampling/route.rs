@@ -153,3 +153,53 @@ pub fn tail_of(segments: &[SampledSegment]) -> Tail {
         count: segments.len(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn seg(kind: SegmentKind, roll: f64, length: f64) -> SampledSegment {
+        SampledSegment { kind, roll, length }
+    }
+    const R: SegmentKind = SegmentKind::Arc;
+    const L: SegmentKind = SegmentKind::Line;
+
+    #[test]
+    fn pieces_merge_into_the_planners_segments() {
+        let pieces = [
+            seg(R, 0.5, 3.0),
+            seg(R, 0.0, 2.0), // no roll: the same arc
+            seg(L, 0.0, 4.0),
+            seg(L, 0.25, 1.0), // a line after a line: one line, the rolls added
+            seg(R, 0.75, 0.0), // empty: dropped, its roll carried on
+            seg(R, 0.5, 6.0),
+            seg(R, 0.1, 1.0), // a roll: a new segment
+        ];
+        assert_eq!(
+            normalize(&pieces),
+            vec![
+                seg(R, 0.5, 5.0),
+                seg(L, 0.25, 5.0),
+                seg(R, 1.25, 6.0),
+                seg(R, 0.1, 1.0)
+            ]
+        );
+    }
+
+    #[test]
+    fn two_lines_in_a_row_and_too_many_segments_are_refused() {
+        let mut s = planner_core::Scenario::paper();
+        s.obstacles.clear();
+        s.options.max_control_degree = 3;
+        let l = Limits::new(&s);
+        let ok = [seg(R, 0.0, 10.0), seg(L, 0.0, 10.0), seg(R, PI, 10.0)];
+        assert_eq!(measure(&l, 0.0, 0.0, &ok).map(|m| m.count), Some(3));
+        let lines = [seg(R, 0.0, 10.0), seg(L, 0.0, 10.0), seg(L, 0.0, 10.0)];
+        assert!(measure(&l, 0.0, 0.0, &lines).is_none());
+        let four = [ok.as_slice(), &[seg(L, 0.0, 1.0)]].concat();
+        assert!(measure(&l, 0.0, 0.0, &four).is_none());
+        // Plane mode: a roll other than 0 or pi leaves the plane.
+        let tilted = [seg(R, 0.3, 10.0)];
+        assert!(measure(&l, 0.0, 0.0, &tilted).is_none());
+    }
+}
