@@ -129,6 +129,13 @@ fn a_target_off_the_axis_is_reached_by_an_arc_and_a_line() {
 }
 
 #[test]
+fn a_seed_gives_the_same_path_every_run() {
+    let s = completeness_scenario(3, 10.0);
+    let first = sample(&s, Budget::DEFAULT, 3).expect("a path");
+    assert_eq!(Some(first), sample(&s, Budget::DEFAULT, 3));
+}
+
+#[test]
 fn a_target_behind_the_entry_is_out_of_reach_of_two_short_arcs() {
     let mut s = open_space([0.0, 0.0, -60.0], 2);
     s.needle.max_arc_deg = 10.0;
