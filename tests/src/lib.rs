@@ -8,6 +8,7 @@ use std::sync::OnceLock;
 
 pub mod readme;
 pub mod reference;
+pub mod sampling;
 pub mod soundness;
 
 /// The workspace root.
