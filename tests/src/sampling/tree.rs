@@ -1,5 +1,5 @@
 //! The goal-directed RRT over tip frames: roots at the entry (one per insertion heading drawn in
-//! the tilt cone), edges of a few millimetres of line or of arc after a roll, and the exact goal
+//! the tilt cone), edges of 1 to 40 mm of line or of arc after a roll, and the exact goal
 //! connection tried from every new node; the shortest connected path within the budget wins.
 
 use super::connect::{connect, Connection};
