@@ -176,7 +176,7 @@ impl Tree<'_> {
     }
 
     /// One edge from node `from` towards `q`, if it keeps within the limits and clear: the last
-    /// segment continued, or a new one; cut short (down to a tenth) where the full edge would hit
+    /// segment continued, or a new one; halved (down to a tenth, or 1 mm) while the edge would hit
     /// an obstacle.
     fn extend(&self, from: usize, q: V3, rng: &mut impl Draw) -> Option<Node> {
         let l = self.limits;
