@@ -300,6 +300,15 @@ fn wide_headings_are_planned_whenever_sampled() {
     assert_complete(60.0, 0..5);
 }
 
+/// At the 60 degree bound the planner's best is RRRR, 101.455 mm; the sampler finds an RLR of
+/// 100.851 mm (theta = (23.91, -7.84) degrees; R 33.458 mm at bevel -11.96, L 2.663, R 64.730 at
+/// -116.73), which the planner's own check accepts.
+#[test]
+#[ignore = "tilt 60 seed 69: the planner's best RRRR is 101.455 mm, a sampled RLR 100.851 mm"]
+fn wide_seed_69_is_planned_as_short_as_sampled() {
+    assert_complete(60.0, [69]);
+}
+
 #[test]
 fn ten_degree_headings_are_planned_whenever_sampled() {
     assert_complete(10.0, 0..5);

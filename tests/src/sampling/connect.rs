@@ -11,6 +11,7 @@
 //! form of `(qx, qy)`, and its length is then `qx sin a + qy cos a` (which must be >= 0). A
 //! target inside the circle (`r < rho`) cannot be reached this way.
 
+use super::arc_arc::two_arcs;
 use super::limits::Limits;
 use super::route::Tail;
 use super::SampledSegment;
@@ -33,7 +34,8 @@ pub struct Connection {
     pub length: f64,
 }
 
-/// The shortest connection from `f` to the target (arc then line, or line then arc) that stays
+/// The shortest connection from `f` to the target (arc then line, or line then arc; two arcs
+/// when neither passes, see [`two_arcs`]) that stays
 /// within N segments and the segment bounds, keeps its clearance and ends within
 /// [`END_TOLERANCE`] of the target.
 pub fn connect(l: &Limits, f: &Frame, tail: Tail) -> Option<Connection> {
@@ -65,6 +67,10 @@ pub fn connect(l: &Limits, f: &Frame, tail: Tail) -> Option<Connection> {
     });
     match (arc_first, line_first) {
         (Some(a), Some(b)) => Some(if b.length < a.length { b } else { a }),
+        (None, None) => two_arcs(l, f)
+            .into_iter()
+            .filter_map(|arcs| checked(l, f, tail, arcs.to_vec()))
+            .min_by(|a, b| a.length.total_cmp(&b.length)),
         (a, b) => a.or(b),
     }
 }
@@ -234,19 +240,23 @@ mod tests {
     fn a_connection_past_n_segments_is_refused() {
         let mut l = open_limits(false);
         let f = l.insertion(0.0, 0.0);
-        let full = Tail {
+        let three = Tail {
             kind: Some(SegmentKind::Arc),
             run: 10.0,
             count: 3,
         };
-        // Off to the side of e1: a roll, an arc and a line are two more segments, one too many
-        // after three.
+        // Off to the side of e1, after N = 4 segments: every connection starts one more.
         l.target = f.p + V3::new(30.0, 0.0, 80.0);
-        assert!(connect(&l, &f, full).is_none());
-        assert!(connect(&l, &f, Tail { count: 2, ..full }).is_some());
-        // On the bevel's side already: the arc goes on without a roll, only the line is new.
-        l.target = f.p + V3::new(0.0, 30.0, 80.0);
-        let c = connect(&l, &f, full).expect("the arc continues");
+        assert!(connect(&l, &f, Tail { count: 4, ..three }).is_none());
+        // After three, only the last arc going on (no roll) and one more arc fit.
+        let c = connect(&l, &f, three).expect("the arc goes on, then one more arc");
+        let kinds: Vec<SegmentKind> = c.pieces.iter().map(|p| p.kind).collect();
+        assert_eq!(kinds, [SegmentKind::Arc, SegmentKind::Arc]);
         assert_eq!(c.pieces[0].roll, 0.0);
+        // On the bevel's side already: the arc goes on, and a line ends it.
+        l.target = f.p + V3::new(0.0, 30.0, 80.0);
+        let c = connect(&l, &f, three).expect("the arc continues");
+        assert_eq!(c.pieces[0].roll, 0.0);
+        assert_eq!(c.pieces[1].kind, SegmentKind::Line);
     }
 }

@@ -2,14 +2,17 @@
 //! and independent of `planner-core` (only its `Scenario` is read), strong enough to find a
 //! path of at most N segments whenever one exists with room to spare, and to find a short one.
 //!
-//! The tree grows from the entry (roots at insertion headings drawn in the tilt cone) by edges of
-//! a few millimetres, a line or an arc after a roll, as long as the path keeps to the planner's
-//! segment rules: a new segment at every roll or kind change, no two lines in a row, each arc at
-//! most `max_arc_deg`, each line at most `max_line_length()`, at most N segments. From every new
-//! node an exact goal connection (roll, arc, line in closed form) is tried; the shortest connected
-//! path within the budget is then shortened by a local search over its parameters. Every point
-//! of a returned path keeps `min_clearance` plus [`CLEARANCE_MARGIN`] from every sphere.
+//! Three trees (each from its own seed) grow from the entry (roots at insertion headings drawn
+//! in the tilt cone) by edges of 1 to 40 mm, a line or an arc after a roll, as long as the path
+//! keeps to the planner's segment rules: a new segment at every roll or kind change, no two lines
+//! in a row, each arc at most `max_arc_deg`, each line at most `max_line_length()`, at most N
+//! segments. From every new node an exact goal connection is tried (arc then line or line then
+//! arc in closed form; two arcs by a scanned root when neither passes); each tree's shortest
+//! connected path is then shortened by a local search over its parameters, and the shortest of
+//! them returned. Every point of a returned path keeps `min_clearance` plus
+//! [`CLEARANCE_MARGIN`] from every sphere.
 
+pub mod arc_arc;
 pub mod connect;
 pub mod family;
 pub mod limits;

@@ -1,5 +1,5 @@
 //! The goal-directed RRT over tip frames: roots at the entry (one per insertion heading drawn in
-//! the tilt cone), edges of a few millimetres of line or of arc after a roll, and the exact goal
+//! the tilt cone), edges of 1 to 40 mm of line or of arc after a roll, and the exact goal
 //! connection tried from every new node; the shortest connected path within the budget wins.
 
 use super::connect::{connect, Connection};
@@ -176,7 +176,7 @@ impl Tree<'_> {
     }
 
     /// One edge from node `from` towards `q`, if it keeps within the limits and clear: the last
-    /// segment continued, or a new one; cut short (down to a tenth) where the full edge would hit
+    /// segment continued, or a new one; halved (down to a tenth, or 1 mm) while the edge would hit
     /// an obstacle.
     fn extend(&self, from: usize, q: V3, rng: &mut impl Draw) -> Option<Node> {
         let l = self.limits;
