@@ -337,22 +337,15 @@ fn ten_degree_seed_43_is_planned_as_short_as_sampled() {
 }
 
 #[test]
-fn two_degree_headings_are_planned_whenever_sampled() {
-    assert_planned_whenever_sampled(2.0, 0..5);
-}
-
-#[test]
-fn fixed_headings_are_planned_whenever_sampled() {
-    assert_planned_whenever_sampled(0.0, 0..5);
-}
-
-/// At 0 and 2 degrees, seed 0: the planner's best RRLR is 77.92 (77.86) mm, a sampled RLRL
-/// 77.74 (77.69) mm: a local optimum of the planner's RLRL.
-#[test]
-#[ignore = "tilt 0 and 2 seed 0: the planner's best is 0.2 % longer than the sampled path"]
-fn narrow_headings_are_planned_as_short_as_sampled() {
-    assert_complete(0.0, 0..5);
+fn two_degree_headings_are_planned_as_short_as_sampled() {
     assert_complete(2.0, 0..5);
+}
+
+/// Seed 0 here and at 2 degrees was 0.2 % longer than sampled (a local optimum of RLRL) before
+/// the seeds' first arcs were also tried rolled.
+#[test]
+fn fixed_headings_are_planned_as_short_as_sampled() {
+    assert_complete(0.0, 0..5);
 }
 
 #[test]

@@ -291,7 +291,7 @@ impl FormSearch<'_> {
         let p = Problem::new(self.scenario, self.form, 0);
         let mut list = Shortlist::new(p.n, SPACE_REFINED, SPACE_NEAR_MISSES);
         let mut turns = [0.0f32; SPACE_PLANES];
-        let planes = seed_plane_turns(&p, SPACE_PLANES, &mut turns);
+        let (planes, banded) = seed_plane_turns(&p, SPACE_PLANES, &mut turns);
         for &psi in &turns[..planes] {
             for sides in 0..(1u16 << self.form.arc_count()) {
                 effort.evaluations += sweep(&p, psi, sides as u8, self.planned_without, &mut list);
@@ -300,9 +300,29 @@ impl FormSearch<'_> {
         list.escape_near_misses(&p, effort);
         let mut known = Basins::new();
         let mut best: Option<LocalSolution> = None;
-        let starts = list.sorted().iter().map(|(_, x)| x);
-        for x in self.extensions.iter().map(|(_, x)| x).chain(starts) {
-            keep_lower(&mut best, refine(&p, x, &mut known, effort));
+        // With the heading fixed or the cone narrow, the planar seeds come from the few planes
+        // that hold the axis or cross the cone, while the shortest paths often bend out of them
+        // from the first arc on: the seeds are tried again with their first arc rolled about
+        // the heading. (One call site of the solver: the firmware's flash holds one copy.)
+        let first_bevel = (0..self.form.len()).find_map(|i| p.bevel_var(i));
+        let rolls = match first_bevel {
+            Some(_) if banded || p.heading_fixed() => FIRST_ARC_ROLLS,
+            _ => 1,
+        };
+        let seeds = list.sorted();
+        for roll in 0..rolls {
+            let extensions: &[(u8, Vars)] = if roll == 0 { self.extensions } else { &[] };
+            let starts = extensions
+                .iter()
+                .map(|(_, x)| x)
+                .chain(seeds.iter().map(|(_, x)| x));
+            for x in starts {
+                let mut x = *x;
+                if let Some(k) = first_bevel.filter(|_| roll > 0) {
+                    x[k] += core::f32::consts::TAU * roll as f32 / FIRST_ARC_ROLLS as f32;
+                }
+                keep_lower(&mut best, refine(&p, &x, &mut known, effort));
+            }
         }
         match best {
             Some(sol) => report(&p, &sol, effort),
@@ -310,6 +330,10 @@ impl FormSearch<'_> {
         }
     }
 }
+
+/// Rolls of a seed's first arc tried, its own included (evenly over a turn), when the heading is
+/// fixed or the cone narrow.
+const FIRST_ARC_ROLLS: usize = 6;
 
 /// Seeds refined per form in plane mode: the best of every side assignment's shortlist.
 pub const PLANE_REFINED: usize = 8;
@@ -326,6 +350,8 @@ fn choose(chosen: &mut heapless::Vec<SidedSeed, PLANE_REFINED>, seed: SidedSeed)
 }
 
 /// Keeps the lower of `best` and `sol`.
+// One copy for both workspaces' loops (the firmware's flash).
+#[inline(never)]
 fn keep_lower(best: &mut Option<LocalSolution>, sol: Result<LocalSolution, SolveFailure>) {
     if let Ok(sol) = sol {
         if best

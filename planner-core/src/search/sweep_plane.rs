@@ -132,7 +132,10 @@ impl ChordFrame {
 /// axis; then only the planes within the band that crosses the cone are of use, and the `count`
 /// planes are spread over that band (one plane, the one holding the axis, when the heading is
 /// fixed).
-pub(super) fn seed_plane_turns(p: &Problem, count: usize, out: &mut [f32]) -> usize {
+///
+/// Returns how many turns were written, and whether they are spread over a band (the cone is
+/// narrow or the heading fixed, off the chord).
+pub(super) fn seed_plane_turns(p: &Problem, count: usize, out: &mut [f32]) -> (usize, bool) {
     let ChordFrame { chord, a, .. } = ChordFrame::of(p);
     let b3: V3 = p.basis.column(2).into();
     // The plane at turn psi has normal n = a cos psi + (chord x a) sin psi, and crosses the cone
@@ -153,20 +156,20 @@ pub(super) fn seed_plane_turns(p: &Problem, count: usize, out: &mut [f32]) -> us
         for (k, o) in out.iter_mut().enumerate().take(count) {
             *o = core::f32::consts::PI * k as f32 / count as f32;
         }
-        return count;
+        return (count, false);
     }
     let holds_axis = crate::fmath::atan2(v, u) + core::f32::consts::FRAC_PI_2;
     if p.heading_fixed() || count < 2 {
         if let Some(o) = out.first_mut() {
             *o = holds_axis;
         }
-        return out.len().min(1);
+        return (out.len().min(1), true);
     }
     let band = crate::fmath::asin(crate::fmath::clamp(sin_tilt / off_axis, 0.0, 1.0));
     for (k, o) in out.iter_mut().enumerate().take(count) {
         *o = holds_axis + band * (2.0 * k as f32 / (count - 1) as f32 - 1.0);
     }
-    count
+    (count, true)
 }
 
 /// The plane of a sweep and the arcs' sides.
