@@ -107,15 +107,40 @@ pub fn firmware_image(root: &Path, board: &str) -> PathBuf {
 /// Builds the release firmware of `board` with `features`. Each board has its own target
 /// directory, so builds of different boards (by tests running at once, say) never overwrite
 /// each other's image.
+///
+/// The build is independent of where the checkout and the cargo home lie ([`path_remaps`]): the
+/// panic locations the image carries would otherwise make its flash figure depend on them.
 pub fn build_firmware(root: &Path, board: &str, features: &str) -> Result<PathBuf> {
     let dir = root.join("firmware");
-    run(
-        cargo_in(&dir)
-            .args(["build", "--release", "--features", features, "--target-dir"])
-            .arg(dir.join("target").join(board)),
-        &format!("cargo build (firmware, {features})"),
-    )?;
+    let mut cmd = cargo_in(&dir);
+    cmd.args(["build", "--release", "--features", features, "--target-dir"])
+        .arg(dir.join("target").join(board));
+    for remap in path_remaps(root) {
+        cmd.arg("--config").arg(remap);
+    }
+    run(&mut cmd, &format!("cargo build (firmware, {features})"))?;
     Ok(firmware_image(root, board))
+}
+
+/// Cargo `--config` values that add `--remap-path-prefix` flags (appended to the target's
+/// rustflags of firmware/.cargo/config.toml) rewriting the checkout and the cargo home to
+/// fixed names, so that the image does not change with the directory it was built in.
+pub fn path_remaps(root: &Path) -> Vec<String> {
+    let root = root.canonicalize().unwrap_or_else(|_| root.to_path_buf());
+    let cargo_home = std::env::var_os("CARGO_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cargo")));
+    let mut prefixes = vec![(root, "")];
+    if let Some(home) = cargo_home {
+        prefixes.push((home.canonicalize().unwrap_or(home), ""));
+    }
+    prefixes
+        .into_iter()
+        .map(|(from, to)| {
+            let flag = format!("--remap-path-prefix={}/={to}", from.display());
+            format!("target.{TARGET}.rustflags=[{flag:?}]")
+        })
+        .collect()
 }
 
 /// Builds the instruction-count plugin and returns the shared library's path.
