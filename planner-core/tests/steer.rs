@@ -149,6 +149,37 @@ fn exact_readings_steer_the_plan_to_the_target() {
 }
 
 #[test]
+fn a_schedule_that_ends_short_is_missed_not_reached() {
+    // The controller never replans for the target error here: the run ends where the schedule
+    // does, `cut` mm of the last insertion short.
+    let config = SteerConfig {
+        replan_error_mm: 1000.0,
+        ..SteerConfig::DEFAULT
+    };
+    for (cut, expect) in [
+        (0.0, StopReason::TargetReached),
+        (0.5, StopReason::TargetReached),
+        (4.0, StopReason::Missed),
+    ] {
+        let s = Scenario::paper();
+        let mut sched = planned(&s);
+        let last = sched.steps.len() - 1;
+        match &mut sched.steps[last].op {
+            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => *length_mm -= cut,
+            Op::Rotate { .. } => panic!("a schedule ends with an insertion"),
+        }
+        let mut b = Bench::new(s.clone());
+        b.steering = Steering::start(&s, &sched, &config).unwrap();
+        b.steps = sched.steps.to_vec();
+        let (last, replaced) = b.run(|_| true);
+        assert!(replaced.is_empty(), "cut {cut}: replanned");
+        assert_eq!(last.command, Command::Stop(expect), "cut {cut}: {last:?}");
+        let miss = last.predicted_error_mm;
+        assert!((miss - cut).abs() < 0.3, "cut {cut}: predicted miss {miss}");
+    }
+}
+
+#[test]
 fn a_short_dropout_is_bridged_and_a_long_one_stops_with_tracking_lost() {
     let mut b = Bench::new(space());
     let (last, _) = b.run(|d| !(20.0..27.0).contains(&d));

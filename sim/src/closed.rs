@@ -106,8 +106,12 @@ pub struct ClosedRun {
     /// The run (target error, deviations, clearance, points).
     #[serde(flatten)]
     pub run: Run,
-    /// Why the controller stopped; `None` when it reached the target.
+    /// Why the controller stopped; `None` when it reached the target. A run whose steps ran
+    /// out without the controller's verdict counts as [`StopReason::Missed`].
     pub stop_reason: Option<StopReason>,
+    /// How far the controller's estimate put the tip from the target when it stopped (mm;
+    /// `None` without a verdict): the predicted miss, beside the run's true target error.
+    pub predicted_miss_mm: Option<f32>,
     /// The controller's counters.
     pub stats: SteerStats,
     /// Path evaluations of each reading that replanned.
@@ -229,6 +233,7 @@ pub fn closed_loop<C: Controller>(
     };
     let mut steps: Vec<Step> = schedule.steps.to_vec();
     let mut stop: Option<StopReason> = None;
+    let mut predicted_miss_mm = None;
     let mut failure: Option<C::Error> = None;
     let mut replan_evaluations = Vec::new();
     // Each continuation has at most MAX_STEPS steps and each reading may replace it; the world
@@ -254,7 +259,11 @@ pub fn closed_loop<C: Controller>(
                     match reply.command {
                         Command::Continue => {}
                         Command::Replace(s) => next = Some(s.to_vec()),
-                        Command::Stop(reason) => stop = Some(reason),
+                        Command::Stop(reason) => {
+                            stop = Some(reason);
+                            predicted_miss_mm =
+                                Some(reply.predicted_error_mm).filter(|e| e.is_finite());
+                        }
                     }
                 }
                 if stop.is_some() || next.is_some() {
@@ -281,7 +290,12 @@ pub fn closed_loop<C: Controller>(
     let stats = controller.stats().map_err(ClosedLoopError::Controller)?;
     Ok(ClosedRun {
         run: finish(&world, planned, seed),
-        stop_reason: stop.filter(|r| *r != StopReason::TargetReached),
+        stop_reason: match stop {
+            Some(StopReason::TargetReached) => None,
+            Some(reason) => Some(reason),
+            None => Some(StopReason::Missed),
+        },
+        predicted_miss_mm,
         stats,
         replan_evaluations,
     })

@@ -226,7 +226,12 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     }
     assert_eq!(
         keys(&s["stops"]),
-        ["bad_measurement", "no_safe_continuation", "tracking_lost"]
+        [
+            "bad_measurement",
+            "missed",
+            "no_safe_continuation",
+            "tracking_lost"
+        ]
     );
     assert!(s["replans"].as_u64().unwrap() > 12);
     assert_eq!(s["collisions"], 0);
@@ -240,6 +245,45 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     for r in runs {
         assert!(r["stop_reason"].is_null(), "{}", r["stop_reason"]);
         assert!(r["steering"]["readings"].as_u64().unwrap() > 50);
+        assert!(r["predicted_miss_mm"].as_f64().unwrap() <= 1.0);
+    }
+}
+
+/// A one-arc plan leaves the controller no authority: runs that end off the target say so
+/// (`missed`, with the controller's predicted miss beyond the reach tolerance) instead of
+/// counting as reached because their steps ran out.
+#[test]
+fn a_run_that_ends_off_the_target_is_missed() {
+    let v = needle_json(&[
+        "simulate",
+        &paper(),
+        "--form",
+        "R",
+        "--runs",
+        "10",
+        "--seed",
+        "3",
+        "--closed-loop",
+        "--json",
+        "--detail",
+    ]);
+    let runs = v["runs_detail"].as_array().unwrap();
+    let missed: Vec<&Value> = runs
+        .iter()
+        .filter(|r| r["stop_reason"] == "missed")
+        .collect();
+    assert!(!missed.is_empty(), "an R plan closed loop misses some runs");
+    assert_eq!(v["summary"]["stops"]["missed"], missed.len());
+    for r in runs {
+        let predicted = r["predicted_miss_mm"].as_f64();
+        match r["stop_reason"].as_str() {
+            None => assert!(predicted.unwrap() <= 1.0),
+            Some("missed") => {
+                assert!(predicted.is_none_or(|p| p > 1.0), "{r}");
+                assert!(r["target_error"].as_f64().unwrap() > 0.0);
+            }
+            Some(_) => {}
+        }
     }
 }
 

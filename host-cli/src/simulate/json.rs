@@ -146,8 +146,12 @@ pub struct ClosedRunJson<'a> {
     #[serde(flatten)]
     pub run: RunJson<'a>,
     /// Why the controller stopped before the target (`no_safe_continuation`, `tracking_lost`,
-    /// `bad_measurement`), or null.
+    /// `bad_measurement`), or `missed` (the steps ran out with the estimate farther than the reach
+    /// tolerance from the target), or null: reached.
     pub stop_reason: Option<&'static str>,
+    /// The controller's estimate of the miss when it stopped (mm; null without a verdict);
+    /// `target_error` is the true miss.
+    pub predicted_miss_mm: Option<f32>,
     /// The controller's counters.
     pub steering: planner_core::steer::SteerStats,
 }
@@ -187,6 +191,7 @@ pub fn closed_json<'a>(
                 .map(|r| ClosedRunJson {
                     run: RunJson::of(&r.run),
                     stop_reason: r.stop_reason.map(|s| s.name()),
+                    predicted_miss_mm: r.predicted_miss_mm,
                     steering: r.stats,
                 })
                 .collect()

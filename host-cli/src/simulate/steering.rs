@@ -32,6 +32,7 @@ pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
         StopReason::NoSafeContinuation,
         StopReason::TrackingLost,
         StopReason::BadMeasurement,
+        StopReason::Missed,
     ] {
         s.stops.insert(reason.name(), 0);
     }

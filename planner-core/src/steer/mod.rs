@@ -42,7 +42,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StopReason {
-    /// The continuation is executed: the tip is at the target as estimated.
+    /// The continuation is executed and the estimate puts the tip within the reach tolerance
+    /// ([`SteerConfig::reach_tolerance_mm`]) of the target as last seen.
     TargetReached,
     /// The continuation being executed is predicted to come too close to an obstacle and no
     /// replan passes the check.
@@ -52,6 +53,9 @@ pub enum StopReason {
     /// The robot's progress is not a number or went backwards: the device cannot know where
     /// the needle is.
     BadMeasurement,
+    /// The continuation is executed but the estimate puts the tip farther than the reach
+    /// tolerance from the target as last seen (the reply's `predicted_error_mm` says how far).
+    Missed,
 }
 
 impl StopReason {
@@ -62,6 +66,7 @@ impl StopReason {
             StopReason::NoSafeContinuation => "no_safe_continuation",
             StopReason::TrackingLost => "tracking_lost",
             StopReason::BadMeasurement => "bad_measurement",
+            StopReason::Missed => "missed",
         }
     }
 }
@@ -198,16 +203,21 @@ pub struct SteerConfig {
     pub iterations: u32,
     /// Stop with [`StopReason::TrackingLost`] after this much insertion without a fix (mm).
     pub max_gap_mm: f32,
+    /// When the continuation is executed, the tip counts as at the target if the estimate puts
+    /// it this close to the target as last seen (mm); farther, the run ends
+    /// [`StopReason::Missed`].
+    pub reach_tolerance_mm: f32,
 }
 
 impl SteerConfig {
     /// The defaults: the literature noise model, re-plan beyond 0.05 mm, 10 iterations per
-    /// attempt, tracking lost after 10 mm without a fix.
+    /// attempt, tracking lost after 10 mm without a fix, the target reached within 1 mm.
     pub const DEFAULT: SteerConfig = SteerConfig {
         noise: NoiseModel::DEFAULT,
         replan_error_mm: 0.05,
         iterations: 10,
         max_gap_mm: 10.0,
+        reach_tolerance_mm: 1.0,
     };
 
     /// Every figure finite and positive.
@@ -218,6 +228,8 @@ impl SteerConfig {
             && self.iterations > 0
             && self.max_gap_mm.is_finite()
             && self.max_gap_mm > 0.0
+            && self.reach_tolerance_mm.is_finite()
+            && self.reach_tolerance_mm > 0.0
     }
 }
 

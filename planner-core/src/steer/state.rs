@@ -193,6 +193,21 @@ impl Steering {
         reply
     }
 
+    /// The end of the continuation: reached or missed, by the estimate's distance to the target.
+    #[inline(never)]
+    fn verdict(&mut self, seq: u32, reading: Reading) -> SteerReply {
+        let miss = (self.estimate.tip.p - self.estimate.target).norm();
+        let reason = if miss <= self.config.reach_tolerance_mm {
+            StopReason::TargetReached
+        } else {
+            StopReason::Missed
+        };
+        let mut reply = self.reply(seq, Command::Stop(reason), reading);
+        reply.predicted_error_mm = miss;
+        self.last_reply = Some(reply.clone());
+        reply
+    }
+
     /// Applies one reading and says what to do next. Never panics; a reading that cannot be
     /// trusted is rejected or stops the insertion with the reason.
     pub fn update(&mut self, m: &TipMeasurement) -> SteerReply {
@@ -246,7 +261,7 @@ impl Steering {
             return self.reply(m.seq, Command::Stop(StopReason::TrackingLost), reading);
         }
         if self.cursor >= self.steps.len() {
-            return self.reply(m.seq, Command::Stop(StopReason::TargetReached), reading);
+            return self.verdict(m.seq, reading);
         }
         self.steer(m.seq, reading)
     }
