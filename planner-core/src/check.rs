@@ -20,10 +20,37 @@ pub struct Verdict {
     pub length: f32,
     /// Risk degree D of the rebuilt path (infinite when it touches or enters an obstacle).
     pub risk: f32,
-    /// Every segment within its length bounds and the posture within the tilt bound.
+    /// Every segment within its length bounds (arcs joined by a bevel rotation under
+    /// [`ARC_JOIN_DEG`] counted as one arc), the whole path within the needle's insertable
+    /// length, and the posture within the tilt bound.
     pub within_bounds: bool,
     /// All three conditions hold: end within tolerance, clearance above the minimum, bounds.
     pub feasible: bool,
+}
+
+/// A bevel rotation smaller than this (degrees, either way) turns the bevel by nothing a driver
+/// executes: the schedule leaves it out, and the arcs on either side of it are one arc, held to
+/// the needle's longest arc. (The end moves by less than 0.01 mm over an arc of 100 mm.)
+pub const ARC_JOIN_DEG: f32 = 0.01;
+
+/// Every run of arcs joined by rotations under [`ARC_JOIN_DEG`] no longer than `max_arc`.
+fn joined_arcs_within(segments: &[SegmentPlan], max_arc: f32) -> bool {
+    let mut run = 0.0f32;
+    let mut previous_arc = false;
+    for s in segments {
+        if s.kind != SegmentKind::Arc {
+            previous_arc = false;
+            continue;
+        }
+        let turn = libm::fmodf(libm::fabsf(s.bevel_deg), 360.0);
+        let joined = previous_arc && (turn < ARC_JOIN_DEG || 360.0 - turn < ARC_JOIN_DEG);
+        run = if joined { run + s.length } else { s.length };
+        if !(run <= max_arc + max_arc * 1e-5) {
+            return false;
+        }
+        previous_arc = true;
+    }
+    true
 }
 
 /// Rebuilds the path that `insertion` and `segments` describe.
@@ -135,7 +162,12 @@ pub fn check(
     let tilt = heading.dot(&nominal);
     let cos_max = crate::fmath::cos(scenario.entry.max_tilt_deg.to_radians());
     let tilt_ok = tilt >= cos_max - 1e-6;
-    let within_bounds = lengths_ok && tilt_ok;
+    let length = geo.total_length();
+    let needle = scenario.needle.length;
+    let within_bounds = lengths_ok
+        && joined_arcs_within(segments, max_arc)
+        && length <= needle + slack(needle)
+        && tilt_ok;
     // A clearance passes only by more than the scenario's resolution (four f32 units in the last
     // place of its coordinates): this check's own rounding must not pass a path that exact
     // arithmetic puts short of the minimum (found by fuzzing: a path kept the minimum in f32 and
@@ -148,7 +180,7 @@ pub fn check(
     Verdict {
         target_error,
         min_clearance,
-        length: geo.total_length(),
+        length,
         risk,
         within_bounds,
         feasible,

@@ -46,6 +46,8 @@ pub enum Field {
     SpinRate,
     /// `driver.max_twist_deg` (at least 360)
     MaxTwist,
+    /// `needle.length` (the insertable length)
+    NeedleLength,
 }
 
 impl Field {
@@ -74,6 +76,7 @@ impl Field {
             Field::RotateSpeed => "0.01 to 100000 deg/s",
             Field::SpinRate => "0.01 to 1000 rev/s",
             Field::MaxTwist => "at least 360 degrees (a spun line turns the shaft whole turns)",
+            Field::NeedleLength => "the entry-target distance to 5000 mm",
         }
     }
 }
@@ -101,6 +104,7 @@ impl core::fmt::Display for Field {
             Field::RotateSpeed => f.write_str("driver.rotate_speed"),
             Field::SpinRate => f.write_str("driver.spin_rate"),
             Field::MaxTwist => f.write_str("driver.max_twist_deg"),
+            Field::NeedleLength => f.write_str("needle.length"),
         }
     }
 }

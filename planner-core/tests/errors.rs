@@ -156,7 +156,15 @@ fn scenarios_beyond_a_needle_workspace_are_refused() {
     s.target.position = [0.0, 0.0, 1e12];
     assert_eq!(err(&s), PlanError::OutOfRange(Field::TargetPosition));
     s.target.position = [0.0, 0.0, 999.0];
+    // A target farther than the needle reaches is refused naming the needle's length.
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::NeedleLength));
+    assert!(err(&s).to_string().contains("needle.length"), "{}", err(&s));
+    s.needle.length = 1000.0;
     assert_eq!(s.validate(), Ok(()));
+    s.needle.length = 6000.0;
+    assert_eq!(err(&s), PlanError::OutOfRange(Field::NeedleLength));
+    s.needle.length = f32::NAN;
+    assert_eq!(err(&s), PlanError::NotFinite(Field::NeedleLength));
     let mut s = Scenario::paper();
     s.obstacles[2].center[1] = -1001.0;
     assert_eq!(err(&s), PlanError::OutOfRange(Field::ObstacleCenter(2)));

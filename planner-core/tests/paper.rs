@@ -118,3 +118,56 @@ fn forms_and_degrees_can_be_restricted() {
     assert_eq!(words, ["R", "LRL"]);
     assert_eq!(r.best().unwrap().form.to_string(), "LRL");
 }
+
+/// Two arcs with no bevel rotation between them are one arc: held to the longest arc together,
+/// and the schedule commands no rotation between them. The whole path is held to the needle's
+/// insertable length.
+#[test]
+fn joined_arcs_and_the_needle_length_are_bounds_of_the_check() {
+    use planner_core::execute::schedule::{schedule, Op};
+    use planner_core::report::SegmentPlan;
+    use planner_core::SegmentKind;
+    let s = Scenario::paper();
+    let max_arc = s.needle.curvature_radius * s.needle.max_arc_deg.to_radians();
+    let arc = |length: f32, bevel_deg: f32| SegmentPlan {
+        kind: SegmentKind::Arc,
+        length,
+        bevel_deg,
+    };
+    let best = plan(&s).unwrap().best().unwrap().clone();
+    let posture = best.insertion;
+    let rr = Form::parse("RR").unwrap();
+    let mut long = s.clone();
+    long.needle.length = 1000.0;
+    let verdict = |segments: &[SegmentPlan]| check(&long, rr, &posture, segments);
+    // Each arc within the bound alone; joined (a rotation of 0 or 360 degrees, or one under the
+    // join threshold) they exceed it; turned by a degree they are two arcs.
+    let half = 0.6 * max_arc;
+    for (turn, within) in [
+        (0.0, false),
+        (0.005, false),
+        (-359.995, false),
+        (1.0, true),
+        (180.0, true),
+    ] {
+        let segments = [arc(half, 0.0), arc(half, turn)];
+        assert_eq!(verdict(&segments).within_bounds, within, "turn {turn}");
+    }
+    assert!(verdict(&[arc(0.5 * max_arc, 0.0), arc(0.5 * max_arc, 0.0)]).within_bounds);
+    // A rotation under the threshold is not commanded.
+    let mut tiny = best.clone();
+    for seg in tiny.segments.iter_mut().skip(1) {
+        seg.bevel_deg = 0.004;
+    }
+    let steps = schedule(&s, &tiny).unwrap().steps;
+    assert!(steps
+        .iter()
+        .all(|st| !matches!(st.op, Op::Rotate { angle_deg } if angle_deg.abs() < 0.01)));
+    // The paper's best plan passes with the default needle and fails with one shorter than it.
+    let v = check(&s, best.form, &best.insertion, &best.segments);
+    assert!(v.feasible && v.length < s.needle.length);
+    let mut short = s.clone();
+    short.needle.length = v.length - 1.0;
+    let v = check(&short, best.form, &best.insertion, &best.segments);
+    assert!(!v.within_bounds && !v.feasible);
+}

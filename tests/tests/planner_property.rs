@@ -114,6 +114,7 @@ fn a_tilt_bound_of_a_fraction_of_a_degree_is_kept() {
         curvature_radius: 63.7,
         max_arc_deg: 310.7255,
         max_line_length: 130.48225,
+        length: planner_core::model::scenario::MAX_NEEDLE_LENGTH_MM,
     };
     s.entry = Entry {
         position: [0.0, 2.319713e-15, -13.882353],
@@ -172,6 +173,7 @@ fn a_minimum_clearance_is_kept_in_exact_arithmetic() {
         curvature_radius: 63.7,
         max_arc_deg: 16.398626,
         max_line_length: 258.45892,
+        length: planner_core::model::scenario::MAX_NEEDLE_LENGTH_MM,
     };
     s.entry = Entry {
         position: [14.509804, 14.509804, 14.509804],

@@ -8,6 +8,7 @@ use anyhow::{bail, Context, Result};
 use planner_core::model::form::{Form, FormSet};
 use planner_core::model::scenario::{
     Driver, Entry, Needle, Obstacle, PlannerOptions, RiskMeasure, Target, Weights, Workspace,
+    DEFAULT_NEEDLE_LENGTH_MM,
 };
 use planner_core::{PlanError, Scenario, MAX_OBSTACLES};
 use std::path::Path;
@@ -87,6 +88,7 @@ impl ScenarioFile {
                 curvature_radius: self.needle.curvature_radius,
                 max_arc_deg: self.needle.max_arc_deg.unwrap_or(DEFAULT_MAX_ARC_DEG),
                 max_line_length: self.needle.max_line_length.unwrap_or(0.0),
+                length: self.needle.length.unwrap_or(DEFAULT_NEEDLE_LENGTH_MM),
             },
             entry: Entry {
                 position: self.entry.position,

@@ -42,6 +42,8 @@ pub struct NeedleFile {
     pub max_arc_deg: Option<f32>,
     /// Longest line (mm); default: twice the entry-target distance plus a half turn.
     pub max_line_length: Option<f32>,
+    /// Insertable length (mm), default 200: no plan or continuation inserts more.
+    pub length: Option<f32>,
 }
 
 /// `[entry]`

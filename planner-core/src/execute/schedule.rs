@@ -9,6 +9,7 @@
 //! the shaft's twist where they were. Rotations take the short way unless that would push the
 //! accumulated twist past the driver's `max_twist_deg`; then they take the long way round.
 
+use crate::check::ARC_JOIN_DEG;
 use crate::model::form::{SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::scenario::{Driver, Scenario};
 use crate::report::{FormOutcome, SegmentPlan};
@@ -234,7 +235,9 @@ fn segment_steps(
 ) -> Result<Steps, ScheduleError> {
     let mut steps = Steps::new();
     for (i, seg) in segments.iter().enumerate() {
-        if (i > 0 || rotate_first) && seg.bevel_deg != 0.0 {
+        let turn = libm::fmodf(libm::fabsf(seg.bevel_deg), 360.0);
+        let turns = turn >= ARC_JOIN_DEG && 360.0 - turn >= ARC_JOIN_DEG;
+        if (i > 0 || rotate_first) && turns {
             let angle_deg = twist.rotation(seg.bevel_deg);
             let duration_s = libm::fabsf(angle_deg) / d.rotate_speed;
             push(&mut steps, Op::Rotate { angle_deg }, duration_s)?;

@@ -35,7 +35,18 @@ pub struct Needle {
     pub max_arc_deg: f32,
     /// Longest single L segment (mm); 0 means "twice the entry-target distance plus a half turn".
     pub max_line_length: f32,
+    /// Insertable length (mm): no plan or continuation inserts more in all.
+    ///
+    /// Default [`DEFAULT_NEEDLE_LENGTH_MM`].
+    pub length: f32,
 }
+
+/// The insertable length of a needle when the scenario does not give one (mm): the
+/// 20 cm of a long biopsy or brachytherapy needle.
+pub const DEFAULT_NEEDLE_LENGTH_MM: f32 = 200.0;
+
+/// The longest insertable length a scenario may give (mm).
+pub const MAX_NEEDLE_LENGTH_MM: f32 = 5000.0;
 
 /// Where and how the needle enters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -326,6 +337,11 @@ impl Scenario {
         if dist(e.position, t.position) <= t.tolerance {
             return Err(PlanError::TargetAtEntry);
         }
+        positive(Field::NeedleLength, n.length)?;
+        let shortest = dist(e.position, t.position) - t.tolerance;
+        if !(shortest..=MAX_NEEDLE_LENGTH_MM).contains(&n.length) {
+            return Err(PlanError::OutOfRange(Field::NeedleLength));
+        }
         let w = &self.weights;
         for (field, v) in [
             (Field::WeightLength, w.length),
@@ -397,6 +413,7 @@ impl Scenario {
                 curvature_radius: 63.7,
                 max_arc_deg: 180.0,
                 max_line_length: 0.0,
+                length: DEFAULT_NEEDLE_LENGTH_MM,
             },
             entry: Entry {
                 position: [0.0; 3],

@@ -143,6 +143,8 @@ pub struct ReplanInput<'a> {
     pub iterations: u32,
     /// Clearance kept on top of the scenario's floor for the estimate's uncertainty (mm).
     pub margin: f32,
+    /// Needle inserted so far (mm): a continuation inserts at most the rest of its length.
+    pub inserted_mm: f32,
 }
 
 /// A continuation that passed the check.
@@ -225,7 +227,9 @@ fn attempt(
         input.target,
     );
     let floor = input.scenario.options.min_clearance + input.margin;
+    let length: f32 = segments.iter().map(|s| s.length).sum();
     let sound = prediction.target_error <= input.scenario.target.tolerance
+        && input.inserted_mm + length <= input.scenario.needle.length
         && prediction.min_clearance > floor
         && peak <= input.scenario.driver.max_twist_deg;
     sound.then_some(Replanned {
@@ -393,6 +397,7 @@ mod tests {
             twist_deg: 0.0,
             iterations: 10,
             margin: 0.3,
+            inserted_mm: 0.0,
         };
         let (found, evaluations, iterations) = replan(&input, &remaining);
         let found = found.expect("a continuation");

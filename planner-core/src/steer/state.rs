@@ -344,6 +344,7 @@ impl Steering {
                 twist_deg: self.base,
                 iterations: self.config.iterations,
                 margin,
+                inserted_mm: self.depth,
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);

@@ -78,7 +78,7 @@ impl<T: MaxSize, E: MaxSize> MaxSize for Result<T, E> {
 }
 
 impl MaxSize for Needle {
-    const MAX_SIZE: usize = 3 * f32::MAX_SIZE;
+    const MAX_SIZE: usize = 4 * f32::MAX_SIZE;
 }
 impl MaxSize for Entry {
     const MAX_SIZE: usize = 2 * <[f32; 3]>::MAX_SIZE + f32::MAX_SIZE;
