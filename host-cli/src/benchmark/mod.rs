@@ -154,3 +154,52 @@ fn measure(
         Pool::of(&open, &closed),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::parse_form;
+
+    /// A scenario with no feasible plan is reported with its reason, not a panic; the table
+    /// lists it and the totals count it.
+    #[test]
+    fn a_scenario_that_cannot_be_planned_is_counted_with_its_reason() {
+        let mut s = unseen_scenario(101);
+        // The first sphere blocks the straight line, the one path a single line can take.
+        s.options.forms.insert(parse_form("L").unwrap());
+        let p = Perturbation::default();
+        let reason = format!("{:#}", measure(s.clone(), &p, 2, 101, 1).unwrap_err());
+        assert!(
+            reason.contains("planning") || reason.contains("reach"),
+            "{reason}"
+        );
+        let planned = measure(unseen_scenario(102), &p, 2, 102, 1).unwrap();
+        assert_eq!(planned.runs, 2);
+        let lost = Unplanned {
+            seed: 101,
+            spheres: s.obstacles.len(),
+            reason: reason.clone(),
+        };
+        let report = BenchmarkReport::new(2, p, vec![planned], vec![lost]);
+        assert_eq!((report.totals.planned, report.totals.unplanned), (1, 1));
+        assert_eq!(report.totals.runs, 2);
+        let args = BenchmarkArgs {
+            scenarios: 2,
+            seed: 101,
+            runs: 2,
+            threads: None,
+            json: false,
+            perturb: Vec::new(),
+            write_scenarios: None,
+        };
+        let table = table::to_table(&args, &report);
+        assert!(
+            table.contains("not benchmarked: 1 of 2 scenarios"),
+            "{table}"
+        );
+        assert!(table.contains(&format!(
+            "seed 101 ({} spheres): {reason}",
+            s.obstacles.len()
+        )));
+    }
+}
