@@ -33,11 +33,8 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
          same worlds closed loop",
         a.seed, a.runs
     );
-    let _ = writeln!(
-        out,
-        "{:<50} |{:^15} |{:^39}",
-        "", "open loop", "closed loop"
-    );
+    let groups = format!("{:<50} |{:^15} |{:^39}", "", "open loop", "closed loop");
+    let _ = writeln!(out, "{}", groups.trim_end());
     let _ = writeln!(
         out,
         "{:>6}{:>8}{:>10}{:>6}{:>10}{:>10} |{:>7}{:>8} |{:>10}{:>7}{:>6}{:>8}{:>8}",
