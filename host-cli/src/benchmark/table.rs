@@ -26,7 +26,7 @@ fn figures(out: &mut String, o: &OpenFigures, c: &ClosedFigures) {
 /// The benchmark's table.
 pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
     let mut out = String::new();
-    let last = a.seed.wrapping_add(a.scenarios as u64 - 1);
+    let last = a.seed.wrapping_add((a.scenarios as u64).saturating_sub(1));
     let _ = writeln!(
         out,
         "unseen 3-D scenarios, seeds {}..={last}: {} simulated worlds each, open loop and the \
