@@ -1,8 +1,9 @@
 //! Host-side library behind the `needle` command: scenario files, plan rendering, commands,
-//! simulated insertions.
+//! simulated insertions, the benchmark on generated scenarios.
 
 pub mod analysis;
 pub mod bench;
+pub mod benchmark;
 pub mod device;
 pub mod random;
 pub mod report;

@@ -65,6 +65,8 @@ enum Command {
     Plot(analysis::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
     Simulate(needle_cli::simulate::SimulateArgs),
+    /// Plan and simulate (open and closed loop) seeded 3-D scenarios nobody tuned on.
+    Benchmark(needle_cli::benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(SendArgs),
     /// Check that a device answers, and how fast.
@@ -246,6 +248,7 @@ fn main() -> ExitCode {
         Command::Approx(a) => analysis::run_approx(a),
         Command::Plot(a) => analysis::run_plot(a),
         Command::Simulate(a) => needle_cli::simulate::run_simulate(a),
+        Command::Benchmark(a) => needle_cli::benchmark::run_benchmark(a),
         Command::Send(a) => send(a),
         Command::Ping { link, count } => device::commands::ping(link, *count),
         Command::Info { link, json } => device::commands::info(link, *json),

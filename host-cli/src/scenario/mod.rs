@@ -11,6 +11,8 @@ pub mod file;
 pub mod geometry;
 pub mod polygon;
 pub mod shapes;
+pub mod unseen;
+pub mod write;
 
 pub use build::{load_scenario, load_scenario_shapes, parse_form, restrict};
 pub use file::ScenarioFile;

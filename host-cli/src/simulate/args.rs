@@ -75,7 +75,7 @@ impl SimulateArgs {
 }
 
 /// A count of at least one (`--threads 0` would run nothing, or silently one thread).
-fn at_least_one(s: &str) -> Result<usize, String> {
+pub fn at_least_one(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(0) => Err("must be at least 1".into()),
         Ok(n) => Ok(n),

@@ -11,7 +11,7 @@ pub mod setup;
 pub mod steering;
 pub mod table;
 
-pub use args::SimulateArgs;
+pub use args::{at_least_one, SimulateArgs};
 pub use command::run_simulate;
 
 use anyhow::{anyhow, Context, Result};

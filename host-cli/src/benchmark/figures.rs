@@ -1,0 +1,287 @@
+//! The benchmark's figures, per scenario and in total, and its JSON (the keys are these
+//! structures' fields). A total is computed from the runs themselves, pooled over the scenarios
+//! (its mean and p95 are those of every run, not an average of the rows').
+
+use crate::simulate::steering::summarise_steering;
+use crate::simulate::Spread;
+use needle_sim::{ClosedRun, Perturbation, Run};
+use planner_core::FormOutcome;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Runs a scenario may have before its worlds' seeds would meet the next scenario's.
+pub const WORLD_SEED_STRIDE: u64 = 1 << 20;
+
+/// What is kept of a set of runs, open and closed loop, to compute the figures (and to pool
+/// them over scenarios).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Pool {
+    /// Runs (each executed open and closed loop).
+    pub runs: usize,
+    /// Open loop: each run's target error (mm).
+    pub open_errors: Vec<f32>,
+    /// Open loop: runs whose true path entered an obstacle.
+    pub open_hits: usize,
+    /// Closed loop: the target error of each run that arrived (was not stopped; mm).
+    pub arrived_errors: Vec<f32>,
+    /// Closed loop: runs stopped before the target, by reason.
+    pub stops: BTreeMap<&'static str, usize>,
+    /// Closed loop: runs whose true path entered an obstacle.
+    pub closed_hits: usize,
+}
+
+impl Pool {
+    /// The pool of the same worlds run `open` and `closed` loop.
+    pub fn of(open: &[Run], closed: &[ClosedRun]) -> Pool {
+        Pool {
+            runs: open.len(),
+            open_errors: open.iter().map(|r| r.target_error).collect(),
+            open_hits: open.iter().filter(|r| r.collided).count(),
+            arrived_errors: closed
+                .iter()
+                .filter(|r| r.stop_reason.is_none())
+                .map(|r| r.run.target_error)
+                .collect(),
+            stops: summarise_steering(closed).stops,
+            closed_hits: closed.iter().filter(|r| r.run.collided).count(),
+        }
+    }
+
+    /// Adds `other`'s runs.
+    pub fn merge(&mut self, other: &Pool) {
+        self.runs += other.runs;
+        self.open_errors.extend_from_slice(&other.open_errors);
+        self.open_hits += other.open_hits;
+        self.arrived_errors.extend_from_slice(&other.arrived_errors);
+        for (reason, n) in &other.stops {
+            *self.stops.entry(reason).or_default() += n;
+        }
+        self.closed_hits += other.closed_hits;
+    }
+
+    fn percent(&self, count: usize) -> f64 {
+        if self.runs == 0 {
+            0.0
+        } else {
+            100.0 * count as f64 / self.runs as f64
+        }
+    }
+
+    /// The open-loop figures.
+    pub fn open(&self) -> OpenFigures {
+        OpenFigures {
+            hits: self.open_hits,
+            hit_percent: self.percent(self.open_hits),
+            mean_target_error: Spread::of(self.open_errors.iter().copied()).mean,
+        }
+    }
+
+    /// The closed-loop figures.
+    pub fn closed(&self) -> ClosedFigures {
+        let arrived = self.arrived_errors.len();
+        let errors = (arrived > 0).then(|| Spread::of(self.arrived_errors.iter().copied()));
+        ClosedFigures {
+            reached: arrived,
+            reached_percent: self.percent(arrived),
+            stops: self.stops.values().sum(),
+            stop_reasons: self.stops.clone(),
+            hits: self.closed_hits,
+            mean_target_error: errors.map(|s| s.mean),
+            p95_target_error: errors.map(|s| s.p95),
+        }
+    }
+}
+
+/// Open loop: the schedule executed as planned.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OpenFigures {
+    /// Runs whose true path entered an obstacle.
+    pub hits: usize,
+    /// The same, in percent of the runs.
+    pub hit_percent: f64,
+    /// Mean distance of the true end to the true target (mm).
+    pub mean_target_error: f64,
+}
+
+/// Closed loop: the same worlds, steered from the tracker's readings.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ClosedFigures {
+    /// Runs the controller did not stop (they end where the steering ends them).
+    pub reached: usize,
+    /// The same, in percent of the runs.
+    pub reached_percent: f64,
+    /// Runs the controller stopped before the target.
+    pub stops: usize,
+    /// `stops` by reason (`no_safe_continuation`, `tracking_lost`, `bad_measurement`).
+    pub stop_reasons: BTreeMap<&'static str, usize>,
+    /// Runs whose true path entered an obstacle (stopped or not).
+    pub hits: usize,
+    /// Mean target error of the runs that arrived (mm; null when none did).
+    pub mean_target_error: Option<f64>,
+    /// 95th percentile (nearest rank) of the same (mm; null when none did).
+    pub p95_target_error: Option<f64>,
+}
+
+/// One generated scenario, planned and executed.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScenarioRow {
+    /// The generator's seed: `unseen_scenario(seed)`.
+    pub seed: u64,
+    /// Spheres in the scenario.
+    pub spheres: usize,
+    /// Distance of the target from the entry (mm).
+    pub target_distance: f32,
+    /// The planned (best) form, e.g. `RL`.
+    pub form: String,
+    /// The plan's length (mm).
+    pub plan_length: f32,
+    /// The plan's smallest clearance to a sphere (mm).
+    pub plan_clearance: f32,
+    /// Runs, each executed open and closed loop.
+    pub runs: usize,
+    /// The first world's seed (run k uses it plus k).
+    pub world_seed: u64,
+    /// Open-loop figures.
+    pub open_loop: OpenFigures,
+    /// Closed-loop figures.
+    pub closed_loop: ClosedFigures,
+    /// The runs behind the figures (for the totals).
+    #[serde(skip)]
+    pub pool: Pool,
+}
+
+impl ScenarioRow {
+    /// The row of scenario `seed` planned as `outcome` and executed as `pool` holds.
+    pub fn new(
+        seed: u64,
+        spheres: usize,
+        target_distance: f32,
+        outcome: &FormOutcome,
+        pool: Pool,
+    ) -> ScenarioRow {
+        ScenarioRow {
+            seed,
+            spheres,
+            target_distance,
+            form: outcome.form.to_string(),
+            plan_length: outcome.length,
+            plan_clearance: outcome.min_clearance,
+            runs: pool.runs,
+            world_seed: super::world_seed(seed),
+            open_loop: pool.open(),
+            closed_loop: pool.closed(),
+            pool,
+        }
+    }
+
+    /// The row in a few words, for the progress line.
+    pub fn progress(&self) -> String {
+        let (o, c) = (&self.open_loop, &self.closed_loop);
+        format!(
+            "{} spheres, {} {:.1} mm; open loop {} of {} hit; closed loop {} reached, {} stopped, {} hit",
+            self.spheres, self.form, self.plan_length, o.hits, self.runs, c.reached, c.stops, c.hits
+        )
+    }
+}
+
+/// A generated scenario that could not be planned (or its plan not executed).
+#[derive(Clone, Debug, Serialize)]
+pub struct Unplanned {
+    /// The generator's seed.
+    pub seed: u64,
+    /// Spheres in the scenario.
+    pub spheres: usize,
+    /// Why, as the planner or the simulator said it.
+    pub reason: String,
+}
+
+/// The figures over every run of every benchmarked scenario.
+#[derive(Clone, Debug, Serialize)]
+pub struct Totals {
+    /// Scenarios generated.
+    pub scenarios: usize,
+    /// Scenarios planned and executed (the rows).
+    pub planned: usize,
+    /// Scenarios that could not be (listed in `unplanned`).
+    pub unplanned: usize,
+    /// Runs over the rows (each open and closed loop).
+    pub runs: usize,
+    /// Open-loop figures over every run.
+    pub open_loop: OpenFigures,
+    /// Closed-loop figures over every run.
+    pub closed_loop: ClosedFigures,
+}
+
+/// `needle benchmark --json`: `scenarios` (one row per benchmarked scenario), `totals`,
+/// `unplanned` and the `perturbation` every world drew from.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchmarkReport {
+    /// One row per scenario planned and executed, in seed order.
+    pub scenarios: Vec<ScenarioRow>,
+    /// Over every run of the rows.
+    pub totals: Totals,
+    /// The scenarios that could not be planned or executed, with the reason.
+    pub unplanned: Vec<Unplanned>,
+    /// The perturbation every world drew from.
+    pub perturbation: Perturbation,
+}
+
+impl BenchmarkReport {
+    /// The report of `generated` scenarios: `rows` benchmarked, `unplanned` not.
+    pub fn new(
+        generated: usize,
+        perturbation: Perturbation,
+        rows: Vec<ScenarioRow>,
+        unplanned: Vec<Unplanned>,
+    ) -> BenchmarkReport {
+        let mut all = Pool::default();
+        for row in &rows {
+            all.merge(&row.pool);
+        }
+        BenchmarkReport {
+            totals: Totals {
+                scenarios: generated,
+                planned: rows.len(),
+                unplanned: unplanned.len(),
+                runs: all.runs,
+                open_loop: all.open(),
+                closed_loop: all.closed(),
+            },
+            scenarios: rows,
+            unplanned,
+            perturbation,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pool(runs: usize, open: &[f32], arrived: &[f32], stops: usize) -> Pool {
+        Pool {
+            runs,
+            open_errors: open.to_vec(),
+            open_hits: 1,
+            arrived_errors: arrived.to_vec(),
+            stops: BTreeMap::from([("no_safe_continuation", stops)]),
+            closed_hits: 0,
+        }
+    }
+
+    #[test]
+    fn totals_pool_the_runs() {
+        let mut all = pool(2, &[1.0, 3.0], &[0.5], 1);
+        all.merge(&pool(4, &[2.0; 4], &[1.0, 1.0, 1.0, 4.0], 0));
+        let (o, c) = (all.open(), all.closed());
+        assert_eq!((all.runs, o.hits), (6, 2));
+        assert_eq!(o.mean_target_error, 2.0);
+        assert!((o.hit_percent - 100.0 / 3.0).abs() < 1e-12);
+        assert_eq!((c.reached, c.stops, c.hits), (5, 1, 0));
+        assert!((c.reached_percent - 500.0 / 6.0).abs() < 1e-12);
+        assert_eq!(c.mean_target_error, Some(1.5));
+        assert_eq!(c.p95_target_error, Some(4.0));
+        let none = pool(3, &[1.0; 3], &[], 3).closed();
+        assert_eq!((none.reached_percent, none.mean_target_error), (0.0, None));
+    }
+}

@@ -1,0 +1,205 @@
+//! `needle benchmark`: the planner and its execution on scenarios nobody tuned on. Scenario `i`
+//! is [`unseen_scenario`]`(seed + i)`; its best plan is executed in `--runs` simulated worlds
+//! open loop, and the same worlds closed loop, exactly as `needle simulate --closed-loop
+//! --compare-open-loop` does (the same [`Setup`]); one row per scenario, the totals over every
+//! run, and the scenarios that could not be planned or executed, each with its reason.
+//! Simulated figures, always called so.
+
+mod figures;
+mod table;
+
+pub use figures::{BenchmarkReport, ClosedFigures, OpenFigures, Pool, ScenarioRow, Totals};
+pub use figures::{Unplanned, WORLD_SEED_STRIDE};
+
+use crate::analysis::parallel;
+use crate::scenario::unseen::unseen_scenario;
+use crate::scenario::write::scenario_toml;
+use crate::simulate::at_least_one;
+use crate::simulate::setup::{Keep, Setup};
+use anyhow::{Context, Result};
+use needle_sim::{Perturbation, TrackerFaults};
+use planner_core::Scenario;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `needle benchmark`
+#[derive(clap::Args, Clone, Debug)]
+pub struct BenchmarkArgs {
+    /// Generated scenarios, at least 1 (seeds S, S+1, ...).
+    #[arg(long, default_value_t = 20, value_parser = at_least_one)]
+    pub scenarios: usize,
+    /// Seed of the first scenario.
+    #[arg(long, default_value_t = 101)]
+    pub seed: u64,
+    /// Simulated insertions per scenario, at least 1: each open loop, and the same worlds
+    /// closed loop.
+    #[arg(long, default_value_t = 40, value_parser = at_least_one)]
+    pub runs: usize,
+    /// Threads, at least 1 (default: every core).
+    #[arg(long, value_parser = at_least_one)]
+    pub threads: Option<usize>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Change one perturbation, KEY=VALUE (repeatable; see docs/execution.md).
+    #[arg(long = "perturb", value_name = "KEY=VALUE")]
+    pub perturb: Vec<String>,
+    /// Also write each generated scenario to DIR/unseen-SEED.toml (a file `needle plan` reads).
+    #[arg(long, value_name = "DIR")]
+    pub write_scenarios: Option<PathBuf>,
+}
+
+/// The seed of the first world of scenario `seed`: worlds of different scenarios never share a
+/// seed (up to [`WORLD_SEED_STRIDE`] runs a scenario), so no two scenarios draw the same
+/// perturbations.
+pub fn world_seed(scenario_seed: u64) -> u64 {
+    scenario_seed.wrapping_mul(WORLD_SEED_STRIDE)
+}
+
+/// Runs `needle benchmark`.
+pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
+    let mut p = Perturbation::default();
+    for kv in &a.perturb {
+        p.apply(kv).context("--perturb")?;
+    }
+    p.validate().context("--perturb")?;
+    if let Some(dir) = &a.write_scenarios {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let threads = a.threads.unwrap_or_else(parallel::default_threads);
+    let mut rows = Vec::new();
+    let mut unplanned = Vec::new();
+    for i in 0..a.scenarios {
+        let seed = a.seed.wrapping_add(i as u64);
+        let scenario = unseen_scenario(seed);
+        if let Some(dir) = &a.write_scenarios {
+            write_scenario(dir, seed, &scenario)?;
+        }
+        let started = Instant::now();
+        let spheres = scenario.obstacles.len();
+        let head = format!("scenario {}/{} (seed {seed})", i + 1, a.scenarios);
+        match measure(scenario, &p, a.runs, seed, threads) {
+            Ok(row) => {
+                let secs = started.elapsed().as_secs_f64();
+                eprintln!("{head}: {}, {secs:.1} s", row.progress());
+                rows.push(row);
+            }
+            Err(e) => {
+                let reason = format!("{e:#}");
+                eprintln!("{head}: not benchmarked: {reason}");
+                unplanned.push(Unplanned {
+                    seed,
+                    spheres,
+                    reason,
+                });
+            }
+        }
+    }
+    let report = BenchmarkReport::new(a.scenarios, p, rows, unplanned);
+    let text = if a.json {
+        serde_json::to_string(&report)? + "\n"
+    } else {
+        table::to_table(a, &report)
+    };
+    write!(std::io::stdout(), "{text}")?;
+    Ok(())
+}
+
+/// Writes `scenario` to `dir/unseen-SEED.toml`.
+fn write_scenario(dir: &Path, seed: u64, scenario: &Scenario) -> Result<()> {
+    let path = dir.join(format!("unseen-{seed}.toml"));
+    let header = format!(
+        "An unseen 3-D scenario: needle_cli::scenario::unseen::unseen_scenario({seed}),\n\
+         written by `needle benchmark` (see docs/execution.md, \"Unseen scenarios\")."
+    );
+    std::fs::write(
+        &path,
+        scenario_toml(scenario, &format!("unseen-{seed}"), &header),
+    )
+    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Plans `scenario` (its best form), executes it in `runs` worlds open loop and the same worlds
+/// closed loop, and keeps the figures of each run (not their paths).
+fn measure(
+    scenario: Scenario,
+    p: &Perturbation,
+    runs: usize,
+    seed: u64,
+    threads: usize,
+) -> Result<ScenarioRow> {
+    let spheres = scenario.obstacles.len();
+    let (entry, target) = (scenario.entry.position, scenario.target.position);
+    let target_distance = (0..3)
+        .map(|k| (target[k] - entry[k]).powi(2))
+        .sum::<f32>()
+        .sqrt();
+    let setup = Setup::new(
+        scenario,
+        *p,
+        TrackerFaults::default(),
+        runs,
+        world_seed(seed),
+    )?;
+    let keep = Keep::default();
+    let open = setup.open_loop(&keep, threads, || {})?;
+    let closed = setup.closed_loop(&keep, threads, || {})?;
+    let outcome = &setup.prepared.outcome;
+    Ok(ScenarioRow::new(
+        seed,
+        spheres,
+        target_distance,
+        outcome,
+        Pool::of(&open, &closed),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::parse_form;
+
+    /// A scenario with no feasible plan is reported with its reason, not a panic; the table
+    /// lists it and the totals count it.
+    #[test]
+    fn a_scenario_that_cannot_be_planned_is_counted_with_its_reason() {
+        let mut s = unseen_scenario(101);
+        // The first sphere blocks the straight line, the one path a single line can take.
+        s.options.forms.insert(parse_form("L").unwrap());
+        let p = Perturbation::default();
+        let reason = format!("{:#}", measure(s.clone(), &p, 2, 101, 1).unwrap_err());
+        assert!(
+            reason.contains("planning") || reason.contains("reach"),
+            "{reason}"
+        );
+        let planned = measure(unseen_scenario(102), &p, 2, 102, 1).unwrap();
+        assert_eq!(planned.runs, 2);
+        let lost = Unplanned {
+            seed: 101,
+            spheres: s.obstacles.len(),
+            reason: reason.clone(),
+        };
+        let report = BenchmarkReport::new(2, p, vec![planned], vec![lost]);
+        assert_eq!((report.totals.planned, report.totals.unplanned), (1, 1));
+        assert_eq!(report.totals.runs, 2);
+        let args = BenchmarkArgs {
+            scenarios: 2,
+            seed: 101,
+            runs: 2,
+            threads: None,
+            json: false,
+            perturb: Vec::new(),
+            write_scenarios: None,
+        };
+        let table = table::to_table(&args, &report);
+        assert!(
+            table.contains("not benchmarked: 1 of 2 scenarios"),
+            "{table}"
+        );
+        assert!(table.contains(&format!(
+            "seed 101 ({} spheres): {reason}",
+            s.obstacles.len()
+        )));
+    }
+}

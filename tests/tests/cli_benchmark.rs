@@ -1,0 +1,156 @@
+//! `needle benchmark` end to end, kept short (3 generated scenarios, 4 worlds each): the JSON's
+//! rows and totals, the scenarios it writes (they plan with `needle plan`), repeatability over
+//! thread counts, and bad input refused as usage errors.
+
+use needle_e2e::{needle, needle_json};
+use serde_json::Value;
+
+const SHORT: [&str; 7] = [
+    "benchmark",
+    "--scenarios",
+    "3",
+    "--runs",
+    "4",
+    "--seed",
+    "101",
+];
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+fn u(v: &Value) -> u64 {
+    v.as_u64().unwrap_or_else(|| panic!("not a count: {v}"))
+}
+
+fn keys(v: &Value) -> Vec<String> {
+    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    k.sort();
+    k
+}
+
+fn scratch(test: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("needle-benchmark-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Every rate a percentage, and the closed loop's counts adding up to the runs.
+fn check_figures(v: &Value, runs: u64) {
+    let (o, c) = (&v["open_loop"], &v["closed_loop"]);
+    for rate in [&o["hit_percent"], &c["reached_percent"]] {
+        assert!((0.0..=100.0).contains(&f(rate)), "{v}");
+    }
+    assert!(u(&o["hits"]) <= runs);
+    assert_eq!(u(&c["reached"]) + u(&c["stops"]), runs, "{v}");
+    let by_reason: u64 = c["stop_reasons"].as_object().unwrap().values().map(u).sum();
+    assert_eq!(by_reason, u(&c["stops"]));
+    assert!((f(&o["hit_percent"]) - 100.0 * u(&o["hits"]) as f64 / runs as f64).abs() < 1e-9);
+    assert!(f(&o["mean_target_error"]) > 0.0);
+    if u(&c["reached"]) > 0 {
+        assert!(f(&c["mean_target_error"]) <= f(&c["p95_target_error"]) + 1e-9);
+    } else {
+        assert!(c["mean_target_error"].is_null());
+    }
+}
+
+#[test]
+fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
+    let dir = scratch("rows");
+    let out = needle()
+        .args(SHORT)
+        .args(["--threads", "2", "--json", "--write-scenarios"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("scenario ")).count(),
+        3
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        keys(&v),
+        ["perturbation", "scenarios", "totals", "unplanned"]
+    );
+    let rows = v["scenarios"].as_array().unwrap();
+    let unplanned = v["unplanned"].as_array().unwrap();
+    assert_eq!(rows.len() + unplanned.len(), 3);
+    let t = &v["totals"];
+    assert_eq!(
+        (u(&t["scenarios"]), u(&t["planned"]), u(&t["unplanned"])),
+        (3, rows.len() as u64, unplanned.len() as u64)
+    );
+    let sum = |path: [&str; 2]| -> u64 { rows.iter().map(|r| u(&r[path[0]][path[1]])).sum() };
+    for path in [
+        ["open_loop", "hits"],
+        ["closed_loop", "reached"],
+        ["closed_loop", "stops"],
+        ["closed_loop", "hits"],
+    ] {
+        assert_eq!(u(&t[path[0]][path[1]]), sum(path), "{path:?}");
+    }
+    let runs: u64 = rows.iter().map(|r| u(&r["runs"])).sum();
+    assert_eq!(u(&t["runs"]), runs);
+    // The total's mean is over every run: the rows' means weighted by their runs.
+    let weighted: f64 = rows
+        .iter()
+        .map(|r| f(&r["open_loop"]["mean_target_error"]) * f(&r["runs"]))
+        .sum();
+    assert!((f(&t["open_loop"]["mean_target_error"]) - weighted / runs as f64).abs() < 1e-6);
+    check_figures(t, runs);
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(u(&row["runs"]), 4);
+        check_figures(row, 4);
+        let seed = u(&row["seed"]);
+        assert_eq!(seed, 101 + k as u64, "rows in seed order");
+        let file = dir.join(format!("unseen-{seed}.toml"));
+        let plan = needle_json(&["plan", file.to_str().unwrap(), "--json"]);
+        assert_eq!(plan["best"]["form"], row["form"], "{}", file.display());
+        let length = f(&plan["best"]["length"]);
+        assert!((length - f(&row["plan_length"])).abs() < 1e-3);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_table_and_the_json_repeat_on_any_thread_count() {
+    let run = |threads: &str, json: bool| {
+        let mut c = needle();
+        c.args(SHORT).args(["--threads", threads]);
+        if json {
+            c.arg("--json");
+        }
+        let out = c.output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8(out.stdout).unwrap()
+    };
+    assert_eq!(run("1", true), run("2", true));
+    let table = run("2", false);
+    assert!(
+        table.contains("closed loop") && table.contains("total: "),
+        "{table}"
+    );
+    assert_eq!(table.lines().filter(|l| l.starts_with("   10")).count(), 3);
+}
+
+#[test]
+fn bad_counts_and_perturbations_are_refused_without_a_panic() {
+    for (flag, value, status) in [
+        ("--scenarios", "0", 2),
+        ("--runs", "0", 2),
+        ("--threads", "0", 2),
+        ("--perturb", "curvature_spread=-1", 1),
+        ("--perturb", "no_such_key=1", 1),
+    ] {
+        let out = needle()
+            .args(["benchmark", "--scenarios", "1", "--runs", "1", flag, value])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(status), "{flag} {value}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(out.stdout.is_empty(), "{flag} {value}");
+    }
+}
