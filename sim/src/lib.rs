@@ -42,14 +42,13 @@
 #![forbid(unsafe_code)]
 
 mod closed;
-mod perturbation;
 pub mod random;
 mod run;
 mod world;
 
 pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller, TrackerFaults};
-pub use perturbation::{PerturbError, Perturbation, KEYS, MEASURE_EVERY_MM_MIN};
-pub use run::{finish, open_loop, Planned, Run};
-pub use world::{
-    Drawn, Executed, Measurement, StepDraw, World, DRIFT_REFERENCE_MM, MAX_PIECE_MM, MIN_FACTOR,
+pub use planner_core::execute::perturbation::{
+    PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
+pub use run::{finish, open_loop, Planned, Run};
+pub use world::{Drawn, Executed, Measurement, StepDraw, World, MIN_FACTOR};

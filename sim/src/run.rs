@@ -1,8 +1,8 @@
 //! One open-loop run: every step of the schedule executed in a perturbed [`World`], and how far
 //! the true path lands from the target and strays from the plan.
 
-use crate::perturbation::{PerturbError, Perturbation};
 use crate::world::{Drawn, World};
+use crate::{PerturbError, Perturbation};
 use planner_core::check::rebuild;
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::model::clearance::closest;

@@ -21,8 +21,8 @@
 //! The tracker measures the tip after every piece of insertion (pieces at most
 //! `measure_every_mm` and 1 mm long) and after every rotation.
 
-use crate::perturbation::{PerturbError, Perturbation};
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
 use planner_core::model::clearance::closest;
@@ -34,13 +34,6 @@ use std::ops::ControlFlow;
 
 /// The smallest curvature factor a draw may give (a wild spread cannot flip the bevel).
 pub const MIN_FACTOR: f32 = 0.2;
-
-/// Longest piece between two recorded points (mm).
-pub const MAX_PIECE_MM: f32 = 1.0;
-
-/// The line length over which a spun line's residual curvature drifts sideways by
-/// `line_drift_mm_per_mm` per mm on average: curvature = 2 · drift / this (mm).
-pub const DRIFT_REFERENCE_MM: f32 = 50.0;
 
 /// Offsets the tracker stream from the physics stream of the same seed.
 const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;

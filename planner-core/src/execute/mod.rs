@@ -4,6 +4,7 @@
 //! ([`ScheduledPlan`]), on the device as on the host.
 
 pub mod nominal;
+pub mod perturbation;
 pub mod plan_with_schedule;
 pub mod schedule;
 

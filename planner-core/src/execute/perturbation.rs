@@ -1,5 +1,7 @@
 //! What differs between the plan's world and the bench: the perturbation model's parameters, their
-//! literature-motivated defaults, their floors, and `KEY=VALUE` parsing with typed errors.
+//! literature-motivated defaults, their floors, and `KEY=VALUE` parsing with typed errors. One
+//! definition for the simulator (`needle-sim` executes it) and the planner (which predicts the
+//! spread it causes), so the planner never assumes a kinder world than the one it is tested in.
 //!
 //! The defaults are the world every later comparison (open against closed loop) runs in. Each is
 //! at least its floor, the least perturbation the simulator is required to model (so no result
@@ -7,8 +9,32 @@
 //! against the seed paper's experiment before any comparison was made; docs/execution.md
 //! tabulates them with their sources.
 
+use core::fmt;
+use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
-use std::fmt;
+
+/// Longest piece of insertion between two simulated tracker measurements (mm).
+pub const MAX_PIECE_MM: f32 = 1.0;
+
+/// The line length over which a spun line's residual curvature drifts sideways by
+/// `line_drift_mm_per_mm` per mm on average: curvature = 2 · drift / this (mm).
+pub const DRIFT_REFERENCE_MM: f32 = 50.0;
+
+/// Longest user text an error repeats (bytes; longer text is cut at a character boundary).
+pub const ECHO_CAPACITY: usize = 48;
+
+/// Text of the user's input as an error repeats it.
+pub type Echo = String<ECHO_CAPACITY>;
+
+fn echo(text: &str) -> Echo {
+    let mut out = Echo::new();
+    for c in text.chars() {
+        if out.push(c).is_err() {
+            break;
+        }
+    }
+    out
+}
 
 /// The perturbation of one simulated insertion: spreads are standard deviations of normal draws.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -74,7 +100,7 @@ pub struct Perturbation {
     /// Default 0.5: NDI Aurora, 0.30 degrees RMS (cube) to 0.5 degrees; the floor.
     pub tracker_heading_deg: f32,
     /// Insertion between two tracker measurements (mm), from [`MEASURE_EVERY_MM_MIN`] to
-    /// [`MAX_PIECE_MM`](crate::MAX_PIECE_MM).
+    /// [`MAX_PIECE_MM`].
     ///
     /// Default 1 (an Aurora samples at 40 Hz: at 2.5 mm/s that is every 0.06 mm; imaging slower).
     pub measure_every_mm: f32,
@@ -124,12 +150,7 @@ const SPECS: [KeySpec; 11] = [
     spec("target_shift_mm", 0.0, 50.0, 0.5),
     spec("tracker_position_mm", 0.0, 50.0, 0.3),
     spec("tracker_heading_deg", 0.0, 45.0, 0.5),
-    spec(
-        "measure_every_mm",
-        MEASURE_EVERY_MM_MIN,
-        crate::MAX_PIECE_MM,
-        0.0,
-    ),
+    spec("measure_every_mm", MEASURE_EVERY_MM_MIN, MAX_PIECE_MM, 0.0),
 ];
 
 const fn spec(key: &'static str, min: f32, max: f32, floor: f32) -> KeySpec {
@@ -160,15 +181,15 @@ pub const KEYS: [&str; 11] = [
 #[derive(Clone, Debug, PartialEq)]
 pub enum PerturbError {
     /// Not one of [`KEYS`].
-    UnknownKey(String),
+    UnknownKey(Echo),
     /// Not of the form `KEY=VALUE`.
-    Syntax(String),
+    Syntax(Echo),
     /// The value is not a number.
     NotANumber {
         /// The key.
         key: &'static str,
         /// What was given.
-        value: String,
+        value: Echo,
     },
     /// The value is non-finite or outside the key's range.
     OutOfRange {
@@ -187,7 +208,12 @@ impl fmt::Display for PerturbError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             PerturbError::UnknownKey(k) => {
-                write!(f, "unknown perturbation `{k}` (known: {})", KEYS.join(", "))
+                write!(f, "unknown perturbation `{k}` (known: ")?;
+                for (i, key) in KEYS.iter().enumerate() {
+                    let sep = if i == 0 { "" } else { ", " };
+                    write!(f, "{sep}{key}")?;
+                }
+                f.write_str(")")
             }
             PerturbError::Syntax(s) => write!(f, "`{s}` is not KEY=VALUE"),
             PerturbError::NotANumber { key, value } => {
@@ -203,7 +229,7 @@ impl fmt::Display for PerturbError {
     }
 }
 
-impl std::error::Error for PerturbError {}
+impl core::error::Error for PerturbError {}
 
 impl Perturbation {
     /// No perturbation at all: the simulated needle follows the plan exactly (measurements every
@@ -260,12 +286,12 @@ impl Perturbation {
     pub fn apply(&mut self, assignment: &str) -> Result<(), PerturbError> {
         let (key, value) = assignment
             .split_once('=')
-            .ok_or_else(|| PerturbError::Syntax(assignment.to_string()))?;
+            .ok_or_else(|| PerturbError::Syntax(echo(assignment)))?;
         let (key, value) = (key.trim(), value.trim());
         let i = index(key)?;
         let v: f32 = value.parse().map_err(|_| PerturbError::NotANumber {
             key: SPECS[i].key,
-            value: value.to_string(),
+            value: echo(value),
         })?;
         self.set(key, v)
     }
@@ -280,14 +306,16 @@ impl Perturbation {
     }
 
     /// The keys whose value lies below their floor (empty for the defaults: a test).
-    pub fn below_floor(&self) -> Vec<&'static str> {
+    pub fn below_floor(&self) -> Vec<&'static str, { KEYS.len() }> {
         let mut copy = *self;
-        SPECS
-            .iter()
-            .enumerate()
-            .filter(|(i, s)| *copy.slot(*i) < s.floor)
-            .map(|(_, s)| s.key)
-            .collect()
+        let mut out = Vec::new();
+        for (i, s) in SPECS.iter().enumerate() {
+            if *copy.slot(i) < s.floor {
+                // Cannot fail: one entry per key at most.
+                let _ = out.push(s.key);
+            }
+        }
+        out
     }
 }
 
@@ -295,7 +323,7 @@ fn index(key: &str) -> Result<usize, PerturbError> {
     SPECS
         .iter()
         .position(|s| s.key == key)
-        .ok_or_else(|| PerturbError::UnknownKey(key.to_string()))
+        .ok_or_else(|| PerturbError::UnknownKey(echo(key)))
 }
 
 fn check(s: &KeySpec, value: f32) -> Result<(), PerturbError> {
