@@ -7,5 +7,6 @@ pub mod nominal;
 pub mod perturbation;
 pub mod plan_with_schedule;
 pub mod schedule;
+pub mod spread;
 
 pub use plan_with_schedule::ScheduledPlan;
