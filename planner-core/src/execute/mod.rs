@@ -6,6 +6,7 @@
 pub mod nominal;
 pub mod perturbation;
 pub mod plan_with_schedule;
+pub mod risk;
 pub mod schedule;
 pub mod spread;
 

@@ -1,0 +1,135 @@
+//! What the spread of an executed schedule ([`spread`](super::spread)) means for the insertion:
+//! the probability that the needle enters an obstacle and the 95th percentile of the miss.
+//!
+//! Collision: for each obstacle, the probability that the tip crosses its surface where the
+//! mean path comes closest in units of the spread along the direction to it (the largest over
+//! the path of `Φ(−clearance / σ_n)`: the errors along a path are strongly correlated, so one
+//! point stands for its neighbours); over obstacles the probabilities add (Boole's bound, as in
+//! chance-constrained planning: Blackmore et al. 2011). The miss: the end point's error with the
+//! target's own displacement added, its squared norm matched to a scaled χ² (Patnaik 1949) and
+//! the percentile taken by Wilson and Hilferty's cube root.
+
+use super::perturbation::Perturbation;
+use super::schedule::Schedule;
+use super::spread::{propagate, TipSpread};
+use crate::model::kinematics::V3;
+use crate::model::scenario::{Scenario, Workspace};
+use nalgebra::Matrix3;
+
+/// Where the spread is evaluated along the path (mm between points at most).
+pub const RISK_SPACING_MM: f32 = 1.0;
+
+/// The standard normal quantile of 0.95.
+const Z95: f32 = 1.644_853_6;
+
+/// The execution risk of a schedule under a perturbation model (predicted, first order).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExecutionRisk {
+    /// Probability that the needle enters any obstacle (Boole's bound over obstacles, at most 1).
+    pub collision_probability: f32,
+    /// 95th percentile of the distance from the end of the insertion to the (displaced) target
+    /// (mm).
+    pub target_error_p95: f32,
+    /// The tip at the end of the insertion.
+    pub end: TipSpread,
+}
+
+/// The standard normal cumulative distribution.
+pub fn normal_cdf(x: f32) -> f32 {
+    0.5 * libm::erfcf(-x * core::f32::consts::FRAC_1_SQRT_2)
+}
+
+/// The predicted execution risk of `schedule` in `scenario` under `p`.
+///
+/// ```
+/// use planner_core::execute::perturbation::Perturbation;
+/// use planner_core::execute::risk::execution_risk;
+/// use planner_core::execute::schedule::schedule;
+/// use planner_core::{plan, Scenario};
+///
+/// let scenario = Scenario::paper();
+/// let best = plan(&scenario).unwrap().best().unwrap().clone();
+/// let s = schedule(&scenario, &best).unwrap();
+/// let risk = execution_risk(&scenario, &s, &Perturbation::default());
+/// assert!(risk.collision_probability > 0.0 && risk.collision_probability < 0.5);
+/// assert!(risk.target_error_p95 > 1.0 && risk.target_error_p95 < 10.0);
+/// let exact = execution_risk(&scenario, &s, &Perturbation::none());
+/// assert!(exact.collision_probability < 1e-6 && exact.target_error_p95 < 0.1);
+/// ```
+pub fn execution_risk(scenario: &Scenario, schedule: &Schedule, p: &Perturbation) -> ExecutionRisk {
+    let mut worst = [0.0f32; crate::MAX_OBSTACLES];
+    let plane = scenario.options.workspace == Workspace::PlaneYz;
+    let end = propagate(scenario, schedule, p, RISK_SPACING_MM, |tip| {
+        for (w, ob) in worst.iter_mut().zip(&scenario.obstacles) {
+            let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
+            if plane {
+                // A circle of the plane is a cylinder across it.
+                away.x = 0.0;
+            }
+            let distance = away.norm();
+            if !(distance > 0.0) {
+                *w = 1.0;
+                continue;
+            }
+            let sd = tip.sd_along(&(away / distance));
+            let clearance = distance - ob.radius;
+            let chance = if sd > 0.0 {
+                normal_cdf(-clearance / sd)
+            } else if clearance > 0.0 {
+                0.0
+            } else {
+                1.0
+            };
+            *w = w.max(chance);
+        }
+    });
+    let collision_probability = worst.iter().sum::<f32>().min(1.0);
+    let t = scenario.target.position;
+    let shift = p.target_shift_mm * p.target_shift_mm;
+    let miss = end.mean - V3::new(t[0], t[1], t[2]);
+    let target_error_p95 = norm_quantile(&miss, &(end.covariance + Matrix3::identity() * shift));
+    ExecutionRisk {
+        collision_probability,
+        target_error_p95,
+        end,
+    }
+}
+
+/// The 95th percentile of `|b + x|` for `x ~ N(0, cov)`: `|b + x|²` matched in mean and
+/// variance to `g·χ²(h)`, whose percentile Wilson and Hilferty's approximation gives.
+fn norm_quantile(b: &V3, cov: &Matrix3<f32>) -> f32 {
+    let mean = cov.trace() + b.norm_squared();
+    let variance = 2.0 * (cov * cov).trace() + 4.0 * (b.transpose() * cov * b)[0];
+    if !(variance > 0.0) {
+        return crate::fmath::sqrt(mean.max(0.0));
+    }
+    let g = variance / (2.0 * mean);
+    let h = 2.0 * mean * mean / variance;
+    let k = 2.0 / (9.0 * h);
+    let root = 1.0 - k + Z95 * crate::fmath::sqrt(k);
+    crate::fmath::sqrt((g * h * root * root * root).max(0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_quantile_of_a_known_distribution() {
+        // |x| for isotropic x of sd 1 in 3-D: the χ distribution with 3 degrees of freedom,
+        // whose 95th percentile is 2.7955.
+        let q = norm_quantile(&V3::zeros(), &Matrix3::identity());
+        assert!((q - 2.7955).abs() < 0.01, "{q}");
+        // One dimension: |N(0, 1)| has its 95th percentile at 1.96 (the approximation is within
+        // a few percent for one degree of freedom).
+        let mut one = Matrix3::zeros();
+        one[(0, 0)] = 1.0;
+        let q = norm_quantile(&V3::zeros(), &one);
+        assert!((q - 1.96).abs() < 0.08, "{q}");
+        // A bias far larger than the spread: the bias plus 1.645 sd along it.
+        let q = norm_quantile(&V3::new(10.0, 0.0, 0.0), &(Matrix3::identity() * 0.01));
+        assert!((q - (10.0 + 0.1645)).abs() < 0.02, "{q}");
+        assert!((normal_cdf(0.0) - 0.5).abs() < 1e-6);
+        assert!((normal_cdf(-1.644_853_6) - 0.05).abs() < 1e-5);
+    }
+}
