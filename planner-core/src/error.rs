@@ -48,6 +48,8 @@ pub enum Field {
     MaxTwist,
     /// `needle.length` (the insertable length)
     NeedleLength,
+    /// `planner.max_collision_probability`
+    MaxCollisionProbability,
 }
 
 impl Field {
@@ -77,6 +79,7 @@ impl Field {
             Field::SpinRate => "0.01 to 1000 rev/s",
             Field::MaxTwist => "at least 360 degrees (a spun line turns the shaft whole turns)",
             Field::NeedleLength => "the entry-target distance to 5000 mm",
+            Field::MaxCollisionProbability => "more than 0 and less than 1",
         }
     }
 }
@@ -105,6 +108,7 @@ impl core::fmt::Display for Field {
             Field::SpinRate => f.write_str("driver.spin_rate"),
             Field::MaxTwist => f.write_str("driver.max_twist_deg"),
             Field::NeedleLength => f.write_str("needle.length"),
+            Field::MaxCollisionProbability => f.write_str("planner.max_collision_probability"),
         }
     }
 }

@@ -24,6 +24,7 @@
 // `!(x > 0.0)` is deliberate: it is also true for NaN, which must be rejected.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod chance;
 pub mod check;
 pub mod device;
 pub mod error;

@@ -39,6 +39,21 @@ pub fn normal_cdf(x: f32) -> f32 {
     0.5 * libm::erfcf(-x * core::f32::consts::FRAC_1_SQRT_2)
 }
 
+/// One obstacle's share of the collision risk: where the path comes closest to it in units of
+/// the spread.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ObstacleRisk {
+    /// Probability of crossing its surface (the largest along the path).
+    pub probability: f32,
+    /// The mean path's clearance to it where that probability is largest (mm).
+    pub clearance: f32,
+    /// The spread of the tip along the direction to it there (mm).
+    pub sd: f32,
+}
+
+/// Per-obstacle risks, in the scenario's order.
+pub type ObstacleRisks = [ObstacleRisk; crate::MAX_OBSTACLES];
+
 /// The predicted execution risk of `schedule` in `scenario` under `p`.
 ///
 /// ```
@@ -57,21 +72,36 @@ pub fn normal_cdf(x: f32) -> f32 {
 /// assert!(exact.collision_probability < 1e-6 && exact.target_error_p95 < 0.1);
 /// ```
 pub fn execution_risk(scenario: &Scenario, schedule: &Schedule, p: &Perturbation) -> ExecutionRisk {
-    let mut worst = [0.0f32; crate::MAX_OBSTACLES];
+    let mut by_obstacle = [ObstacleRisk::default(); crate::MAX_OBSTACLES];
+    execution_risk_by_obstacle(scenario, schedule, p, &mut by_obstacle)
+}
+
+/// [`execution_risk`], with each obstacle's share written to `by_obstacle`.
+pub fn execution_risk_by_obstacle(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    by_obstacle: &mut ObstacleRisks,
+) -> ExecutionRisk {
     let plane = scenario.options.workspace == Workspace::PlaneYz;
+    *by_obstacle = [ObstacleRisk {
+        probability: 0.0,
+        clearance: f32::INFINITY,
+        sd: 0.0,
+    }; crate::MAX_OBSTACLES];
     let end = propagate(scenario, schedule, p, RISK_SPACING_MM, |tip| {
-        for (w, ob) in worst.iter_mut().zip(&scenario.obstacles) {
+        for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
             let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
             if plane {
                 // A circle of the plane is a cylinder across it.
                 away.x = 0.0;
             }
             let distance = away.norm();
-            if !(distance > 0.0) {
-                *w = 1.0;
-                continue;
-            }
-            let sd = tip.sd_along(&(away / distance));
+            let sd = if distance > 0.0 {
+                tip.sd_along(&(away / distance))
+            } else {
+                0.0
+            };
             let clearance = distance - ob.radius;
             let chance = if sd > 0.0 {
                 normal_cdf(-clearance / sd)
@@ -80,10 +110,20 @@ pub fn execution_risk(scenario: &Scenario, schedule: &Schedule, p: &Perturbation
             } else {
                 1.0
             };
-            *w = w.max(chance);
+            if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
+                *w = ObstacleRisk {
+                    probability: chance,
+                    clearance,
+                    sd,
+                };
+            }
         }
     });
-    let collision_probability = worst.iter().sum::<f32>().min(1.0);
+    let collision_probability = by_obstacle
+        .iter()
+        .map(|o| o.probability)
+        .sum::<f32>()
+        .min(1.0);
     let t = scenario.target.position;
     let shift = p.target_shift_mm * p.target_shift_mm;
     let miss = end.mean - V3::new(t[0], t[1], t[2]);
