@@ -4,8 +4,13 @@ use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
+use needle_cli::report::execution::{add_to_json, execution_lines, form_risks};
 use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
-use needle_cli::scenario::{load_scenario, load_scenario_shapes, restrict};
+use needle_cli::scenario::{
+    load_execution, load_scenario, load_scenario_shapes, restrict, Execution,
+};
+use planner_core::chance::{plan_within_risk, ChancePlan};
+use planner_core::execute::risk::ExecutionRisk;
 use planner_core::execute::schedule::Schedule;
 use planner_core::{PlanReport, Scenario};
 use std::io::Write;
@@ -133,14 +138,37 @@ fn print_plan(
     schedule: Option<&Schedule>,
     stats: Stats,
 ) -> Result<()> {
+    print_plan_predicted(args, scenario, report, schedule, stats, None)
+}
+
+/// What a plan predicts about its execution (the scenario has `[execution]` or a bound).
+struct Predicted<'a> {
+    execution: &'a Execution,
+    risks: Vec<Option<ExecutionRisk>>,
+    chance: Option<&'a ChancePlan>,
+}
+
+/// [`print_plan`] with the predictions, when there are any.
+fn print_plan_predicted(
+    args: &PlanArgs,
+    scenario: &Scenario,
+    report: &PlanReport,
+    schedule: Option<&Schedule>,
+    stats: Stats,
+    predicted: Option<&Predicted>,
+) -> Result<()> {
     if args.json {
-        writeln!(
-            std::io::stdout(),
-            "{}",
-            plan_json(scenario, report, schedule, stats)
-        )?;
+        let mut json = plan_json(scenario, report, schedule, stats);
+        if let Some(p) = predicted {
+            add_to_json(&mut json, scenario, p.execution, &p.risks, p.chance, report);
+        }
+        writeln!(std::io::stdout(), "{json}")?;
     } else {
         write!(std::io::stdout(), "{}", plan_table(report, stats))?;
+        if let Some(p) = predicted {
+            let lines = execution_lines(report, p.execution, &p.risks, p.chance);
+            write!(std::io::stdout(), "{lines}")?;
+        }
         if let Some(schedule) = schedule.filter(|_| args.schedule) {
             write!(
                 std::io::stdout(),
@@ -163,8 +191,18 @@ fn reachable(report: &PlanReport) -> Result<()> {
 
 fn plan(args: &PlanArgs) -> Result<()> {
     let scenario = load(args)?;
+    let execution = load_execution(&args.file)?;
     let start = Instant::now();
-    let planned = planner_core::plan_scheduled(&scenario).context("planning failed")?;
+    let chance = match execution.max_collision_probability {
+        Some(bound) => {
+            Some(plan_within_risk(&scenario, &execution.model, bound).context("planning failed")?)
+        }
+        None => None,
+    };
+    let planned = match &chance {
+        Some(c) => c.planned.clone(),
+        None => planner_core::plan_scheduled(&scenario).context("planning failed")?,
+    };
     let stats = Stats {
         time_us: start.elapsed().as_micros() as u64,
     };
@@ -175,11 +213,26 @@ fn plan(args: &PlanArgs) -> Result<()> {
         ),
         None => None,
     };
-    print_plan(args, &scenario, &planned.report, schedule, stats)?;
+    let predicted = execution.given.then(|| Predicted {
+        execution: &execution,
+        risks: form_risks(&scenario, &planned.report, &execution.model),
+        chance: chance.as_ref(),
+    });
+    let report = &planned.report;
+    print_plan_predicted(args, &scenario, report, schedule, stats, predicted.as_ref())?;
     if let Some(out) = &args.plot {
-        analysis::write_plan_plot(&args.file, args.approx, &scenario, &planned.report, out)?;
+        analysis::write_plan_plot(&args.file, args.approx, &scenario, report, out)?;
     }
-    reachable(&planned.report)
+    reachable(report)?;
+    match (&chance, execution.max_collision_probability) {
+        (Some(c), Some(bound)) if !c.within_bound => Err(anyhow!(
+            "no plan keeps the predicted collision probability within {bound}: the best found \
+             has {:.4} (with obstacles grown by up to {:.2} mm)",
+            c.risk.map_or(f32::NAN, |r| r.collision_probability),
+            c.margins.iter().fold(0.0f32, |a, m| a.max(*m))
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn send(args: &SendArgs) -> Result<()> {

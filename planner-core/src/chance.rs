@@ -17,7 +17,7 @@ use crate::model::scenario::Scenario;
 use crate::{plan_scheduled, Field, PlanError, MAX_OBSTACLES};
 
 /// Plans made at most while searching for margins that meet the bound.
-pub const MAX_ROUNDS: u32 = 6;
+pub const MAX_ROUNDS: u32 = 10;
 
 /// An obstacle whose probability is below this share of the bound gets no share of it.
 const NEGLIGIBLE_SHARE: f32 = 0.01;
@@ -132,6 +132,9 @@ pub fn plan_within_risk(
     }
     scenario.validate()?;
     let mut margins = [0.0f32; MAX_OBSTACLES];
+    // The margins of the last round that found a path: a round whose grown obstacles leave none
+    // backs off half way towards them.
+    let mut found = [0.0f32; MAX_OBSTACLES];
     let mut last: Option<ChancePlan> = None;
     for round in 1..=MAX_ROUNDS {
         let planned = plan_scheduled(&grown(scenario, &margins))?;
@@ -157,15 +160,25 @@ pub fn plan_within_risk(
             return Ok(outcome);
         }
         if risk.is_none() {
-            // The grown obstacles leave no path: the last plan that had one is the answer.
-            return Ok(last.map_or(outcome, |l| ChancePlan { rounds: round, ..l }));
+            let Some(l) = last.as_mut() else {
+                return Ok(outcome); // no path even without margins
+            };
+            l.rounds = round;
+            if margins == found {
+                break;
+            }
+            for (m, f) in margins.iter_mut().zip(&found) {
+                *m = 0.5 * (*m + f);
+            }
+            continue;
         }
+        found = margins;
         last = Some(outcome);
         if !raise_margins(scenario, bound, &by_obstacle, &mut margins) {
             break;
         }
     }
-    // `last` is set: every round that did not return set it.
+    // `last` is set: the first round either returned or set it.
     last.ok_or(PlanError::Unreachable)
 }
 

@@ -28,6 +28,8 @@ pub struct Pool {
     pub stops: BTreeMap<&'static str, usize>,
     /// Closed loop: runs whose true path entered an obstacle.
     pub closed_hits: usize,
+    /// Closed loop: runs made (0 with `--open-loop-only`).
+    pub closed_runs: usize,
 }
 
 impl Pool {
@@ -37,6 +39,7 @@ impl Pool {
             runs: open.len(),
             open_errors: open.iter().map(|r| r.target_error).collect(),
             open_hits: open.iter().filter(|r| r.collided).count(),
+            closed_runs: closed.len(),
             arrived_errors: closed
                 .iter()
                 .filter(|r| r.stop_reason.is_none())
@@ -57,6 +60,7 @@ impl Pool {
             *self.stops.entry(reason).or_default() += n;
         }
         self.closed_hits += other.closed_hits;
+        self.closed_runs += other.closed_runs;
     }
 
     fn percent(&self, count: usize) -> f64 {
@@ -69,18 +73,23 @@ impl Pool {
 
     /// The open-loop figures.
     pub fn open(&self) -> OpenFigures {
+        let errors = Spread::of(self.open_errors.iter().copied());
         OpenFigures {
             hits: self.open_hits,
             hit_percent: self.percent(self.open_hits),
-            mean_target_error: Spread::of(self.open_errors.iter().copied()).mean,
+            mean_target_error: errors.mean,
+            p95_target_error: errors.p95,
         }
     }
 
-    /// The closed-loop figures.
-    pub fn closed(&self) -> ClosedFigures {
+    /// The closed-loop figures (`None` when no run was steered).
+    pub fn closed(&self) -> Option<ClosedFigures> {
+        if self.closed_runs == 0 {
+            return None;
+        }
         let arrived = self.arrived_errors.len();
         let errors = (arrived > 0).then(|| Spread::of(self.arrived_errors.iter().copied()));
-        ClosedFigures {
+        Some(ClosedFigures {
             reached: arrived,
             reached_percent: self.percent(arrived),
             stops: self.stops.values().sum(),
@@ -88,7 +97,7 @@ impl Pool {
             hits: self.closed_hits,
             mean_target_error: errors.map(|s| s.mean),
             p95_target_error: errors.map(|s| s.p95),
-        }
+        })
     }
 }
 
@@ -101,6 +110,21 @@ pub struct OpenFigures {
     pub hit_percent: f64,
     /// Mean distance of the true end to the true target (mm).
     pub mean_target_error: f64,
+    /// 95th percentile (nearest rank) of the same (mm).
+    pub p95_target_error: f64,
+}
+
+/// What the planner predicted for the plan's open-loop execution, under its model (first order;
+/// `planner_core::execute::risk`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PredictedFigures {
+    /// Probability that the executed path enters a sphere.
+    pub collision_probability: f64,
+    /// 95th percentile of the miss (mm).
+    pub target_error_p95: f64,
+    /// The length of the plan made without the bound (mm; null without a bound): the safe
+    /// plan's cost is `plan_length` minus this.
+    pub unbounded_length: Option<f64>,
 }
 
 /// Closed loop: the same worlds, steered from the tracker's readings.
@@ -141,10 +165,12 @@ pub struct ScenarioRow {
     pub runs: usize,
     /// The first world's seed (run k uses it plus k).
     pub world_seed: u64,
+    /// What the planner predicted for the open loop.
+    pub predicted: PredictedFigures,
     /// Open-loop figures.
     pub open_loop: OpenFigures,
-    /// Closed-loop figures.
-    pub closed_loop: ClosedFigures,
+    /// Closed-loop figures (null with `--open-loop-only`).
+    pub closed_loop: Option<ClosedFigures>,
     /// The runs behind the figures (for the totals).
     #[serde(skip)]
     pub pool: Pool,
@@ -157,6 +183,7 @@ impl ScenarioRow {
         spheres: usize,
         target_distance: f32,
         outcome: &FormOutcome,
+        predicted: PredictedFigures,
         pool: Pool,
     ) -> ScenarioRow {
         ScenarioRow {
@@ -168,6 +195,7 @@ impl ScenarioRow {
             plan_clearance: outcome.min_clearance,
             runs: pool.runs,
             world_seed: super::world_seed(seed),
+            predicted,
             open_loop: pool.open(),
             closed_loop: pool.closed(),
             pool,
@@ -176,10 +204,21 @@ impl ScenarioRow {
 
     /// The row in a few words, for the progress line.
     pub fn progress(&self) -> String {
-        let (o, c) = (&self.open_loop, &self.closed_loop);
+        let o = &self.open_loop;
+        let closed = self.closed_loop.as_ref().map_or(String::new(), |c| {
+            format!(
+                "; closed loop {} reached, {} stopped, {} hit",
+                c.reached, c.stops, c.hits
+            )
+        });
         format!(
-            "{} spheres, {} {:.1} mm; open loop {} of {} hit; closed loop {} reached, {} stopped, {} hit",
-            self.spheres, self.form, self.plan_length, o.hits, self.runs, c.reached, c.stops, c.hits
+            "{} spheres, {} {:.1} mm; open loop {} of {} hit (predicted {:.1} %){closed}",
+            self.spheres,
+            self.form,
+            self.plan_length,
+            o.hits,
+            self.runs,
+            100.0 * self.predicted.collision_probability
         )
     }
 }
@@ -208,8 +247,11 @@ pub struct Totals {
     pub runs: usize,
     /// Open-loop figures over every run.
     pub open_loop: OpenFigures,
-    /// Closed-loop figures over every run.
-    pub closed_loop: ClosedFigures,
+    /// The predicted open-loop collision rate over every run (the mean of the rows'
+    /// predictions, weighted by their runs).
+    pub predicted_collision_probability: f64,
+    /// Closed-loop figures over every run (null with `--open-loop-only`).
+    pub closed_loop: Option<ClosedFigures>,
 }
 
 /// `needle benchmark --json`: `scenarios` (one row per benchmarked scenario), `totals`,
@@ -235,8 +277,10 @@ impl BenchmarkReport {
         unplanned: Vec<Unplanned>,
     ) -> BenchmarkReport {
         let mut all = Pool::default();
+        let mut expected_hits = 0.0;
         for row in &rows {
             all.merge(&row.pool);
+            expected_hits += row.predicted.collision_probability * row.runs as f64;
         }
         BenchmarkReport {
             totals: Totals {
@@ -245,6 +289,7 @@ impl BenchmarkReport {
                 unplanned: unplanned.len(),
                 runs: all.runs,
                 open_loop: all.open(),
+                predicted_collision_probability: expected_hits / all.runs.max(1) as f64,
                 closed_loop: all.closed(),
             },
             scenarios: rows,
@@ -266,6 +311,7 @@ mod tests {
             arrived_errors: arrived.to_vec(),
             stops: BTreeMap::from([("no_safe_continuation", stops)]),
             closed_hits: 0,
+            closed_runs: runs,
         }
     }
 
@@ -273,7 +319,7 @@ mod tests {
     fn totals_pool_the_runs() {
         let mut all = pool(2, &[1.0, 3.0], &[0.5], 1);
         all.merge(&pool(4, &[2.0; 4], &[1.0, 1.0, 1.0, 4.0], 0));
-        let (o, c) = (all.open(), all.closed());
+        let (o, c) = (all.open(), all.closed().unwrap());
         assert_eq!((all.runs, o.hits), (6, 2));
         assert_eq!(o.mean_target_error, 2.0);
         assert!((o.hit_percent - 100.0 / 3.0).abs() < 1e-12);
@@ -281,7 +327,12 @@ mod tests {
         assert!((c.reached_percent - 500.0 / 6.0).abs() < 1e-12);
         assert_eq!(c.mean_target_error, Some(1.5));
         assert_eq!(c.p95_target_error, Some(4.0));
-        let none = pool(3, &[1.0; 3], &[], 3).closed();
+        let none = pool(3, &[1.0; 3], &[], 3).closed().unwrap();
+        let open_only = Pool {
+            closed_runs: 0,
+            ..pool(3, &[1.0; 3], &[], 0)
+        };
+        assert_eq!(open_only.closed(), None);
         assert_eq!((none.reached_percent, none.mean_target_error), (0.0, None));
     }
 }

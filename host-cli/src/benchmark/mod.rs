@@ -8,7 +8,9 @@
 mod figures;
 mod table;
 
-pub use figures::{BenchmarkReport, ClosedFigures, OpenFigures, Pool, ScenarioRow, Totals};
+pub use figures::{
+    BenchmarkReport, ClosedFigures, OpenFigures, Pool, PredictedFigures, ScenarioRow, Totals,
+};
 pub use figures::{Unplanned, WORLD_SEED_STRIDE};
 
 use crate::analysis::parallel;
@@ -16,8 +18,10 @@ use crate::scenario::unseen::unseen_scenario;
 use crate::scenario::write::scenario_toml;
 use crate::simulate::at_least_one;
 use crate::simulate::setup::{Keep, Setup};
+use crate::simulate::PlanBound;
 use anyhow::{Context, Result};
 use needle_sim::{Perturbation, TrackerFaults};
+use planner_core::execute::risk::execution_risk;
 use planner_core::Scenario;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -48,6 +52,22 @@ pub struct BenchmarkArgs {
     /// Also write each generated scenario to DIR/unseen-SEED.toml (a file `needle plan` reads).
     #[arg(long, value_name = "DIR")]
     pub write_scenarios: Option<PathBuf>,
+    /// Plan every scenario under this bound on the predicted collision probability (default
+    /// model: the simulator's defaults, not `--perturb`); a scenario no plan meets it for is
+    /// counted with that reason.
+    #[arg(long, value_name = "P", value_parser = probability)]
+    pub max_collision_probability: Option<f32>,
+    /// Execute open loop only (no closed-loop runs; their figures are null).
+    #[arg(long)]
+    pub open_loop_only: bool,
+}
+
+/// A probability strictly between 0 and 1.
+fn probability(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(p) if p > 0.0 && p < 1.0 => Ok(p),
+        _ => Err("must be a number more than 0 and less than 1".into()),
+    }
 }
 
 /// The seed of the first world of scenario `seed`: worlds of different scenarios never share a
@@ -79,7 +99,7 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
         let started = Instant::now();
         let spheres = scenario.obstacles.len();
         let head = format!("scenario {}/{} (seed {seed})", i + 1, a.scenarios);
-        match measure(scenario, &p, a.runs, seed, threads) {
+        match measure(scenario, &p, a, seed, threads) {
             Ok(row) => {
                 let secs = started.elapsed().as_secs_f64();
                 eprintln!("{head}: {}, {secs:.1} s", row.progress());
@@ -125,32 +145,57 @@ fn write_scenario(dir: &Path, seed: u64, scenario: &Scenario) -> Result<()> {
 fn measure(
     scenario: Scenario,
     p: &Perturbation,
-    runs: usize,
+    a: &BenchmarkArgs,
     seed: u64,
     threads: usize,
 ) -> Result<ScenarioRow> {
+    let model = Perturbation::default();
+    let bound = a
+        .max_collision_probability
+        .map(|max_collision_probability| PlanBound {
+            model,
+            max_collision_probability,
+        });
     let spheres = scenario.obstacles.len();
     let (entry, target) = (scenario.entry.position, scenario.target.position);
     let target_distance = (0..3)
         .map(|k| (target[k] - entry[k]).powi(2))
         .sum::<f32>()
         .sqrt();
-    let setup = Setup::new(
+    let unbounded_length = bound.map(|_| {
+        planner_core::plan(&scenario)
+            .ok()
+            .and_then(|r| r.best().map(|b| f64::from(b.length)))
+            .unwrap_or(f64::NAN)
+    });
+    let setup = Setup::bounded(
         scenario,
         *p,
         TrackerFaults::default(),
-        runs,
+        a.runs,
         world_seed(seed),
+        bound.as_ref(),
     )?;
+    let risk = execution_risk(&setup.scenario, &setup.prepared.schedule, &model);
+    let predicted = PredictedFigures {
+        collision_probability: f64::from(risk.collision_probability),
+        target_error_p95: f64::from(risk.target_error_p95),
+        unbounded_length,
+    };
     let keep = Keep::default();
     let open = setup.open_loop(&keep, threads, || {})?;
-    let closed = setup.closed_loop(&keep, threads, || {})?;
+    let closed = if a.open_loop_only {
+        Vec::new()
+    } else {
+        setup.closed_loop(&keep, threads, || {})?
+    };
     let outcome = &setup.prepared.outcome;
     Ok(ScenarioRow::new(
         seed,
         spheres,
         target_distance,
         outcome,
+        predicted,
         Pool::of(&open, &closed),
     ))
 }
@@ -168,12 +213,23 @@ mod tests {
         // The first sphere blocks the straight line, the one path a single line can take.
         s.options.forms.insert(parse_form("L").unwrap());
         let p = Perturbation::default();
-        let reason = format!("{:#}", measure(s.clone(), &p, 2, 101, 1).unwrap_err());
+        let args = BenchmarkArgs {
+            scenarios: 2,
+            seed: 101,
+            runs: 2,
+            threads: None,
+            json: false,
+            perturb: Vec::new(),
+            write_scenarios: None,
+            max_collision_probability: None,
+            open_loop_only: false,
+        };
+        let reason = format!("{:#}", measure(s.clone(), &p, &args, 101, 1).unwrap_err());
         assert!(
             reason.contains("planning") || reason.contains("reach"),
             "{reason}"
         );
-        let planned = measure(unseen_scenario(102), &p, 2, 102, 1).unwrap();
+        let planned = measure(unseen_scenario(102), &p, &args, 102, 1).unwrap();
         assert_eq!(planned.runs, 2);
         let lost = Unplanned {
             seed: 101,
@@ -183,15 +239,6 @@ mod tests {
         let report = BenchmarkReport::new(2, p, vec![planned], vec![lost]);
         assert_eq!((report.totals.planned, report.totals.unplanned), (1, 1));
         assert_eq!(report.totals.runs, 2);
-        let args = BenchmarkArgs {
-            scenarios: 2,
-            seed: 101,
-            runs: 2,
-            threads: None,
-            json: false,
-            perturb: Vec::new(),
-            write_scenarios: None,
-        };
         let table = table::to_table(&args, &report);
         assert!(
             table.contains("not benchmarked: 1 of 2 scenarios"),

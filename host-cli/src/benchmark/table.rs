@@ -8,19 +8,46 @@ fn mm(v: Option<f64>) -> String {
     v.map_or_else(|| "-".to_string(), |v| format!("{v:.2}"))
 }
 
-/// The open- and closed-loop columns.
-fn figures(out: &mut String, o: &OpenFigures, c: &ClosedFigures) {
+/// The open- and closed-loop columns (dashes for a closed loop not run).
+fn figures(out: &mut String, predicted: Option<f64>, o: &OpenFigures, c: Option<&ClosedFigures>) {
+    let predicted = predicted.map_or_else(|| "-".to_string(), |p| format!("{:.1}", 100.0 * p));
+    let _ = write!(
+        out,
+        " |{:>7.1}{:>8}{:>8.2}{:>8.2} |",
+        o.hit_percent, predicted, o.mean_target_error, o.p95_target_error
+    );
+    let _ = match c {
+        Some(c) => writeln!(
+            out,
+            "{:>10.1}{:>7}{:>6}{:>8}{:>8}",
+            c.reached_percent,
+            c.stops,
+            c.hits,
+            mm(c.mean_target_error),
+            mm(c.p95_target_error)
+        ),
+        None => writeln!(out, "{:>10}{:>7}{:>6}{:>8}{:>8}", "-", "-", "-", "-", "-"),
+    };
+}
+
+/// The safe plans' lengths against the unbounded ones.
+fn length_costs(out: &mut String, bound: f32, r: &BenchmarkReport) {
     let _ = writeln!(
         out,
-        " |{:>7.1}{:>8.2} |{:>10.1}{:>7}{:>6}{:>8}{:>8}",
-        o.hit_percent,
-        o.mean_target_error,
-        c.reached_percent,
-        c.stops,
-        c.hits,
-        mm(c.mean_target_error),
-        mm(c.p95_target_error)
+        "planned under max_collision_probability = {bound}; cost in length of the safe plans:"
     );
+    for row in &r.scenarios {
+        if let Some(free) = row.predicted.unbounded_length {
+            let _ = writeln!(
+                out,
+                "  seed {}: {:.1} mm against {:.1} mm unbounded ({:+.1} mm)",
+                row.seed,
+                row.plan_length,
+                free,
+                f64::from(row.plan_length) - free
+            );
+        }
+    }
 }
 
 /// The benchmark's table.
@@ -33,11 +60,11 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
          same worlds closed loop",
         a.seed, a.runs
     );
-    let groups = format!("{:<50} |{:^15} |{:^39}", "", "open loop", "closed loop");
+    let groups = format!("{:<50} |{:^31} |{:^39}", "", "open loop", "closed loop");
     let _ = writeln!(out, "{}", groups.trim_end());
     let _ = writeln!(
         out,
-        "{:>6}{:>8}{:>10}{:>6}{:>10}{:>10} |{:>7}{:>8} |{:>10}{:>7}{:>6}{:>8}{:>8}",
+        "{:>6}{:>8}{:>10}{:>6}{:>10}{:>10} |{:>7}{:>8}{:>8}{:>8} |{:>10}{:>7}{:>6}{:>8}{:>8}",
         "seed",
         "spheres",
         "target mm",
@@ -45,7 +72,9 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         "length",
         "clearance",
         "hit %",
+        "pred %",
         "error",
+        "p95",
         "reached %",
         "stops",
         "hits",
@@ -63,7 +92,13 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
             row.plan_length,
             row.plan_clearance
         );
-        figures(&mut out, &row.open_loop, &row.closed_loop);
+        let predicted = Some(row.predicted.collision_probability);
+        figures(
+            &mut out,
+            predicted,
+            &row.open_loop,
+            row.closed_loop.as_ref(),
+        );
     }
     let t = &r.totals;
     let _ = write!(
@@ -71,11 +106,12 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         "{:<50}",
         format!("total: {} scenarios, {} runs", t.planned, t.runs)
     );
-    figures(&mut out, &t.open_loop, &t.closed_loop);
+    let predicted = Some(t.predicted_collision_probability);
+    figures(&mut out, predicted, &t.open_loop, t.closed_loop.as_ref());
     let reasons: Vec<String> = t
         .closed_loop
-        .stop_reasons
         .iter()
+        .flat_map(|c| c.stop_reasons.iter())
         .filter(|(_, n)| **n > 0)
         .map(|(reason, n)| format!("{reason} {n}"))
         .collect();
@@ -84,8 +120,12 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
     }
     let _ = writeln!(
         out,
-        "errors in mm (closed loop: of the runs that arrived); hits: runs that entered a sphere"
+        "errors in mm (closed loop: of the runs that arrived); hits: runs that entered a sphere; \
+         pred %: the planner's predicted collision probability (first order)"
     );
+    if let Some(bound) = a.max_collision_probability {
+        length_costs(&mut out, bound, r);
+    }
     let _ = writeln!(
         out,
         "not benchmarked: {} of {} scenarios",

@@ -35,6 +35,10 @@ fn widened(p: [f32; 3]) -> [f64; 3] {
 pub struct PlanJson {
     /// The best form's path, `null` when there is none.
     pub best: Option<BestPath>,
+    /// With an `[execution]` table or a collision bound: the world assumed and what the plan
+    /// predicts in it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub execution: Option<super::execution::ExecutionJson>,
     /// One entry per form tried, in catalogue order.
     pub forms: Vec<FormEntry>,
     /// Time and effort of the whole plan.
@@ -91,6 +95,13 @@ pub struct FormEntry {
     /// Points at most 1 mm apart from the entry to the end: written for the best path only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub points: Option<Vec<[f64; 3]>>,
+    /// Predicted probability that the executed path enters an obstacle (first order, open
+    /// loop; with an `[execution]` table or a bound, feasible forms only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collision_probability: Option<f64>,
+    /// Predicted 95th percentile of the executed path's miss (mm; as `collision_probability`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_error_p95: Option<f64>,
 }
 
 /// `insertion`: the posture of the needle at the entry.
@@ -181,6 +192,8 @@ fn entry(o: &FormOutcome, shown: bool) -> FormEntry {
                 .collect()
         }),
         points: None,
+        collision_probability: None,
+        target_error_p95: None,
     }
 }
 
@@ -223,6 +236,7 @@ pub fn plan_json(
 ) -> PlanJson {
     PlanJson {
         best: report.best().map(|b| BestPath::of(scenario, b, schedule)),
+        execution: None,
         forms: report.forms.iter().map(FormEntry::of).collect(),
         stats: StatsJson {
             time_us: stats.time_us,

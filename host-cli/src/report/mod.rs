@@ -5,6 +5,7 @@
 //! `needle send` prints through the same functions, so a plan from a device reads exactly like a
 //! local one.
 
+pub mod execution;
 pub mod json;
 pub mod schedule;
 pub mod sweep;

@@ -27,6 +27,9 @@ pub struct ScenarioFile {
     pub planner: Option<PlannerFile>,
     /// The needle driver (defaults 2.5 mm/s, 360 deg/s, 4 rev/s, 360 degrees).
     pub driver: Option<DriverFile>,
+    /// The world the plan is executed in: `mode` and the perturbation keys of
+    /// `needle simulate --perturb` (read by `execution::execution_of`).
+    pub execution: Option<toml::Table>,
     /// Directory of the file, for `polygon_file` paths (set by [`ScenarioFile::load`]).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -133,6 +136,9 @@ pub struct PlannerFile {
     pub risk: Option<String>,
     /// Smallest clearance a plan must keep (mm), default 0.
     pub min_clearance: Option<f32>,
+    /// Bound on the predicted probability that the executed plan enters an obstacle (off by
+    /// default).
+    pub max_collision_probability: Option<f32>,
 }
 
 impl ScenarioFile {

@@ -7,6 +7,7 @@
 pub mod approx;
 pub mod build;
 mod exact;
+pub mod execution;
 pub mod file;
 pub mod geometry;
 pub mod polygon;
@@ -15,5 +16,6 @@ pub mod unseen;
 pub mod write;
 
 pub use build::{load_scenario, load_scenario_shapes, parse_form, restrict};
+pub use execution::{load_execution, Execution, ExecutionMode};
 pub use file::ScenarioFile;
 pub use shapes::ObstacleShape;

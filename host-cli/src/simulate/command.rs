@@ -10,11 +10,12 @@ use super::setup::{Keep, Setup};
 use super::steering::summarise_steering;
 use super::summarise;
 use super::table::{closed_table, to_table, Header};
+use super::PlanBound;
 use crate::analysis::cli::output::{progress, title_of, OutputFile};
 use crate::analysis::parallel;
-use crate::scenario::{load_scenario_shapes, restrict, ObstacleShape};
+use crate::scenario::{load_execution, load_scenario_shapes, restrict, ObstacleShape};
 use anyhow::{anyhow, Context, Result};
-use needle_sim::{ClosedRun, Perturbation, Run, TrackerFaults};
+use needle_sim::{ClosedRun, Run, TrackerFaults};
 use std::io::Write;
 
 /// The runs made: open loop, closed loop, or both (`--compare-open-loop`).
@@ -55,10 +56,19 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
 
 /// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
 fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
-    let mut p = Perturbation::default();
+    // The scenario's `[execution]` is the world (the simulator's defaults where it is
+    // silent); `--perturb` changes the world, not what the planner was told.
+    let execution = load_execution(&a.file)?;
+    let mut p = execution.model;
     for kv in &a.perturb {
         p.apply(kv).context("--perturb")?;
     }
+    let bound = execution
+        .max_collision_probability
+        .map(|max_collision_probability| PlanBound {
+            model: execution.model,
+            max_collision_probability,
+        });
     let mut faults = TrackerFaults::default();
     for kv in &a.fault {
         faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
@@ -68,7 +78,8 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
     if let Some(f) = &a.form {
         restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
     }
-    Ok((Setup::new(scenario, p, faults, a.runs, a.seed)?, shapes))
+    let setup = Setup::bounded(scenario, p, faults, a.runs, a.seed, bound.as_ref())?;
+    Ok((setup, shapes))
 }
 
 /// The runs of the mode asked for, with a progress bar on a terminal (not with `--json`).

@@ -15,7 +15,9 @@ pub use args::{at_least_one, SimulateArgs};
 pub use command::run_simulate;
 
 use anyhow::{anyhow, Context, Result};
+use needle_sim::Perturbation;
 use needle_sim::Run;
+use planner_core::chance::plan_within_risk;
 use planner_core::execute::schedule::{schedule, Schedule};
 use planner_core::{FormOutcome, Scenario};
 
@@ -27,9 +29,39 @@ pub struct Prepared {
     pub schedule: Schedule,
 }
 
-/// Plans `scenario` (already restricted to the form asked for, if any) and schedules the best.
-pub fn prepare(scenario: &Scenario) -> Result<Prepared> {
-    let report = planner_core::plan(scenario).context("planning failed")?;
+/// A bound on the predicted collision probability the plan must keep, under a perturbation
+/// model (the scenario's `[execution]`, not the simulated world's: the planner is told what the
+/// scenario says, never the world's draws).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanBound {
+    /// The model the planner predicts with.
+    pub model: Perturbation,
+    /// The bound.
+    pub max_collision_probability: f32,
+}
+
+/// Plans `scenario` (already restricted to the form asked for, if any) and schedules the best;
+/// with a bound, the best must keep it (else an error saying so).
+pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepared> {
+    let report = match bound {
+        None => planner_core::plan(scenario).context("planning failed")?,
+        Some(b) => {
+            let c = plan_within_risk(scenario, &b.model, b.max_collision_probability)
+                .context("planning failed")?;
+            if c.planned.report.best().is_none() {
+                return Err(anyhow!(planner_core::PlanError::Unreachable));
+            }
+            if !c.within_bound {
+                return Err(anyhow!(
+                    "no plan keeps the predicted collision probability within {}: the best \
+                     found has {:.4}",
+                    b.max_collision_probability,
+                    c.risk.map_or(f32::NAN, |r| r.collision_probability)
+                ));
+            }
+            c.planned.report
+        }
+    };
     let outcome = report
         .best()
         .cloned()

@@ -4,7 +4,7 @@
 //! outputs need ([`Keep`]), so that memory grows with `--runs` by a few numbers a run, not by
 //! every run's path and steps.
 
-use super::{prepare, run_seed, Prepared};
+use super::{prepare, run_seed, PlanBound, Prepared};
 use crate::analysis::parallel;
 use anyhow::{anyhow, Result};
 use needle_sim::{
@@ -111,8 +111,20 @@ impl Setup {
         runs: usize,
         seed: u64,
     ) -> Result<Setup> {
+        Setup::bounded(scenario, perturbation, faults, runs, seed, None)
+    }
+
+    /// [`Setup::new`], the plan made under `bound` when given.
+    pub fn bounded(
+        scenario: Scenario,
+        perturbation: Perturbation,
+        faults: TrackerFaults,
+        runs: usize,
+        seed: u64,
+        bound: Option<&PlanBound>,
+    ) -> Result<Setup> {
         perturbation.validate()?;
-        let prepared = prepare(&scenario)?;
+        let prepared = prepare(&scenario, bound)?;
         let planned = Planned::of(&scenario, &prepared.outcome);
         Ok(Setup {
             scenario,
