@@ -245,22 +245,53 @@ fn segment_steps(
         if !(seg.length > 0.0) {
             continue;
         }
-        let length_mm = seg.length;
-        let push_s = length_mm / d.insert_speed;
-        match seg.kind {
-            SegmentKind::Arc => push(&mut steps, Op::Insert { length_mm }, push_s)?,
-            SegmentKind::Line => {
-                let least = MIN_SPIN_RAD_PER_MM * length_mm / (2.0 * PI);
-                let turns = even_turns((d.spin_rate * push_s).max(least)).ok_or(
-                    ScheduleError::Driver(PlanError::OutOfRange(Field::SpinRate)),
-                )?;
-                twist.spin();
-                let duration_s = push_s.max(turns as f32 / d.spin_rate);
-                push(&mut steps, Op::InsertSpin { length_mm, turns }, duration_s)?;
-            }
+        if seg.kind == SegmentKind::Line {
+            twist.spin();
         }
+        let step = insertion_step(d, seg.kind, seg.length)?;
+        push(&mut steps, step.op, step.duration_s)?;
     }
     Ok(steps)
+}
+
+/// The driver's step that inserts `length_mm` along a segment of `kind`: a push for an arc, a
+/// spun push (whole turns, an even number, fast enough to straighten the line) for a line, with
+/// the time it takes.
+pub fn insertion_step(
+    d: &Driver,
+    kind: SegmentKind,
+    length_mm: f32,
+) -> Result<Step, ScheduleError> {
+    let push_s = length_mm / d.insert_speed;
+    Ok(match kind {
+        SegmentKind::Arc => Step {
+            op: Op::Insert { length_mm },
+            duration_s: push_s,
+        },
+        SegmentKind::Line => {
+            let least = MIN_SPIN_RAD_PER_MM * length_mm / (2.0 * PI);
+            let turns = even_turns((d.spin_rate * push_s).max(least)).ok_or(
+                ScheduleError::Driver(PlanError::OutOfRange(Field::SpinRate)),
+            )?;
+            Step {
+                op: Op::InsertSpin { length_mm, turns },
+                duration_s: push_s.max(turns as f32 / d.spin_rate),
+            }
+        }
+    })
+}
+
+/// `step` with its insertion (or rotation) changed to `amount` (mm, or degrees), its time and a
+/// spin's turns made consistent with it.
+pub fn resized_step(d: &Driver, step: &Step, amount: f32) -> Result<Step, ScheduleError> {
+    match step.op {
+        Op::Rotate { .. } => Ok(Step {
+            op: Op::Rotate { angle_deg: amount },
+            duration_s: libm::fabsf(amount) / d.rotate_speed,
+        }),
+        Op::Insert { .. } => insertion_step(d, SegmentKind::Arc, amount),
+        Op::InsertSpin { .. } => insertion_step(d, SegmentKind::Line, amount),
+    }
 }
 
 fn push(steps: &mut Steps, op: Op, duration_s: f32) -> Result<(), ScheduleError> {

@@ -207,17 +207,24 @@ pub struct SteerConfig {
     /// it this close to the target as last seen (mm); farther, the run ends
     /// [`StopReason::Missed`].
     pub reach_tolerance_mm: f32,
+    /// A continuation turns the bevel only by more than this (degrees): a smaller turn is left
+    /// out (and the continuation checked without it). Below the shaft's torsional play a turn
+    /// of the base does not reach the tip at all; above it, a controller that turns by tenths of
+    /// a degree at every reading only wears the driver.
+    pub rotation_dead_band_deg: f32,
 }
 
 impl SteerConfig {
     /// The defaults: the literature noise model, re-plan beyond 0.05 mm, 10 iterations per
-    /// attempt, tracking lost after 10 mm without a fix, the target reached within 1 mm.
+    /// attempt, tracking lost after 10 mm without a fix, the target reached within 1 mm, no turn
+    /// of the bevel under 2 degrees.
     pub const DEFAULT: SteerConfig = SteerConfig {
         noise: NoiseModel::DEFAULT,
         replan_error_mm: 0.05,
         iterations: 10,
         max_gap_mm: 10.0,
         reach_tolerance_mm: 1.0,
+        rotation_dead_band_deg: 2.0,
     };
 
     /// Every figure finite and positive.
@@ -230,6 +237,8 @@ impl SteerConfig {
             && self.max_gap_mm > 0.0
             && self.reach_tolerance_mm.is_finite()
             && self.reach_tolerance_mm > 0.0
+            && self.rotation_dead_band_deg.is_finite()
+            && (0.0..180.0).contains(&self.rotation_dead_band_deg)
     }
 }
 

@@ -127,6 +127,16 @@ fn wrapped_deg(rad: f32) -> f32 {
     d
 }
 
+/// `deg`, or no turn at all when it is within `band` of a whole turn.
+fn dead_banded(deg: f32, band: f32) -> f32 {
+    let off = libm::fmodf(libm::fabsf(deg), 360.0);
+    if off < band || 360.0 - off < band {
+        0.0
+    } else {
+        deg
+    }
+}
+
 /// What a replan needs: the scenario, the estimate, and the budget.
 pub struct ReplanInput<'a> {
     /// The planning problem (obstacles, weights, bounds, driver).
@@ -145,6 +155,8 @@ pub struct ReplanInput<'a> {
     pub margin: f32,
     /// Needle inserted so far (mm): a continuation inserts at most the rest of its length.
     pub inserted_mm: f32,
+    /// Bevel turns smaller than this are left out of a continuation (degrees).
+    pub dead_band_deg: f32,
 }
 
 /// A continuation that passed the check.
@@ -207,9 +219,9 @@ fn attempt(
     spent.1 += sol.iterations;
     let lengths = p.lengths(&sol.eval.x);
     let bevels = p.bevels(&sol.eval.x);
-    let mut segments = Segments::new();
+    let mut exact = Segments::new();
     for i in 0..form.len() {
-        segments
+        exact
             .push(SegmentPlan {
                 kind: form.kind(i),
                 length: lengths[i],
@@ -217,8 +229,27 @@ fn attempt(
             })
             .ok()?;
     }
+    // The same continuation without its turns under the dead band, when it still passes: a
+    // turn is commanded only where the path needs it.
+    let mut banded = exact.clone();
+    for seg in banded.iter_mut() {
+        seg.bevel_deg = dead_banded(seg.bevel_deg, input.dead_band_deg);
+    }
+    if banded != exact {
+        if let Some(found) = checked(input, &banded, spent) {
+            return Some(found);
+        }
+    }
+    checked(input, &exact, spent)
+}
+
+/// `segments` from the tip as motor steps, if executing them passes the check: the target
+/// within tolerance, every clearance above the floor and the margin, the needle's length and
+/// the twist limit kept.
+#[inline(never)]
+fn checked(input: &ReplanInput, segments: &[SegmentPlan], spent: &(u32, u32)) -> Option<Replanned> {
     let (steps, peak) =
-        continuation_steps(&input.scenario.driver, &segments, input.twist_deg).ok()?;
+        continuation_steps(&input.scenario.driver, segments, input.twist_deg).ok()?;
     let prediction = predict(
         input.scenario,
         &input.tip,
@@ -398,6 +429,7 @@ mod tests {
             iterations: 10,
             margin: 0.3,
             inserted_mm: 0.0,
+            dead_band_deg: 0.0,
         };
         let (found, evaluations, iterations) = replan(&input, &remaining);
         let found = found.expect("a continuation");

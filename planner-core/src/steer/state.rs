@@ -6,7 +6,7 @@ use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
 };
 use crate::execute::nominal::posture_frame;
-use crate::execute::schedule::{Op, Schedule, Step, Steps, MAX_STEPS};
+use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::Scenario;
@@ -149,13 +149,14 @@ impl Steering {
         for i in self.cursor..self.steps.len() {
             let mut step = self.steps[i];
             if i == self.cursor {
-                let left = (self.end_depth[i] - self.depth).max(0.0);
-                match &mut step.op {
-                    Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
-                        *length_mm = left;
+                let left = match step.op {
+                    Op::Insert { .. } | Op::InsertSpin { .. } => {
+                        (self.end_depth[i] - self.depth).max(0.0)
                     }
-                    Op::Rotate { angle_deg } => *angle_deg = self.end_base[i] - self.base,
-                }
+                    Op::Rotate { .. } => self.end_base[i] - self.base,
+                };
+                // A validated driver always has a step for what is left.
+                step = resized_step(&self.scenario.driver, &step, left).unwrap_or(step);
             }
             let _ = out.push(step);
         }
@@ -345,6 +346,7 @@ impl Steering {
                 iterations: self.config.iterations,
                 margin,
                 inserted_mm: self.depth,
+                dead_band_deg: self.config.rotation_dead_band_deg,
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);
@@ -378,12 +380,11 @@ impl Steering {
         let mut steps = remaining.clone();
         let last = steps.last_mut()?;
         let along = (self.estimate.target - now.end.p).dot(&now.end.e3());
-        match &mut last.op {
-            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => {
-                *length_mm = (*length_mm + along).max(0.0);
-            }
+        let length = match last.op {
+            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => length_mm,
             Op::Rotate { .. } => return None,
-        }
+        };
+        *last = resized_step(&self.scenario.driver, last, (length + along).max(0.0)).ok()?;
         let prediction = self.predict(&steps);
         let floor = self.scenario.options.min_clearance + 2.0 * self.estimate.position_sd();
         let better = prediction.target_error + 1e-4 < now.target_error;

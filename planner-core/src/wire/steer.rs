@@ -40,7 +40,7 @@ impl MaxSize for NoiseModel {
     const MAX_SIZE: usize = 10 * f32::MAX_SIZE;
 }
 impl MaxSize for SteerConfig {
-    const MAX_SIZE: usize = NoiseModel::MAX_SIZE + 3 * f32::MAX_SIZE + u32::MAX_SIZE;
+    const MAX_SIZE: usize = NoiseModel::MAX_SIZE + 4 * f32::MAX_SIZE + u32::MAX_SIZE;
 }
 
 // A step's bound is what `Steps` counts with.
