@@ -52,7 +52,10 @@ fn the_dead_band_cuts_the_turns_not_the_accuracy() {
         ..SteerConfig::DEFAULT
     });
     println!("turns per insertion (median), turns under 2 degrees, mean error: with {banded:?}, without {unbanded:?}");
-    assert!(5 * banded.0 < 2 * unbanded.0, "{banded:?} against {unbanded:?}");
+    assert!(
+        5 * banded.0 < 2 * unbanded.0,
+        "{banded:?} against {unbanded:?}"
+    );
     assert!(5 * banded.1 < unbanded.1, "{banded:?} against {unbanded:?}");
     assert!(
         banded.2 < unbanded.2 + 0.05,
