@@ -45,7 +45,7 @@ fn reproduces_every_form(scenario: &Scenario) -> usize {
             .map(|i| geo.starts[i].p)
             .collect();
         let mut executed = Vec::new();
-        let end = execute(scenario, &s, |start, _, _| executed.push(start.p));
+        let end = execute(scenario, &s, |start, _, _, _| executed.push(start.p));
         assert_eq!(planned.len(), executed.len(), "{}", o.form);
         for (a, b) in planned.iter().zip(&executed) {
             assert!(dist(*a, *b) < 1e-3, "{}: {a} vs {b}", o.form);
@@ -93,6 +93,7 @@ fn durations_follow_the_driver_and_lines_spin_fast_enough() {
                     assert!(spin >= MIN_SPIN_RAD_PER_MM * length_mm);
                     assert!(turns as f32 / step.duration_s <= d.spin_rate * 1.0001);
                 }
+                Op::InsertDuty { .. } => panic!("a plan's schedule has no duty-cycled push"),
             }
             total += step.duration_s;
         }
@@ -142,7 +143,7 @@ fn rotations_go_the_long_way_rather_than_past_the_twist_limit() {
     assert_eq!(s.max_twist_deg, 340.0);
     // The bevel ends where the plan puts it either way round.
     let geo = rebuild(&scenario, o.form, &o.insertion, &o.segments);
-    let end = execute(&scenario, &s, |_, _, _| {});
+    let end = execute(&scenario, &s, |_, _, _, _| {});
     assert!(dist(end.p, geo.end()) < 1e-3);
 }
 

@@ -87,14 +87,15 @@ impl Bench {
         'steps: loop {
             let steps = self.steps.clone();
             for step in &steps {
-                let pieces: Vec<(SegmentKind, f32)> = match step.op {
-                    Op::Rotate { angle_deg } => {
-                        self.base += angle_deg;
-                        self.tip = self.tip.rolled(angle_deg.to_radians());
-                        vec![]
+                let (pieces, radius) = match step.op.segment(radius) {
+                    None => {
+                        if let Op::Rotate { angle_deg } = step.op {
+                            self.base += angle_deg;
+                            self.tip = self.tip.rolled(angle_deg.to_radians());
+                        }
+                        (vec![], radius)
                     }
-                    Op::Insert { length_mm } => pieces(SegmentKind::Arc, length_mm),
-                    Op::InsertSpin { length_mm, .. } => pieces(SegmentKind::Line, length_mm),
+                    Some((kind, length, r)) => (pieces(kind, length), r),
                 };
                 let mut replies = Vec::new();
                 if pieces.is_empty() {
@@ -166,7 +167,7 @@ fn a_schedule_that_ends_short_is_missed_not_reached() {
         let last = sched.steps.len() - 1;
         match &mut sched.steps[last].op {
             Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => *length_mm -= cut,
-            Op::Rotate { .. } => panic!("a schedule ends with an insertion"),
+            _ => panic!("a plan's schedule ends with an insertion"),
         }
         let mut b = Bench::new(s.clone());
         b.steering = Steering::start(&s, &sched, &config).unwrap();
@@ -283,7 +284,7 @@ fn a_tip_headed_into_an_obstacle_stops_with_no_safe_continuation() {
 /// The smallest clearance of `steps` executed from `tip` (exact, spheres).
 fn clearance_of(s: &Scenario, tip: &Frame, steps: &[Step], radius: f32) -> f32 {
     let mut least = f32::INFINITY;
-    execute_from(*tip, steps, radius, |start, kind, len| {
+    execute_from(*tip, steps, radius, |start, kind, len, radius| {
         for o in &s.obstacles {
             let c = V3::new(o.center[0], o.center[1], o.center[2]);
             least = least.min(closest(start, kind, len, radius, &c).distance - o.radius);

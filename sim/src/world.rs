@@ -98,6 +98,7 @@ enum Last {
     Rotate,
     Insert,
     Spin,
+    Duty,
 }
 
 /// One simulated insertion in progress.
@@ -153,7 +154,7 @@ fn executed_part(step: &Step, inserted_mm: f32) -> Step {
     let mut part = *step;
     match &mut part.op {
         Op::Rotate { .. } => {}
-        Op::Insert { length_mm } => {
+        Op::Insert { length_mm } | Op::InsertDuty { length_mm, .. } => {
             let share = share(*length_mm);
             if share < 1.0 {
                 part.duration_s *= share;
@@ -364,9 +365,52 @@ impl World {
                 draw.tip_rotation_deg = self.spin_settles();
                 done
             }
+            Op::InsertDuty { length_mm, duty } => {
+                self.duty_cycled(length_mm, duty, &mut draw, &mut on_measure)
+            }
         };
         self.drawn.steps.push(draw);
         self.executed.push(executed_part(step, done.inserted_mm));
+        done
+    }
+
+    /// A duty-cycled push: the held share bends the needle by `duty` of its (perturbed)
+    /// curvature towards the bevel, the spun share drifts as a spun line does; both draws are
+    /// fresh after any other step. One arc carries the sum of the two curvatures.
+    fn duty_cycled(
+        &mut self,
+        length_mm: f32,
+        duty: f32,
+        draw: &mut StepDraw,
+        on_measure: &mut impl FnMut(&Measurement) -> ControlFlow<()>,
+    ) -> Executed {
+        if self.last != Last::Duty {
+            self.segment_factor = 1.0 + normal(&mut self.physics, self.p.segment_curvature_spread);
+            let sd = self.p.line_drift_mm_per_mm;
+            self.line_drift = [0; 2].map(|_| normal(&mut self.physics, sd));
+        }
+        self.last = Last::Duty;
+        draw.segment_factor = self.segment_factor;
+        draw.drift = self.line_drift;
+        let factor = (self.drawn.curvature_factor * self.segment_factor).max(MIN_FACTOR);
+        let bend = duty.clamp(0.0, 1.0) * factor / self.scenario.needle.curvature_radius;
+        let [d1, d2] = self.line_drift;
+        let across = [
+            2.0 * d1 / DRIFT_REFERENCE_MM,
+            bend + 2.0 * d2 / DRIFT_REFERENCE_MM,
+        ];
+        let size = libm::sqrtf(across[0] * across[0] + across[1] * across[1]);
+        let done = if size == 0.0 {
+            let radius = self.scenario.needle.curvature_radius;
+            self.push(SegmentKind::Line, length_mm, radius, draw, on_measure)
+        } else {
+            let roll = libm::atan2f(-across[0], across[1]);
+            self.tip = self.tip.rolled(roll);
+            let done = self.push(SegmentKind::Arc, length_mm, 1.0 / size, draw, on_measure);
+            self.tip = self.tip.rolled(-roll);
+            done
+        };
+        draw.tip_rotation_deg = self.spin_settles();
         done
     }
 

@@ -63,7 +63,7 @@ fn no_perturbation_follows_every_plan() {
             let s = schedule(&scenario, &o).unwrap();
             let planned = Planned::of(&scenario, &o);
             let r = open_loop(&scenario, &planned, &s, &Perturbation::none(), 3).unwrap();
-            let nominal_end = nominal::execute(&scenario, &s, |_, _, _| {}).p;
+            let nominal_end = nominal::execute(&scenario, &s, |_, _, _, _| {}).p;
             let e = end(&r);
             let miss =
                 (nominal_end - planner_core::model::kinematics::V3::new(e[0], e[1], e[2])).norm();
@@ -144,7 +144,7 @@ fn a_torsional_lag_turns_the_bend_plane() {
                 }
                 rotations += 1;
             }
-            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => depth += length_mm,
+            op => depth += op.inserted_mm(),
         }
     }
     assert!(rotations >= 1);
@@ -350,4 +350,53 @@ fn bad_perturbations_are_typed_errors() {
     assert!(World::new(&scenario, &s.posture, &p, 0).is_err());
     p.measure_every_mm = f32::INFINITY;
     assert!(World::new(&scenario, &s.posture, &p, 0).is_err());
+}
+
+/// A duty-cycled push executed without perturbation ends where its curvature says (an arc of
+/// radius r / duty in the bevel's plane, as the nominal model has it); with the default
+/// perturbation it strays both ways, by its curvature error and its drift.
+#[test]
+fn a_duty_cycled_push_bends_by_its_share_of_the_curvature() {
+    use planner_core::execute::nominal::execute_from;
+    use planner_core::execute::schedule::duty_step;
+    use planner_core::SegmentKind;
+    let scenario = Scenario::paper();
+    let (_, s) = form(&scenario, "R");
+    let r = scenario.needle.curvature_radius;
+    for duty in [0.0, 0.25, 0.5, 1.0] {
+        let step = duty_step(&scenario.driver, 40.0, duty);
+        let mut world = World::new(&scenario, &s.posture, &Perturbation::none(), 1).unwrap();
+        let start = world.tip();
+        world.execute(&step, |_| ControlFlow::Continue(()));
+        let nominal = execute_from(start, &[step], r, |_, _, _, _| {});
+        let expected = if duty > 0.0 {
+            start.advanced(SegmentKind::Arc, 40.0, r / duty)
+        } else {
+            start.advanced(SegmentKind::Line, 40.0, r)
+        };
+        assert!((world.tip().p - expected.p).norm() < 1e-3, "duty {duty}");
+        assert!((nominal.p - expected.p).norm() < 1e-4, "duty {duty}");
+        // The bend is towards the bevel and grows with the duty.
+        let side = (expected.p - start.p).dot(&start.e2());
+        assert!(
+            (side - r / duty.max(1e-9) * (1.0 - (40.0 * duty / r).cos())).abs() < 1e-3
+                || duty == 0.0
+        );
+    }
+    let step = duty_step(&scenario.driver, 40.0, 0.5);
+    let ends: Vec<_> = (0..50)
+        .map(|seed| {
+            let mut w = World::new(&scenario, &s.posture, &Perturbation::default(), seed).unwrap();
+            w.execute(&step, |_| ControlFlow::Continue(()));
+            (w.tip().p, w.drawn().steps[0])
+        })
+        .collect();
+    assert!(ends
+        .iter()
+        .all(|(_, d)| d.drift != [0.0; 2] && d.segment_factor != 1.0));
+    let spread = ends
+        .iter()
+        .map(|(p, _)| (p - ends[0].0).norm())
+        .fold(0.0f32, f32::max);
+    assert!(spread > 0.1, "{spread}");
 }

@@ -111,8 +111,10 @@ fn plane_seed_130_rl_planned_alone() {
     assert_form_agrees(true, 130, "RL", Ask::EachForm);
 }
 
-/// Fixed by merging same-side arcs in the sweep. RRR whose only feasible paths loop (L = 325.7 mm, theta1 at the -60 degree bound, the last
-/// two arcs on one circle): reported infeasible.
+/// RRR whose only paths loop (L = 325.7 mm, theta1 at the -60 degree bound, the last two arcs
+/// on one circle): once reported infeasible where the reference found the loop (fixed by merging
+/// same-side arcs in the sweep); now infeasible for both, the loop being longer than the needle
+/// (200 mm) and its joined arcs longer than the longest arc.
 #[test]
 fn plane_seed_102_rrr_long_loop() {
     assert_form_agrees(true, 102, "RRR", Ask::AllForms);

@@ -62,6 +62,8 @@ fn words(s: &Schedule) -> Vec<(String, u32)> {
             Op::Rotate { angle_deg } => (0, angle_deg, 0),
             Op::Insert { length_mm } => (1, length_mm, 0),
             Op::InsertSpin { length_mm, turns } => (2, length_mm, turns),
+            // A plan's schedule has none; compared all the same, the duty's bits as the turns.
+            Op::InsertDuty { length_mm, duty } => (3, length_mm, duty.to_bits()),
         };
         w.push((format!("step {n} op"), tag));
         w.push((format!("step {n} angle or length"), value.to_bits()));

@@ -36,7 +36,8 @@ pub struct PostureJson {
 }
 
 /// One entry of `best.schedule.steps`: `op` is `rotate` (with `angle_deg`), `insert` (with
-/// `length_mm`) or `insert_spin` (with `length_mm` and `turns`).
+/// `length_mm`), `insert_spin` (with `length_mm` and `turns`) or, in a steered run's steps,
+/// `insert_duty` (with `length_mm` and `duty`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct StepJson {
@@ -51,6 +52,9 @@ pub struct StepJson {
     /// Whole spin turns, alternating direction: `insert_spin` only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub turns: Option<u32>,
+    /// Share of the push with the bevel held (the rest spun): `insert_duty` only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duty: Option<f64>,
     /// How long the step takes (s).
     pub duration_s: f64,
 }
@@ -61,6 +65,7 @@ pub fn op_name(op: &Op) -> &'static str {
         Op::Rotate { .. } => "rotate",
         Op::Insert { .. } => "insert",
         Op::InsertSpin { .. } => "insert_spin",
+        Op::InsertDuty { .. } => "insert_duty",
     }
 }
 
@@ -92,14 +97,21 @@ impl StepJson {
     pub fn of(op: &Op, duration_s: f32) -> StepJson {
         let (angle_deg, length_mm, turns) = match *op {
             Op::Rotate { angle_deg } => (Some(angle_deg), None, None),
-            Op::Insert { length_mm } => (None, Some(length_mm), None),
+            Op::Insert { length_mm } | Op::InsertDuty { length_mm, .. } => {
+                (None, Some(length_mm), None)
+            }
             Op::InsertSpin { length_mm, turns } => (None, Some(length_mm), Some(turns)),
+        };
+        let duty = match *op {
+            Op::InsertDuty { duty, .. } => Some(f64::from(duty)),
+            _ => None,
         };
         StepJson {
             op: op_name(op).to_owned(),
             angle_deg: angle_deg.map(f64::from),
             length_mm: length_mm.map(f64::from),
             turns,
+            duty,
             duration_s: f64::from(duration_s),
         }
     }

@@ -27,7 +27,7 @@ pub fn posture_frame(scenario: &Scenario, schedule: &Schedule) -> Frame {
 pub fn execute(
     scenario: &Scenario,
     schedule: &Schedule,
-    segment: impl FnMut(&Frame, SegmentKind, f32),
+    segment: impl FnMut(&Frame, SegmentKind, f32, f32),
 ) -> Frame {
     let radius = scenario.needle.curvature_radius;
     execute_from(
@@ -39,34 +39,33 @@ pub fn execute(
 }
 
 /// Executes `steps` on a nominal needle of arc radius `radius` whose tip starts at `tip`, as
-/// [`execute`] does.
+/// [`execute`] does; `segment(start, kind, length, radius)` sees each segment with its own
+/// radius (a duty-cycled push bends less).
 pub fn execute_from(
     mut tip: Frame,
     steps: &[Step],
     radius: f32,
-    mut segment: impl FnMut(&Frame, SegmentKind, f32),
+    mut segment: impl FnMut(&Frame, SegmentKind, f32, f32),
 ) -> Frame {
     for step in steps {
-        let (kind, length) = match step.op {
-            Op::Rotate { angle_deg } => {
+        // Whole turns in alternating directions (spins, duty cycling) leave the bevel where it
+        // was.
+        let Some((kind, length, r)) = step.op.segment(radius) else {
+            if let Op::Rotate { angle_deg } = step.op {
                 tip = tip.rolled(angle_deg.to_radians());
-                continue;
             }
-            Op::Insert { length_mm } => (SegmentKind::Arc, length_mm),
-            // Whole turns in alternating directions leave the bevel where it was.
-            Op::InsertSpin { length_mm, .. } => (SegmentKind::Line, length_mm),
+            continue;
         };
-        segment(&tip, kind, length);
-        tip = tip.advanced(kind, length, radius);
+        segment(&tip, kind, length, r);
+        tip = tip.advanced(kind, length, r);
     }
     tip
 }
 
 /// Visits the nominal tip path from the entry, points at most `spacing` mm apart.
 pub fn sample(scenario: &Scenario, schedule: &Schedule, spacing: f32, mut visit: impl FnMut(V3)) {
-    let radius = scenario.needle.curvature_radius;
     let mut first = true;
-    execute(scenario, schedule, |start, kind, length| {
+    execute(scenario, schedule, |start, kind, length, radius| {
         if first {
             visit(start.p);
             first = false;
@@ -85,7 +84,7 @@ pub fn peak_twist(schedule: &Schedule) -> f32 {
     for step in &schedule.steps {
         match step.op {
             Op::Rotate { angle_deg } => now += angle_deg,
-            Op::InsertSpin { .. } => {
+            Op::InsertSpin { .. } | Op::InsertDuty { .. } => {
                 let turn = if now > 0.0 { -360.0 } else { 360.0 };
                 peak = peak.max(libm::fabsf(now + turn));
             }
@@ -111,9 +110,8 @@ pub struct ScheduleVerdict {
 
 /// Re-checks a schedule against the scenario by executing it (exact clearances per segment).
 pub fn check(scenario: &Scenario, schedule: &Schedule) -> ScheduleVerdict {
-    let radius = scenario.needle.curvature_radius;
     let mut min_clearance = f32::INFINITY;
-    let end = execute(scenario, schedule, |start, kind, length| {
+    let end = execute(scenario, schedule, |start, kind, length, radius| {
         for ob in &scenario.obstacles {
             let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
             let d = closest(start, kind, length, radius, &c).distance - ob.radius;

@@ -44,6 +44,42 @@ pub enum Op {
         /// Whole turns (even, so the spin ends where it began).
         turns: u32,
     },
+    /// Push `length_mm` duty-cycled: the share `duty` of it with the bevel held where it is, the
+    /// rest spinning (whole turns at the driver's spin rate, alternating, interleaved finely): an
+    /// arc of curvature `duty` times the needle's towards the bevel (Minhas et al. 2007; the seed
+    /// paper's DR paths). The steering's corrections; a plan never contains one.
+    InsertDuty {
+        /// Insertion (mm).
+        length_mm: f32,
+        /// Share of the push with the bevel held, in [0, 1].
+        duty: f32,
+    },
+}
+
+impl Op {
+    /// The needle this step inserts (mm; 0 for a rotation).
+    pub fn inserted_mm(&self) -> f32 {
+        match *self {
+            Op::Rotate { .. } => 0.0,
+            Op::Insert { length_mm }
+            | Op::InsertSpin { length_mm, .. }
+            | Op::InsertDuty { length_mm, .. } => length_mm,
+        }
+    }
+
+    /// The path this step drives on a needle of arc radius `radius`: the kind, length and
+    /// radius of its segment (`None` for a rotation).
+    pub fn segment(&self, radius: f32) -> Option<(SegmentKind, f32, f32)> {
+        match *self {
+            Op::Rotate { .. } => None,
+            Op::Insert { length_mm } => Some((SegmentKind::Arc, length_mm, radius)),
+            Op::InsertSpin { length_mm, .. } => Some((SegmentKind::Line, length_mm, radius)),
+            Op::InsertDuty { length_mm, duty } if duty > 0.0 => {
+                Some((SegmentKind::Arc, length_mm, radius / duty.min(1.0)))
+            }
+            Op::InsertDuty { length_mm, .. } => Some((SegmentKind::Line, length_mm, radius)),
+        }
+    }
 }
 
 /// A command and how long the driver takes for it.
@@ -291,6 +327,47 @@ pub fn resized_step(d: &Driver, step: &Step, amount: f32) -> Result<Step, Schedu
         }),
         Op::Insert { .. } => insertion_step(d, SegmentKind::Arc, amount),
         Op::InsertSpin { .. } => insertion_step(d, SegmentKind::Line, amount),
+        Op::InsertDuty { duty, .. } => Ok(duty_step(d, amount, duty)),
+    }
+}
+
+/// The steps of a duty-cycled correction from a shaft twisted by `twist_deg`: the bevel turned
+/// by `bevel_deg` (left out when 0), then `length_mm` pushed at `duty`; with the largest twist
+/// they reach.
+pub fn duty_continuation(
+    driver: &Driver,
+    bevel_deg: f32,
+    length_mm: f32,
+    duty: f32,
+    twist_deg: f32,
+) -> Result<(Steps, f32), ScheduleError> {
+    driver.validate().map_err(ScheduleError::Driver)?;
+    let mut twist = Twist {
+        now: twist_deg,
+        peak: libm::fabsf(twist_deg),
+        limit: driver.max_twist_deg,
+    };
+    let mut steps = Steps::new();
+    if bevel_deg != 0.0 {
+        let angle_deg = twist.rotation(bevel_deg);
+        let duration_s = libm::fabsf(angle_deg) / driver.rotate_speed;
+        push(&mut steps, Op::Rotate { angle_deg }, duration_s)?;
+    }
+    twist.spin();
+    let step = duty_step(driver, length_mm, duty);
+    push(&mut steps, step.op, step.duration_s)?;
+    Ok((steps, twist.peak))
+}
+
+/// A duty-cycled push of `length_mm` at `duty` (clamped to [0, 1]), with the time it takes:
+/// the insertion's, the spins riding on it.
+pub fn duty_step(d: &Driver, length_mm: f32, duty: f32) -> Step {
+    Step {
+        op: Op::InsertDuty {
+            length_mm,
+            duty: crate::fmath::clamp(duty, 0.0, 1.0),
+        },
+        duration_s: length_mm / d.insert_speed,
     }
 }
 

@@ -194,27 +194,30 @@ pub fn propagate(
     let mut tip = spread_at(&src, &Partial::NONE, p, depth, planned.p, mean.p);
     visit(&tip);
     for step in &schedule.steps {
-        let (kind, length) = match step.op {
-            Op::Rotate { angle_deg } => {
+        let Some((kind, length, r)) = step.op.segment(radius) else {
+            if let Op::Rotate { angle_deg } = step.op {
                 planned = planned.rolled(angle_deg.to_radians());
                 mean = mean.rolled(torsion.rotate(angle_deg, depth).to_radians());
-                last = None;
-                continue;
             }
-            Op::Insert { length_mm } => (SegmentKind::Arc, length_mm),
-            Op::InsertSpin { length_mm, .. } => (SegmentKind::Line, length_mm),
+            last = None;
+            continue;
         };
-        if last != Some(kind) {
+        // A duty-cycled push bends by its share of the curvature and drifts as a spun line:
+        // the world draws its factor and its drift afresh after any other step.
+        let duty = matches!(step.op, Op::InsertDuty { .. });
+        let key = (kind, duty);
+        if last != Some(key) {
             src.flush(p);
         }
-        last = Some(kind);
+        last = Some(key);
         let pieces = libm::ceilf(length / spacing).max(1.0) as u32;
         let advance_sd = p.insertion_error_mm * crate::fmath::sqrt(length.max(0.0) / 100.0);
         for k in 1..=pieces {
             let t = length * k as f32 / pieces as f32;
-            let part = Partial::of(kind, &mean, t, radius, advance_sd * t / length.max(1e-6));
-            let at_planned = planned.point_at(kind, t, radius);
-            let at_mean = mean.point_at(kind, t, radius);
+            let shared = advance_sd * t / length.max(1e-6);
+            let part = Partial::of(kind, duty, &mean, t, r, shared);
+            let at_planned = planned.point_at(kind, t, r);
+            let at_mean = mean.point_at(kind, t, r);
             tip = spread_at(&src, &part, p, depth + t, at_planned, at_mean);
             visit(&tip);
             if k == pieces {
@@ -222,9 +225,9 @@ pub fn propagate(
             }
         }
         depth += length;
-        planned = planned.advanced(kind, length, radius);
-        mean = mean.advanced(kind, length, radius);
-        if kind == SegmentKind::Line {
+        planned = planned.advanced(kind, length, r);
+        mean = mean.advanced(kind, length, r);
+        if kind == SegmentKind::Line || duty {
             mean = mean.rolled(torsion.spin_settles(depth).to_radians());
         }
     }
@@ -261,18 +264,27 @@ impl Partial {
         advance_sd: 0.0,
     };
 
-    /// A push of `kind` from `start`, `t` mm into it; the advance error drawn for the whole push
-    /// is shared out along it (`advance_sd` at `t`).
-    fn of(kind: SegmentKind, start: &Frame, t: f32, radius: f32, advance_sd: f32) -> Partial {
+    /// A push of `kind` (duty-cycled or not) from `start`, `t` mm into it; the advance error
+    /// drawn for the whole push is shared out along it (`advance_sd` at `t`).
+    fn of(
+        kind: SegmentKind,
+        duty: bool,
+        start: &Frame,
+        t: f32,
+        radius: f32,
+        advance_sd: f32,
+    ) -> Partial {
         let end = start.advanced(kind, t, radius);
         let mut part = Partial {
             advance: advance_twist(kind, &end, radius),
             advance_sd,
             ..Partial::NONE
         };
-        match kind {
-            SegmentKind::Arc => part.curvature = curvature_twist(start, t, radius),
-            SegmentKind::Line => part.drift = drift_twists(start, t),
+        if kind == SegmentKind::Arc {
+            part.curvature = curvature_twist(start, t, radius);
+        }
+        if kind == SegmentKind::Line || duty {
+            part.drift = drift_twists(start, t);
         }
         part
     }

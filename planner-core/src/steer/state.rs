@@ -111,7 +111,7 @@ impl Steering {
         for (i, step) in steps.iter().take(MAX_STEPS).enumerate() {
             match step.op {
                 Op::Rotate { angle_deg } => base += angle_deg,
-                Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => depth += length_mm,
+                op => depth += op.inserted_mm(),
             }
             self.end_depth[i] = depth;
             self.end_base[i] = base;
@@ -131,16 +131,16 @@ impl Steering {
         }
     }
 
-    /// The kind of the insertion in progress: the first insertion not yet done.
-    fn kind_in_progress(&self) -> SegmentKind {
+    /// The insertion in progress (the first not yet done): its segment's kind and radius, and
+    /// whether the shaft spins during it (a spun line, a duty-cycled push).
+    fn insertion_in_progress(&self) -> (SegmentKind, f32, bool) {
+        let radius = self.scenario.needle.curvature_radius;
         for step in self.steps.iter().skip(self.cursor) {
-            match step.op {
-                Op::Insert { .. } => return SegmentKind::Arc,
-                Op::InsertSpin { .. } => return SegmentKind::Line,
-                Op::Rotate { .. } => {}
+            if let Some((kind, _, r)) = step.op.segment(radius) {
+                return (kind, r, !matches!(step.op, Op::Insert { .. }));
             }
         }
-        self.last_kind.unwrap_or(SegmentKind::Line)
+        (self.last_kind.unwrap_or(SegmentKind::Line), radius, true)
     }
 
     /// What remains of the continuation: the step in progress cut to what is left of it.
@@ -150,10 +150,8 @@ impl Steering {
             let mut step = self.steps[i];
             if i == self.cursor {
                 let left = match step.op {
-                    Op::Insert { .. } | Op::InsertSpin { .. } => {
-                        (self.end_depth[i] - self.depth).max(0.0)
-                    }
                     Op::Rotate { .. } => self.end_base[i] - self.base,
+                    _ => (self.end_depth[i] - self.depth).max(0.0),
                 };
                 // A validated driver always has a step for what is left.
                 step = resized_step(&self.scenario.driver, &step, left).unwrap_or(step);
@@ -276,19 +274,21 @@ impl Steering {
         let pushed = m.depth_mm - self.depth;
         self.spinning = false;
         if pushed > 0.0 {
-            let kind = self.kind_in_progress();
+            let (kind, radius, spinning) = self.insertion_in_progress();
             if kind == SegmentKind::Arc && self.last_kind != Some(SegmentKind::Arc) {
                 self.estimate.new_arc();
             }
-            let radius = self.scenario.needle.curvature_radius;
             self.estimate.advanced(kind, pushed, radius);
             self.last_kind = Some(kind);
-            self.spinning = kind == SegmentKind::Line;
+            self.spinning = spinning;
         }
         self.depth = self.depth.max(m.depth_mm);
         self.base = m.base_deg;
         while self.cursor < self.steps.len() && self.done(self.cursor) {
-            if matches!(self.steps[self.cursor].op, Op::InsertSpin { .. }) {
+            if matches!(
+                self.steps[self.cursor].op,
+                Op::InsertSpin { .. } | Op::InsertDuty { .. }
+            ) {
                 self.estimate.spun(self.depth);
             }
             self.cursor += 1;
@@ -381,8 +381,8 @@ impl Steering {
         let last = steps.last_mut()?;
         let along = (self.estimate.target - now.end.p).dot(&now.end.e3());
         let length = match last.op {
-            Op::Insert { length_mm } | Op::InsertSpin { length_mm, .. } => length_mm,
             Op::Rotate { .. } => return None,
+            op => op.inserted_mm(),
         };
         *last = resized_step(&self.scenario.driver, last, (length + along).max(0.0)).ok()?;
         let prediction = self.predict(&steps);

@@ -39,6 +39,8 @@ pub struct Problem {
     pub min_clearance: f64,
     /// Plane mode: theta2 = 0 and bevels 0 or pi.
     pub plane: bool,
+    /// Insertable length (mm): the whole path's bound.
+    pub needle_length: f64,
 }
 
 impl Problem {
@@ -71,13 +73,15 @@ impl Problem {
             risk_sum: s.options.risk == RiskMeasure::Sum,
             min_clearance: f64::from(s.options.min_clearance.max(0.0)),
             plane: s.options.workspace == Workspace::PlaneYz,
+            needle_length: f64::from(s.needle.length),
         }
     }
 
-    /// Longest segment of `kind` standing for `pieces` segments of the form.
-    pub fn bound(&self, kind: SegmentKind, pieces: u8) -> f64 {
+    /// Longest segment of `kind` standing for `pieces` segments of the form: arcs joined without
+    /// a turn are one arc, held to the longest arc whatever the pieces.
+    pub fn bound(&self, kind: SegmentKind, _pieces: u8) -> f64 {
         match kind {
-            SegmentKind::Arc => self.max_arc * f64::from(pieces),
+            SegmentKind::Arc => self.max_arc,
             SegmentKind::Line => self.max_line,
         }
     }
@@ -215,11 +219,40 @@ fn seg_distance(pb: &Problem, f: &Frame, s: &Seg, c: V3) -> f64 {
 }
 
 fn bounds_ok(pb: &Problem, c: &Cand) -> bool {
+    let segs = c.segs();
+    let total: f64 = segs.iter().map(|s| s.length).sum();
     pb.tilt_ok(c.theta1, c.theta2)
-        && c.segs().iter().all(|s| {
+        && total <= pb.needle_length * (1.0 + 1e-9)
+        && joined_arcs_ok(pb, segs)
+        && segs.iter().all(|s| {
             let max = pb.bound(s.kind, s.pieces);
             s.length.is_finite() && s.length >= -1e-9 && s.length <= max * (1.0 + 1e-12) + 1e-9
         })
+}
+
+/// Arcs that follow one another without a turn of the bevel (under 0.01 degree, the planner's
+/// check's threshold) are one arc, held to the longest arc.
+fn joined_arcs_ok(pb: &Problem, segs: &[Seg]) -> bool {
+    let mut run = 0.0;
+    let mut previous_arc = false;
+    for s in segs {
+        if s.kind != SegmentKind::Arc {
+            previous_arc = false;
+            continue;
+        }
+        let turn = s.roll.rem_euclid(core::f64::consts::TAU);
+        let still = turn.min(core::f64::consts::TAU - turn) < 0.01f64.to_radians();
+        run = if previous_arc && still {
+            run + s.length
+        } else {
+            s.length
+        };
+        if run > pb.max_arc * (1.0 + 1e-9) + 1e-9 {
+            return false;
+        }
+        previous_arc = true;
+    }
+    true
 }
 
 /// Measures a candidate completely; `control` is N (the form's segment count).
