@@ -42,6 +42,7 @@
 #![forbid(unsafe_code)]
 
 mod closed;
+mod executed;
 pub mod random;
 mod run;
 mod world;

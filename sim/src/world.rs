@@ -21,6 +21,7 @@
 //! The tracker measures the tip after every piece of insertion (pieces at most
 //! `measure_every_mm` and 1 mm long) and after every rotation.
 
+use crate::executed::executed_part;
 use crate::random::{seeded, Draw, SplitMix64};
 use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
 use planner_core::execute::nominal::posture_frame;
@@ -138,39 +139,6 @@ fn turned(f: &Frame, axis: V3, angle: f32) -> Frame {
             .set_column(i, &rotate(f.r.column(i).into(), axis, angle));
     }
     out
-}
-
-/// What the driver did of `step` when it pushed `inserted_mm` of it: all of it, or, broken off,
-/// the share of its time and of a spin's whole turns that its share of the push took (the push
-/// and the spin run at steady rates for the whole step).
-fn executed_part(step: &Step, inserted_mm: f32) -> Step {
-    let share = |planned_mm: f32| {
-        if inserted_mm < planned_mm && planned_mm > 0.0 {
-            inserted_mm / planned_mm
-        } else {
-            1.0
-        }
-    };
-    let mut part = *step;
-    match &mut part.op {
-        Op::Rotate { .. } => {}
-        Op::Insert { length_mm } | Op::InsertDuty { length_mm, .. } => {
-            let share = share(*length_mm);
-            if share < 1.0 {
-                part.duration_s *= share;
-            }
-            *length_mm = inserted_mm;
-        }
-        Op::InsertSpin { length_mm, turns } => {
-            let share = share(*length_mm);
-            if share < 1.0 {
-                part.duration_s *= share;
-                *turns = (*turns as f32 * share) as u32;
-            }
-            *length_mm = inserted_mm;
-        }
-    }
-    part
 }
 
 impl World {

@@ -27,6 +27,7 @@
 //! assert!(matches!(reply.command, Command::Continue | Command::Replace(_)));
 //! ```
 
+mod aimed;
 pub mod estimate;
 mod matmul;
 pub mod replan;
