@@ -72,7 +72,13 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         keys(&v),
-        ["perturbation", "scenarios", "totals", "unplanned"]
+        [
+            "by_form",
+            "perturbation",
+            "scenarios",
+            "totals",
+            "unplanned"
+        ]
     );
     let rows = v["scenarios"].as_array().unwrap();
     let unplanned = v["unplanned"].as_array().unwrap();
@@ -100,6 +106,17 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         .sum();
     assert!((f(&t["open_loop"]["mean_target_error"]) - weighted / runs as f64).abs() < 1e-6);
     check_figures(t, runs);
+    // The totals by planned form partition the rows.
+    let by_form = v["by_form"].as_object().unwrap();
+    for (form, ft) in by_form {
+        let mine: Vec<&Value> = rows.iter().filter(|r| r["form"] == form.as_str()).collect();
+        assert_eq!(u(&ft["scenarios"]), mine.len() as u64, "{form}");
+        let reached: u64 = mine.iter().map(|r| u(&r["closed_loop"]["reached"])).sum();
+        assert_eq!(u(&ft["closed_loop"]["reached"]), reached, "{form}");
+        check_figures(ft, 4 * mine.len() as u64);
+    }
+    let counted: u64 = by_form.values().map(|ft| u(&ft["scenarios"])).sum();
+    assert_eq!(counted, rows.len() as u64);
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(u(&row["runs"]), 4);
         check_figures(row, 4);

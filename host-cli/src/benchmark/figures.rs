@@ -254,14 +254,30 @@ pub struct Totals {
     pub closed_loop: Option<ClosedFigures>,
 }
 
+/// The figures over the runs of the scenarios whose plan has one form.
+#[derive(Clone, Debug, Serialize)]
+pub struct FormTotals {
+    /// Scenarios planned with the form.
+    pub scenarios: usize,
+    /// Runs over them.
+    pub runs: usize,
+    /// Open-loop figures over those runs.
+    pub open_loop: OpenFigures,
+    /// Closed-loop figures over those runs (null with `--open-loop-only`).
+    pub closed_loop: Option<ClosedFigures>,
+}
+
 /// `needle benchmark --json`: `scenarios` (one row per benchmarked scenario), `totals`,
-/// `unplanned` and the `perturbation` every world drew from.
+/// `by_form` (the totals of the scenarios planned with each form), `unplanned` and the
+/// `perturbation` every world drew from.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchmarkReport {
     /// One row per scenario planned and executed, in seed order.
     pub scenarios: Vec<ScenarioRow>,
     /// Over every run of the rows.
     pub totals: Totals,
+    /// Over the runs of the rows planned with each form, by form word.
+    pub by_form: BTreeMap<String, FormTotals>,
     /// The scenarios that could not be planned or executed, with the reason.
     pub unplanned: Vec<Unplanned>,
     /// The perturbation every world drew from.
@@ -278,10 +294,26 @@ impl BenchmarkReport {
     ) -> BenchmarkReport {
         let mut all = Pool::default();
         let mut expected_hits = 0.0;
+        let mut forms: BTreeMap<String, (usize, Pool)> = BTreeMap::new();
         for row in &rows {
             all.merge(&row.pool);
             expected_hits += row.predicted.collision_probability * row.runs as f64;
+            let (count, pool) = forms.entry(row.form.clone()).or_default();
+            *count += 1;
+            pool.merge(&row.pool);
         }
+        let by_form = forms
+            .into_iter()
+            .map(|(form, (scenarios, pool))| {
+                let totals = FormTotals {
+                    scenarios,
+                    runs: pool.runs,
+                    open_loop: pool.open(),
+                    closed_loop: pool.closed(),
+                };
+                (form, totals)
+            })
+            .collect();
         BenchmarkReport {
             totals: Totals {
                 scenarios: generated,
@@ -292,6 +324,7 @@ impl BenchmarkReport {
                 predicted_collision_probability: expected_hits / all.runs.max(1) as f64,
                 closed_loop: all.closed(),
             },
+            by_form,
             scenarios: rows,
             unplanned,
             perturbation,

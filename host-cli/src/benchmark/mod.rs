@@ -11,7 +11,7 @@ mod table;
 pub use figures::{
     BenchmarkReport, ClosedFigures, OpenFigures, Pool, PredictedFigures, ScenarioRow, Totals,
 };
-pub use figures::{Unplanned, WORLD_SEED_STRIDE};
+pub use figures::{FormTotals, Unplanned, WORLD_SEED_STRIDE};
 
 use crate::analysis::parallel;
 use crate::scenario::unseen::unseen_scenario;

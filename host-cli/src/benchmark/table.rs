@@ -30,6 +30,19 @@ fn figures(out: &mut String, predicted: Option<f64>, o: &OpenFigures, c: Option<
     };
 }
 
+/// The totals of the scenarios planned with each form.
+fn by_form(out: &mut String, r: &BenchmarkReport) {
+    let _ = writeln!(out, "by planned form:");
+    for (form, t) in &r.by_form {
+        let _ = write!(
+            out,
+            "{:<50}",
+            format!("  {form}: {} scenarios, {} runs", t.scenarios, t.runs)
+        );
+        figures(out, None, &t.open_loop, t.closed_loop.as_ref());
+    }
+}
+
 /// The safe plans' lengths against the unbounded ones.
 fn length_costs(out: &mut String, bound: f32, r: &BenchmarkReport) {
     let _ = writeln!(
@@ -123,6 +136,7 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         "errors in mm (closed loop: of the runs that arrived); hits: runs that entered a sphere; \
          pred %: the planner's predicted collision probability (first order)"
     );
+    by_form(&mut out, r);
     if let Some(bound) = a.max_collision_probability {
         length_costs(&mut out, bound, r);
     }
