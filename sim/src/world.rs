@@ -25,6 +25,7 @@ use crate::executed::executed_part;
 use crate::random::{seeded, Draw, SplitMix64};
 use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
 use planner_core::execute::nominal::posture_frame;
+use planner_core::execute::perturbation::TorsionPlay;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
 use planner_core::model::clearance::closest;
 use planner_core::model::kinematics::{rotate, Frame, V3};
@@ -112,8 +113,7 @@ pub struct World {
     segment_factor: f32,
     line_drift: [f32; 2],
     last: Last,
-    base_deg: f32,
-    tip_deg: f32,
+    torsion: TorsionPlay,
     depth: f32,
     commanded: f32,
     true_target: V3,
@@ -179,8 +179,7 @@ impl World {
             segment_factor: 1.0,
             line_drift: [0.0; 2],
             last: Last::Nothing,
-            base_deg: 0.0,
-            tip_deg: 0.0,
+            torsion: TorsionPlay::new(p),
             depth: 0.0,
             commanded: 0.0,
             true_target: v3(scenario.target.position) + v3(target_shift_mm),
@@ -252,7 +251,7 @@ impl World {
         let arr = |v: V3| [v.x, v.y, v.z];
         Measurement {
             depth_mm: self.commanded,
-            base_deg: self.base_deg,
+            base_deg: self.torsion.base_deg,
             position: arr(self.tip.p + v3(noise)),
             heading: arr(f.e3()),
             bevel: arr(f.e2()),
@@ -384,33 +383,20 @@ impl World {
 
     /// Turns the base by `angle_deg`; the tip follows through the play. Returns the tip's turn.
     fn rotate_base(&mut self, angle_deg: f32) -> f32 {
-        self.base_deg += angle_deg;
-        let lag = self.p.torsion_lag_deg_per_mm * self.depth;
-        let turn = if lag == 0.0 {
-            angle_deg
-        } else {
-            self.tip_deg.clamp(self.base_deg - lag, self.base_deg + lag) - self.tip_deg
-        };
-        self.tip_deg += turn;
+        let turn = self.torsion.rotate(angle_deg, self.depth);
         if turn != 0.0 {
             self.tip = self.tip.rolled(turn.to_radians());
         }
         turn
     }
 
-    /// After a spin (whole turns alternating from the side of zero twist, as the schedule makes
-    /// them) the base is back where it was and the tip rests lag·depth past it on the side of the
-    /// first turn. Returns the tip's net turn.
+    /// After a spin the tip rests past the base by the play ([`TorsionPlay::spin_settles`]).
+    /// Returns the tip's net turn.
     fn spin_settles(&mut self) -> f32 {
-        let lag = self.p.torsion_lag_deg_per_mm * self.depth;
-        if lag == 0.0 {
-            return 0.0;
+        let turn = self.torsion.spin_settles(self.depth);
+        if self.torsion.lag_per_mm * self.depth != 0.0 {
+            self.tip = self.tip.rolled(turn.to_radians());
         }
-        let first = if self.base_deg > 0.0 { -1.0 } else { 1.0 };
-        let settled = self.base_deg + first * lag.min(180.0);
-        let turn = settled - self.tip_deg;
-        self.tip_deg = settled;
-        self.tip = self.tip.rolled(turn.to_radians());
         turn
     }
 

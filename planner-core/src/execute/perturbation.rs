@@ -124,6 +124,59 @@ impl Default for Perturbation {
     }
 }
 
+/// The shaft's torsional play, as the simulated world has it and the spread predicts it: the tip
+/// roll stays within ± lag·depth of the base roll and moves only when the base drags it (a
+/// backlash); after a spin (whole turns alternating from the side of zero twist, as the schedule
+/// makes them) the base is back where it was and the tip rests lag·depth past it on the side of
+/// the first turn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TorsionPlay {
+    /// `torsion_lag_deg_per_mm`.
+    pub lag_per_mm: f32,
+    /// The base's accumulated roll (degrees).
+    pub base_deg: f32,
+    /// The tip's accumulated roll (degrees).
+    pub tip_deg: f32,
+}
+
+impl TorsionPlay {
+    /// Both at zero, with the play of `p`.
+    pub fn new(p: &Perturbation) -> TorsionPlay {
+        TorsionPlay {
+            lag_per_mm: p.torsion_lag_deg_per_mm,
+            base_deg: 0.0,
+            tip_deg: 0.0,
+        }
+    }
+
+    /// The tip's turn when the base turns by `angle_deg` at `depth` (mm).
+    pub fn rotate(&mut self, angle_deg: f32, depth: f32) -> f32 {
+        self.base_deg += angle_deg;
+        let lag = self.lag_per_mm * depth;
+        let turn = if lag == 0.0 {
+            angle_deg
+        } else {
+            crate::fmath::clamp(self.tip_deg, self.base_deg - lag, self.base_deg + lag)
+                - self.tip_deg
+        };
+        self.tip_deg += turn;
+        turn
+    }
+
+    /// The tip's net turn as a spin at `depth` (mm) settles.
+    pub fn spin_settles(&mut self, depth: f32) -> f32 {
+        let lag = self.lag_per_mm * depth;
+        if lag == 0.0 {
+            return 0.0;
+        }
+        let first = if self.base_deg > 0.0 { -1.0 } else { 1.0 };
+        let settled = self.base_deg + first * lag.min(180.0);
+        let turn = settled - self.tip_deg;
+        self.tip_deg = settled;
+        turn
+    }
+}
+
 /// The closest tracker measurements may be (mm). An EM tracker (NDI Aurora) samples at 40 Hz: at
 /// the driver's 2.5 mm/s that is every 0.0625 mm, and no tracker or imaging reports a needle tip
 /// more often. Closer spacings describe no bench and only cost: every measurement is a recorded

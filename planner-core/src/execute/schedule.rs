@@ -164,6 +164,16 @@ struct Twist {
 }
 
 impl Twist {
+    /// The twist of a shaft already turned by `twist_deg`, under a validated `driver`'s limit.
+    fn continuing(driver: &Driver, twist_deg: f32) -> Result<Twist, ScheduleError> {
+        driver.validate().map_err(ScheduleError::Driver)?;
+        Ok(Twist {
+            now: twist_deg,
+            peak: libm::fabsf(twist_deg),
+            limit: driver.max_twist_deg,
+        })
+    }
+
     /// The rotation by `angle` (degrees, in [-180, 180]) the short way, or the long way when the
     /// short one would pass the limit.
     fn rotation(&mut self, angle: f32) -> f32 {
@@ -251,12 +261,7 @@ pub fn continuation_steps(
     segments: &[SegmentPlan],
     twist_deg: f32,
 ) -> Result<(Steps, f32), ScheduleError> {
-    driver.validate().map_err(ScheduleError::Driver)?;
-    let mut twist = Twist {
-        now: twist_deg,
-        peak: libm::fabsf(twist_deg),
-        limit: driver.max_twist_deg,
-    };
+    let mut twist = Twist::continuing(driver, twist_deg)?;
     let steps = segment_steps(driver, segments, true, &mut twist)?;
     Ok((steps, twist.peak))
 }
@@ -341,12 +346,7 @@ pub fn duty_continuation(
     duty: f32,
     twist_deg: f32,
 ) -> Result<(Steps, f32), ScheduleError> {
-    driver.validate().map_err(ScheduleError::Driver)?;
-    let mut twist = Twist {
-        now: twist_deg,
-        peak: libm::fabsf(twist_deg),
-        limit: driver.max_twist_deg,
-    };
+    let mut twist = Twist::continuing(driver, twist_deg)?;
     let mut steps = Steps::new();
     if bevel_deg != 0.0 {
         let angle_deg = twist.rotation(bevel_deg);

@@ -13,7 +13,7 @@
 //! ([`Perturbation`]); the tracker's figures do not enter (open loop).
 
 use super::nominal::posture_frame;
-use super::perturbation::{Perturbation, DRIFT_REFERENCE_MM};
+use super::perturbation::{Perturbation, TorsionPlay, DRIFT_REFERENCE_MM};
 use super::schedule::{Op, Schedule};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{Frame, V3};
@@ -105,44 +105,6 @@ struct Sources {
     drift: [Twist; 2],
 }
 
-/// The propagation's torsion state: the tip's roll follows the base's through the play, as the
-/// simulated world's does, so the mean path turns the bevel where the world does.
-struct Torsion {
-    lag_per_mm: f32,
-    base_deg: f32,
-    tip_deg: f32,
-}
-
-impl Torsion {
-    /// The tip's turn when the base turns by `angle_deg` at `depth`.
-    fn rotate(&mut self, angle_deg: f32, depth: f32) -> f32 {
-        self.base_deg += angle_deg;
-        let lag = self.lag_per_mm * depth;
-        let turn = if lag == 0.0 {
-            angle_deg
-        } else {
-            crate::fmath::clamp(self.tip_deg, self.base_deg - lag, self.base_deg + lag)
-                - self.tip_deg
-        };
-        self.tip_deg += turn;
-        turn
-    }
-
-    /// The tip's net turn after a spin at `depth`: it rests lag·depth past the base on the side
-    /// of the spin's first turn.
-    fn spin_settles(&mut self, depth: f32) -> f32 {
-        let lag = self.lag_per_mm * depth;
-        if lag == 0.0 {
-            return 0.0;
-        }
-        let first = if self.base_deg > 0.0 { -1.0 } else { 1.0 };
-        let settled = self.base_deg + first * lag.min(180.0);
-        let turn = settled - self.tip_deg;
-        self.tip_deg = settled;
-        turn
-    }
-}
-
 fn outer(s: &Twist, variance: f32) -> Matrix6<f32> {
     s * s.transpose() * variance
 }
@@ -184,11 +146,8 @@ pub fn propagate(
         segment_curvature: Twist::zeros(),
         drift: [Twist::zeros(); 2],
     };
-    let mut torsion = Torsion {
-        lag_per_mm: p.torsion_lag_deg_per_mm,
-        base_deg: 0.0,
-        tip_deg: 0.0,
-    };
+    // The mean path turns the bevel where the simulated world does.
+    let mut torsion = TorsionPlay::new(p);
     let mut depth = 0.0f32;
     let mut last = None;
     let mut tip = spread_at(&src, &Partial::NONE, p, depth, planned.p, mean.p);
