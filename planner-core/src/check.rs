@@ -75,13 +75,7 @@ pub fn rebuild(
         lengths[i] = s.length;
         bevels[i] = s.bevel_deg.to_radians();
     }
-    PathGeometry::build(
-        form,
-        first,
-        &lengths,
-        &bevels,
-        scenario.needle.curvature_radius,
-    )
+    PathGeometry::build(form, first, &lengths, &bevels, scenario.planned_radius())
 }
 
 /// Checks a reported path against the scenario.
@@ -135,7 +129,7 @@ pub fn check(
         }
         _ => inverse_sum,
     };
-    let max_arc = scenario.needle.curvature_radius * scenario.needle.max_arc_deg.to_radians();
+    let max_arc = scenario.planned_radius() * scenario.needle.max_arc_deg.to_radians();
     let max_line = scenario.max_line_length();
     // Bounds are checked with a relative slack of one part in 10^5 (f32 rounding of the report).
     let slack = |bound: f32| bound * 1e-5;

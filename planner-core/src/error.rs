@@ -50,6 +50,8 @@ pub enum Field {
     NeedleLength,
     /// `planner.max_collision_probability`
     MaxCollisionProbability,
+    /// `planner.curvature_reserve`
+    CurvatureReserve,
 }
 
 impl Field {
@@ -80,6 +82,9 @@ impl Field {
             Field::MaxTwist => "at least 360 degrees (a spun line turns the shaft whole turns)",
             Field::NeedleLength => "the entry-target distance to 5000 mm",
             Field::MaxCollisionProbability => "more than 0 and less than 1",
+            Field::CurvatureReserve => {
+                "0 to 0.5 (the share of the needle's curvature kept in hand)"
+            }
         }
     }
 }
@@ -109,6 +114,7 @@ impl core::fmt::Display for Field {
             Field::MaxTwist => f.write_str("driver.max_twist_deg"),
             Field::NeedleLength => f.write_str("needle.length"),
             Field::MaxCollisionProbability => f.write_str("planner.max_collision_probability"),
+            Field::CurvatureReserve => f.write_str("planner.curvature_reserve"),
         }
     }
 }

@@ -180,3 +180,59 @@ fn bad_driver_settings_and_pathless_outcomes_are_typed_errors() {
     let none = FormOutcome::infeasible(Form::parse("RL").unwrap());
     assert_eq!(schedule(&scenario, &none), Err(ScheduleError::NoPath));
 }
+
+/// A plan keeping a fifth of the curvature in hand: its arcs have the wider radius, the schedule
+/// pushes them duty-cycled at four fifths, and executing it on the nominal needle (whose duty
+/// cycle bends it by that share) ends at the target clear of every obstacle. The same scenario
+/// at the full curvature plans tighter arcs.
+#[test]
+fn a_curvature_reserve_plans_wider_arcs_pushed_duty_cycled() {
+    let mut s = space();
+    s.options.curvature_reserve = 0.2;
+    assert!((s.planned_radius() - 63.7 / 0.8).abs() < 1e-3);
+    let report = plan(&s).unwrap();
+    let best = report.best().unwrap();
+    let sched = schedule(&s, best).unwrap();
+    let mut arcs = 0;
+    for step in &sched.steps {
+        match step.op {
+            Op::Insert { .. } => panic!("a plain push in a reserved plan: {:?}", sched.steps),
+            Op::InsertDuty { duty, .. } => {
+                assert!((duty - 0.8).abs() < 1e-6, "{duty}");
+                arcs += 1;
+            }
+            _ => {}
+        }
+    }
+    assert!(arcs > 0, "{:?}", sched.steps);
+    let verdict = check(&s, &sched);
+    assert!(verdict.feasible, "{verdict:?}");
+    assert!(verdict.target_error < 0.01, "{verdict:?}");
+    // The reserved plan's geometry is not the full-curvature one's: the check on the needle's
+    // own radius finds its end elsewhere.
+    let mut full = s.clone();
+    full.options.curvature_reserve = 0.0;
+    let g = rebuild(&full, best.form, &best.insertion, &best.segments);
+    let t = s.target.position;
+    let target = planner_core::model::kinematics::V3::new(t[0], t[1], t[2]);
+    let miss = dist(g.end(), target);
+    assert!(miss > 1.0, "{miss}");
+}
+
+/// A reserve outside [0, 0.5] is refused with its field.
+#[test]
+fn a_curvature_reserve_out_of_range_is_a_typed_error() {
+    for bad in [-0.1, 0.6, f32::NAN] {
+        let mut s = space();
+        s.options.curvature_reserve = bad;
+        let e = plan(&s).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                PlanError::OutOfRange(Field::CurvatureReserve)
+                    | PlanError::NotFinite(Field::CurvatureReserve)
+            ),
+            "{bad}: {e:?}"
+        );
+    }
+}

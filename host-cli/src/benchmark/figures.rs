@@ -63,6 +63,27 @@ impl Pool {
         self.closed_runs += other.closed_runs;
     }
 
+    /// Only the open-loop runs.
+    pub fn open_part(&self) -> Pool {
+        Pool {
+            runs: self.runs,
+            open_errors: self.open_errors.clone(),
+            open_hits: self.open_hits,
+            ..Pool::default()
+        }
+    }
+
+    /// Only the closed-loop runs.
+    pub fn closed_part(&self) -> Pool {
+        Pool {
+            arrived_errors: self.arrived_errors.clone(),
+            stops: self.stops.clone(),
+            closed_hits: self.closed_hits,
+            closed_runs: self.closed_runs,
+            ..Pool::default()
+        }
+    }
+
     fn percent(&self, count: usize) -> f64 {
         if self.runs == 0 {
             0.0
@@ -91,7 +112,7 @@ impl Pool {
         let errors = (arrived > 0).then(|| Spread::of(self.arrived_errors.iter().copied()));
         Some(ClosedFigures {
             reached: arrived,
-            reached_percent: self.percent(arrived),
+            reached_percent: 100.0 * arrived as f64 / self.closed_runs as f64,
             stops: self.stops.values().sum(),
             stop_reasons: self.stops.clone(),
             hits: self.closed_hits,
@@ -146,6 +167,31 @@ pub struct ClosedFigures {
     pub p95_target_error: Option<f64>,
 }
 
+/// The plan a scenario is steered along: made keeping curvature in hand.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SteeredPlan {
+    /// Its form.
+    pub form: String,
+    /// Its length (mm).
+    pub plan_length: f32,
+    /// Its smallest clearance to a sphere (mm).
+    pub plan_clearance: f32,
+    /// The curvature reserve it keeps (the one asked for, or less where no path keeps that).
+    pub curvature_reserve: f32,
+}
+
+impl SteeredPlan {
+    /// The plan `outcome` of `scenario`.
+    pub fn of(scenario: &planner_core::Scenario, outcome: &FormOutcome) -> SteeredPlan {
+        SteeredPlan {
+            form: outcome.form.to_string(),
+            plan_length: outcome.length,
+            plan_clearance: outcome.min_clearance,
+            curvature_reserve: scenario.options.curvature_reserve,
+        }
+    }
+}
+
 /// One generated scenario, planned and executed.
 #[derive(Clone, Debug, Serialize)]
 pub struct ScenarioRow {
@@ -169,6 +215,8 @@ pub struct ScenarioRow {
     pub predicted: PredictedFigures,
     /// Open-loop figures.
     pub open_loop: OpenFigures,
+    /// The plan steered closed loop (null with `--open-loop-only`).
+    pub closed_loop_plan: Option<SteeredPlan>,
     /// Closed-loop figures (null with `--open-loop-only`).
     pub closed_loop: Option<ClosedFigures>,
     /// The runs behind the figures (for the totals).
@@ -184,6 +232,7 @@ impl ScenarioRow {
         target_distance: f32,
         outcome: &FormOutcome,
         predicted: PredictedFigures,
+        closed_loop_plan: Option<SteeredPlan>,
         pool: Pool,
     ) -> ScenarioRow {
         ScenarioRow {
@@ -197,6 +246,7 @@ impl ScenarioRow {
             world_seed: super::world_seed(seed),
             predicted,
             open_loop: pool.open(),
+            closed_loop_plan,
             closed_loop: pool.closed(),
             pool,
         }
@@ -254,16 +304,19 @@ pub struct Totals {
     pub closed_loop: Option<ClosedFigures>,
 }
 
-/// The figures over the runs of the scenarios whose plan has one form.
+/// The figures over the runs of the scenarios planned with one form: open loop by the open-loop
+/// plan's form, closed loop by the steered plan's.
 #[derive(Clone, Debug, Serialize)]
 pub struct FormTotals {
-    /// Scenarios planned with the form.
+    /// Scenarios whose open-loop plan has the form.
     pub scenarios: usize,
     /// Runs over them.
     pub runs: usize,
     /// Open-loop figures over those runs.
     pub open_loop: OpenFigures,
-    /// Closed-loop figures over those runs (null with `--open-loop-only`).
+    /// Scenarios whose steered plan has the form.
+    pub closed_loop_scenarios: usize,
+    /// Closed-loop figures over their runs (null when none).
     pub closed_loop: Option<ClosedFigures>,
 }
 
@@ -294,21 +347,27 @@ impl BenchmarkReport {
     ) -> BenchmarkReport {
         let mut all = Pool::default();
         let mut expected_hits = 0.0;
-        let mut forms: BTreeMap<String, (usize, Pool)> = BTreeMap::new();
+        let mut forms: BTreeMap<String, (usize, usize, Pool)> = BTreeMap::new();
         for row in &rows {
             all.merge(&row.pool);
             expected_hits += row.predicted.collision_probability * row.runs as f64;
-            let (count, pool) = forms.entry(row.form.clone()).or_default();
-            *count += 1;
-            pool.merge(&row.pool);
+            let (open, _, pool) = forms.entry(row.form.clone()).or_default();
+            *open += 1;
+            pool.merge(&row.pool.open_part());
+            if let Some(steered) = &row.closed_loop_plan {
+                let (_, closed, pool) = forms.entry(steered.form.clone()).or_default();
+                *closed += 1;
+                pool.merge(&row.pool.closed_part());
+            }
         }
         let by_form = forms
             .into_iter()
-            .map(|(form, (scenarios, pool))| {
+            .map(|(form, (scenarios, closed_loop_scenarios, pool))| {
                 let totals = FormTotals {
                     scenarios,
                     runs: pool.runs,
                     open_loop: pool.open(),
+                    closed_loop_scenarios,
                     closed_loop: pool.closed(),
                 };
                 (form, totals)

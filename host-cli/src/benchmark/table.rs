@@ -32,14 +32,37 @@ fn figures(out: &mut String, predicted: Option<f64>, o: &OpenFigures, c: Option<
 
 /// The totals of the scenarios planned with each form.
 fn by_form(out: &mut String, r: &BenchmarkReport) {
-    let _ = writeln!(out, "by planned form:");
+    let _ = writeln!(
+        out,
+        "by planned form (open loop: scenarios planned so; closed loop: scenarios steered so):"
+    );
     for (form, t) in &r.by_form {
         let _ = write!(
             out,
             "{:<50}",
-            format!("  {form}: {} scenarios, {} runs", t.scenarios, t.runs)
+            format!(
+                "  {form}: {} open / {} closed scenarios",
+                t.scenarios, t.closed_loop_scenarios
+            )
         );
         figures(out, None, &t.open_loop, t.closed_loop.as_ref());
+    }
+}
+
+/// The plans steered closed loop, where they differ from the open-loop plan.
+fn steered_plans(out: &mut String, asked: f32, r: &BenchmarkReport) {
+    let _ = writeln!(
+        out,
+        "closed loop steers plans keeping curvature reserve {asked} (less where no path keeps it):"
+    );
+    for row in &r.scenarios {
+        if let Some(p) = &row.closed_loop_plan {
+            let _ = writeln!(
+                out,
+                "  seed {}: {} {:.1} mm, clearance {:.2} mm, reserve {}",
+                row.seed, p.form, p.plan_length, p.plan_clearance, p.curvature_reserve
+            );
+        }
     }
 }
 
@@ -137,6 +160,9 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
          pred %: the planner's predicted collision probability (first order)"
     );
     by_form(&mut out, r);
+    if !a.open_loop_only {
+        steered_plans(&mut out, a.curvature_reserve, r);
+    }
     if let Some(bound) = a.max_collision_probability {
         length_costs(&mut out, bound, r);
     }

@@ -2,6 +2,7 @@
 //! errors name the file's keys.
 
 use super::approx::Method;
+use super::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use super::file::ScenarioFile;
 use super::shapes::ObstacleShape;
 use anyhow::{bail, Context, Result};
@@ -21,6 +22,17 @@ pub const DEFAULT_MAX_TILT_DEG: f32 = 60.0;
 pub const DEFAULT_TOLERANCE: f32 = 0.1;
 
 impl ScenarioFile {
+    /// `planner.curvature_reserve` where the file says nothing of it: the closed loop's
+    /// ([`CLOSED_LOOP_CURVATURE_RESERVE`]) when `execution.mode` is `"closed_loop"`, else none.
+    fn default_curvature_reserve(&self) -> f32 {
+        let mode = self.execution.as_ref().and_then(|t| t.get("mode"));
+        if mode.and_then(|m| m.as_str()) == Some("closed_loop") {
+            CLOSED_LOOP_CURVATURE_RESERVE
+        } else {
+            0.0
+        }
+    }
+
     /// Builds the core scenario, checking what the core checks (so errors name the file's keys).
     pub fn to_scenario(&self) -> Result<Scenario> {
         self.to_scenario_with(&self.obstacle_shapes(None)?)
@@ -107,6 +119,9 @@ impl ScenarioFile {
                 workspace,
                 risk,
                 min_clearance: p.min_clearance.unwrap_or(0.0),
+                curvature_reserve: p
+                    .curvature_reserve
+                    .unwrap_or_else(|| self.default_curvature_reserve()),
             },
             driver: {
                 let d = self.driver.clone().unwrap_or_default();

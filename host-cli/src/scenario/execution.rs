@@ -8,6 +8,13 @@ use anyhow::{bail, Context, Result};
 use planner_core::execute::perturbation::Perturbation;
 use std::path::Path;
 
+/// The curvature reserve (`planner.curvature_reserve`) of a scenario whose `execution.mode` is
+/// `"closed_loop"` and that says nothing of it, and of the plans `needle benchmark` steers: the
+/// share of the needle's curvature kept for the controller. Measured on the unseen scenarios
+/// (docs/execution.md, "Curvature in hand"): a tissue that bends less than the plan assumed
+/// otherwise leaves a target no path reaches.
+pub const CLOSED_LOOP_CURVATURE_RESERVE: f32 = 0.2;
+
 /// How the plan will be executed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExecutionMode {
@@ -146,5 +153,30 @@ mod tests {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");
         }
+    }
+
+    /// A scenario steered closed loop keeps curvature in hand unless it says otherwise; one
+    /// executed open loop plans at the full curvature; a reserve out of range names its key.
+    #[test]
+    fn the_closed_loop_keeps_curvature_in_hand_by_default() {
+        let scenario = |extra: &str| {
+            let text = format!(
+                "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
+                 direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
+            );
+            ScenarioFile::parse(&text)?.to_scenario()
+        };
+        let reserve = |extra: &str| scenario(extra).unwrap().options.curvature_reserve;
+        assert_eq!(reserve(""), 0.0);
+        assert_eq!(reserve("[execution]\nmode = \"open_loop\"\n"), 0.0);
+        let closed = "[execution]\nmode = \"closed_loop\"\n";
+        assert_eq!(reserve(closed), CLOSED_LOOP_CURVATURE_RESERVE);
+        let given = format!("{closed}[planner]\ncurvature_reserve = 0.05\n");
+        assert_eq!(reserve(&given), 0.05);
+        let e = scenario("[planner]\ncurvature_reserve = 0.7\n").unwrap_err();
+        assert!(
+            format!("{e:#}").contains("planner.curvature_reserve"),
+            "{e:#}"
+        );
     }
 }

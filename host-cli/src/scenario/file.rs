@@ -136,6 +136,8 @@ pub struct PlannerFile {
     pub risk: Option<String>,
     /// Smallest clearance a plan must keep (mm), default 0.
     pub min_clearance: Option<f32>,
+    /// Share of the needle's curvature the plan leaves unused for steering, 0 to 0.5.
+    pub curvature_reserve: Option<f32>,
     /// Bound on the predicted probability that the executed plan enters an obstacle (off by
     /// default).
     pub max_collision_probability: Option<f32>,

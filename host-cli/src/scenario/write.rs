@@ -67,7 +67,11 @@ pub fn scenario_toml(scenario: &Scenario, name: &str, header: &str) -> String {
         RiskMeasure::Sum => "sum",
     };
     let _ = writeln!(out, "risk = \"{risk}\"");
-    let _ = writeln!(out, "min_clearance = {}\n", num(p.min_clearance));
+    let _ = writeln!(out, "min_clearance = {}", num(p.min_clearance));
+    if p.curvature_reserve > 0.0 {
+        let _ = writeln!(out, "curvature_reserve = {}", num(p.curvature_reserve));
+    }
+    let _ = writeln!(out);
     let d = &s.driver;
     let _ = writeln!(out, "[driver]");
     let _ = writeln!(out, "insert_speed = {}", num(d.insert_speed));

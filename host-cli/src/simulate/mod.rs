@@ -71,6 +71,42 @@ pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepare
     Ok(Prepared { outcome, schedule })
 }
 
+/// Reserves under this are not tried: the plan is made at the needle's full curvature.
+const LEAST_CURVATURE_RESERVE: f32 = 0.04;
+
+/// [`prepare`], keeping as much of the scenario's curvature reserve as a path allows: where
+/// no path exists at the reserve asked for (a target close behind an obstacle needs the
+/// needle's full bend), the reserve is halved until one does, down to none. Returns the
+/// scenario with the reserve planned with, and the plan.
+pub fn prepare_keeping_reserve(
+    scenario: &Scenario,
+    bound: Option<&PlanBound>,
+) -> Result<(Scenario, Prepared)> {
+    let mut s = scenario.clone();
+    loop {
+        match prepare(&s, bound) {
+            Err(e) if s.options.curvature_reserve > 0.0 && is_unreachable(&e) => {
+                let half = 0.5 * s.options.curvature_reserve;
+                s.options.curvature_reserve = if half < LEAST_CURVATURE_RESERVE {
+                    0.0
+                } else {
+                    half
+                };
+            }
+            other => return other.map(|p| (s, p)),
+        }
+    }
+}
+
+fn is_unreachable(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<planner_core::PlanError>(),
+            Some(planner_core::PlanError::Unreachable)
+        )
+    })
+}
+
 /// The seed of run `i` (runs are independent: a run's result depends on its seed alone).
 pub fn run_seed(seed: u64, i: usize) -> u64 {
     seed.wrapping_add(i as u64)

@@ -4,7 +4,7 @@
 //! outputs need ([`Keep`]), so that memory grows with `--runs` by a few numbers a run, not by
 //! every run's path and steps.
 
-use super::{prepare, run_seed, PlanBound, Prepared};
+use super::{prepare_keeping_reserve, run_seed, PlanBound, Prepared};
 use crate::analysis::parallel;
 use anyhow::{anyhow, Result};
 use needle_sim::{
@@ -114,7 +114,8 @@ impl Setup {
         Setup::bounded(scenario, perturbation, faults, runs, seed, None)
     }
 
-    /// [`Setup::new`], the plan made under `bound` when given.
+    /// [`Setup::new`], the plan made under `bound` when given, keeping as much of the
+    /// scenario's curvature reserve as a path allows (`scenario` then says how much).
     pub fn bounded(
         scenario: Scenario,
         perturbation: Perturbation,
@@ -124,7 +125,7 @@ impl Setup {
         bound: Option<&PlanBound>,
     ) -> Result<Setup> {
         perturbation.validate()?;
-        let prepared = prepare(&scenario, bound)?;
+        let (scenario, prepared) = prepare_keeping_reserve(&scenario, bound)?;
         let planned = Planned::of(&scenario, &prepared.outcome);
         Ok(Setup {
             scenario,

@@ -47,7 +47,8 @@ pub enum Op {
     /// Push `length_mm` duty-cycled: the share `duty` of it with the bevel held where it is, the
     /// rest spinning (whole turns at the driver's spin rate, alternating, interleaved finely): an
     /// arc of curvature `duty` times the needle's towards the bevel (Minhas et al. 2007; the seed
-    /// paper's DR paths). The steering's corrections; a plan never contains one.
+    /// paper's DR paths). The arcs of a plan with a curvature reserve, and the steering's
+    /// corrections.
     InsertDuty {
         /// Insertion (mm).
         length_mm: f32,
@@ -243,7 +244,7 @@ pub fn schedule(scenario: &Scenario, outcome: &FormOutcome) -> Result<Schedule, 
         peak: 0.0,
         limit: d.max_twist_deg,
     };
-    let steps = segment_steps(d, &outcome.segments, false, &mut twist)?;
+    let steps = segment_steps(d, &outcome.segments, false, scenario.arc_duty(), &mut twist)?;
     let duration_s = steps.iter().map(|s| s.duration_s).sum();
     Ok(Schedule {
         posture,
@@ -254,24 +255,27 @@ pub fn schedule(scenario: &Scenario, outcome: &FormOutcome) -> Result<Schedule, 
 }
 
 /// The steps that continue from a tip in tissue along `segments` (each bevel the rotation
-/// before its segment, the first one included), with the shaft twisted `twist_deg` already.
-/// Returns the steps and the largest accumulated twist they reach.
+/// before its segment, the first one included), with the shaft twisted `twist_deg` already,
+/// each arc pushed at `arc_duty` (1: a plain push). Returns the steps and the largest
+/// accumulated twist they reach.
 pub fn continuation_steps(
     driver: &Driver,
     segments: &[SegmentPlan],
     twist_deg: f32,
+    arc_duty: f32,
 ) -> Result<(Steps, f32), ScheduleError> {
     let mut twist = Twist::continuing(driver, twist_deg)?;
-    let steps = segment_steps(driver, segments, true, &mut twist)?;
+    let steps = segment_steps(driver, segments, true, arc_duty, &mut twist)?;
     Ok((steps, twist.peak))
 }
 
 /// A rotation (where the bevel turns; before the first segment only with `rotate_first`) and
-/// an insertion per segment.
+/// an insertion per segment, arcs pushed at `arc_duty` (duty-cycled below 1).
 fn segment_steps(
     d: &Driver,
     segments: &[SegmentPlan],
     rotate_first: bool,
+    arc_duty: f32,
     twist: &mut Twist,
 ) -> Result<Steps, ScheduleError> {
     let mut steps = Steps::new();
@@ -286,10 +290,15 @@ fn segment_steps(
         if !(seg.length > 0.0) {
             continue;
         }
-        if seg.kind == SegmentKind::Line {
+        let duty_cycled = seg.kind == SegmentKind::Arc && arc_duty < 1.0;
+        if seg.kind == SegmentKind::Line || duty_cycled {
             twist.spin();
         }
-        let step = insertion_step(d, seg.kind, seg.length)?;
+        let step = if duty_cycled {
+            duty_step(d, seg.length, arc_duty)
+        } else {
+            insertion_step(d, seg.kind, seg.length)?
+        };
         push(&mut steps, step.op, step.duration_s)?;
     }
     Ok(steps)

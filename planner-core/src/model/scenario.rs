@@ -48,6 +48,10 @@ pub const DEFAULT_NEEDLE_LENGTH_MM: f32 = 200.0;
 /// The longest insertable length a scenario may give (mm).
 pub const MAX_NEEDLE_LENGTH_MM: f32 = 5000.0;
 
+/// The largest curvature reserve a scenario may ask for: at half its curvature a needle still
+/// bends, duty-cycled, as an arc rather than a drifting line.
+pub const MAX_CURVATURE_RESERVE: f32 = 0.5;
+
 /// Where and how the needle enters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -141,6 +145,12 @@ pub struct PlannerOptions {
     pub risk: RiskMeasure,
     /// Smallest clearance a plan may keep to any obstacle (mm, >= 0).
     pub min_clearance: f32,
+    /// Share of the needle's curvature the plan leaves unused, in [0, 0.5]: arcs are planned
+    /// at the radius `curvature_radius / (1 − reserve)` and pushed duty-cycled at
+    /// `1 − reserve`, so a steering controller can bend harder than the plan in any direction
+    /// (a plan at the needle's full curvature has a target the controller cannot reach when the
+    /// tissue bends a little less). 0, the default, plans at the full curvature.
+    pub curvature_reserve: f32,
 }
 
 impl Default for PlannerOptions {
@@ -151,6 +161,7 @@ impl Default for PlannerOptions {
             workspace: Workspace::Space,
             risk: RiskMeasure::Mean,
             min_clearance: 0.0,
+            curvature_reserve: 0.0,
         }
     }
 }
@@ -275,6 +286,17 @@ fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
 }
 
 impl Scenario {
+    /// The radius the plan's arcs have (mm): the needle's, widened by the curvature reserve.
+    pub fn planned_radius(&self) -> f32 {
+        self.needle.curvature_radius / self.arc_duty()
+    }
+
+    /// The share of each planned arc's push with the bevel held (1 without a curvature reserve:
+    /// a plain push).
+    pub fn arc_duty(&self) -> f32 {
+        1.0 - crate::fmath::clamp(self.options.curvature_reserve, 0.0, MAX_CURVATURE_RESERVE)
+    }
+
     /// Longest line segment allowed (mm): the needle's setting, or by default twice the
     /// entry-target distance plus half a turn of arc.
     pub fn max_line_length(&self) -> f32 {
@@ -284,7 +306,7 @@ impl Scenario {
         }
         let (a, b) = (self.entry.position, self.target.position);
         let d = V3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-        2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * n.curvature_radius
+        2.0 * crate::fmath::sqrt(d.dot(&d)) + core::f32::consts::PI * self.planned_radius()
     }
 
     /// How finely f32 arithmetic resolves positions at this scenario's coordinates (mm): four
@@ -358,6 +380,10 @@ impl Scenario {
         finite(Field::MinClearance, &[o.min_clearance])?;
         if o.min_clearance < 0.0 {
             return Err(PlanError::OutOfRange(Field::MinClearance));
+        }
+        finite(Field::CurvatureReserve, &[o.curvature_reserve])?;
+        if !(0.0..=MAX_CURVATURE_RESERVE).contains(&o.curvature_reserve) {
+            return Err(PlanError::OutOfRange(Field::CurvatureReserve));
         }
         if o.max_control_degree == 0 || usize::from(o.max_control_degree) > MAX_CONTROL_DEGREE {
             return Err(PlanError::ControlDegreeOutOfRange {

@@ -82,7 +82,7 @@ impl<'a> Problem<'a> {
     /// The problem of `form`; in plane mode `sides` bit i set means arc i turns to the negative side.
     pub fn new(scenario: &'a Scenario, form: Form, sides: u8) -> Problem<'a> {
         let plane = scenario.options.workspace == Workspace::PlaneYz;
-        let radius = scenario.needle.curvature_radius;
+        let radius = scenario.planned_radius();
         // The optimiser's bounds sit a few f32 ulps inside the scenario's, so a path at a bound
         // still respects it when its reported numbers are rounded or re-evaluated in f64.
         let tilt = scenario.entry.max_tilt_deg.to_radians() * BOUND_SHRINK;

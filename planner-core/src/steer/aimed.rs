@@ -78,6 +78,7 @@ mod tests {
             margin: 0.3,
             inserted_mm: 50.0,
             dead_band_deg: 2.0,
+            arc_duty: 1.0,
         };
         let found = aimed_duty(&input, &(0, 0)).expect("a duty-cycled continuation");
         assert!(

@@ -88,9 +88,10 @@ pub fn segments_of(steps: &[Step]) -> Option<Segments> {
                 continue;
             }
             Op::Insert { length_mm } => (SegmentKind::Arc, length_mm),
-            Op::InsertSpin { length_mm, .. } => (SegmentKind::Line, length_mm),
-            // A duty-cycled correction is no segment of a form: replans start afresh.
-            Op::InsertDuty { .. } => return None,
+            Op::InsertDuty { length_mm, duty } if duty > 0.0 => (SegmentKind::Arc, length_mm),
+            Op::InsertSpin { length_mm, .. } | Op::InsertDuty { length_mm, .. } => {
+                (SegmentKind::Line, length_mm)
+            }
         };
         let bevel_deg = if kind == SegmentKind::Arc {
             core::mem::take(&mut pending)
@@ -140,6 +141,7 @@ pub(super) fn dead_banded(deg: f32, band: f32) -> f32 {
 }
 
 /// What a replan needs: the scenario, the estimate, and the budget.
+#[derive(Clone, Copy)]
 pub struct ReplanInput<'a> {
     /// The planning problem (obstacles, weights, bounds, driver).
     pub scenario: &'a Scenario,
@@ -159,6 +161,9 @@ pub struct ReplanInput<'a> {
     pub inserted_mm: f32,
     /// Bevel turns smaller than this are left out of a continuation (degrees).
     pub dead_band_deg: f32,
+    /// The share of the curvature a continuation's arcs are pushed at (1: plain pushes; below,
+    /// duty-cycled, keeping the rest in hand).
+    pub arc_duty: f32,
 }
 
 /// A continuation that passed the check.
@@ -185,6 +190,7 @@ fn sub_scenario(input: &ReplanInput) -> Scenario {
     let h = input.tip.e3();
     s.entry.direction = [h.x, h.y, h.z];
     s.needle.curvature_radius = input.radius;
+    s.options.curvature_reserve = 1.0 - input.arc_duty;
     if s.options.workspace == Workspace::PlaneYz {
         for o in s.obstacles.iter_mut() {
             o.center[0] = input.tip.p.x;
@@ -207,7 +213,7 @@ fn attempt(
     let mut x0: Vars = [0.0; MAX_VARS];
     for (i, seg) in start.iter().enumerate().take(form.len()) {
         let k = p.length_var(i);
-        x0[k] = crate::fmath::clamp(seg.length / input.radius, p.lower[k], p.upper[k]);
+        x0[k] = crate::fmath::clamp(seg.length / p.radius, p.lower[k], p.upper[k]);
         if let Some(b) = p.bevel_var(i) {
             x0[b] = seg.bevel_deg.to_radians();
         }
@@ -250,8 +256,13 @@ fn attempt(
 /// the twist limit kept.
 #[inline(never)]
 fn checked(input: &ReplanInput, segments: &[SegmentPlan], spent: &(u32, u32)) -> Option<Replanned> {
-    let (steps, peak) =
-        continuation_steps(&input.scenario.driver, segments, input.twist_deg).ok()?;
+    let (steps, peak) = continuation_steps(
+        &input.scenario.driver,
+        segments,
+        input.twist_deg,
+        input.arc_duty,
+    )
+    .ok()?;
     let length: f32 = segments.iter().map(|s| s.length).sum();
     sound(input, steps, peak, length, spent)
 }
@@ -346,11 +357,35 @@ fn variants(remaining: &[SegmentPlan], aim_deg: f32) -> [Option<Segments>; 3] {
 }
 
 /// Re-plans from the estimate: the remaining segments first (warm start), then the same with a
-/// degree of freedom more ([`variants`]), then the short forms RL, LR and RR aimed at the target.
+/// degree of freedom more ([`variants`]), then the short forms RL, LR and RR aimed at the target,
+/// all at the continuation's arc duty; then the duty-cycled arc aimed through the target; then,
+/// when the arcs keep curvature in hand, the short forms at the needle's full curvature.
 /// Returns the continuation (if any passes the check), the evaluations and the iterations spent.
 pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
-    let sub = sub_scenario(input);
     let mut spent = (0u32, 0u32);
+    let found = forms_from(input, remaining, &mut spent)
+        .or_else(|| super::aimed::aimed_duty(input, &spent))
+        .or_else(|| {
+            (input.arc_duty < 1.0)
+                .then(|| {
+                    let full = ReplanInput {
+                        arc_duty: 1.0,
+                        ..*input
+                    };
+                    forms_from(&full, &[], &mut spent)
+                })
+                .flatten()
+        });
+    (found, spent.0, spent.1)
+}
+
+/// The forms tried from the tip (see [`replan`]), the first that passes the check.
+fn forms_from(
+    input: &ReplanInput,
+    remaining: &[SegmentPlan],
+    spent: &mut (u32, u32),
+) -> Option<Replanned> {
+    let sub = sub_scenario(input);
     // Aim the bevel at the target, across the heading.
     let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let bevel_deg = crate::fmath::atan2(-local.x, local.y).to_degrees();
@@ -360,14 +395,15 @@ pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replann
         let Some(form) = form_of(start) else {
             continue;
         };
-        if let Some(r) = attempt(input, &sub, form, start, &mut spent) {
-            return (Some(r), spent.0, spent.1);
+        if let Some(r) = attempt(input, &sub, form, start, spent) {
+            return Some(r);
         }
     }
+    let radius = sub.planned_radius();
     let ahead = local.z.max(1.0);
     let sideways = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
     let turn = crate::fmath::atan2(2.0 * sideways, ahead);
-    let arc = (turn * input.radius).max(0.5);
+    let arc = (turn * radius).max(0.5);
     let seg = |kind, length, bevel_deg| SegmentPlan {
         kind,
         length,
@@ -401,11 +437,11 @@ pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replann
         let Some(form) = Form::parse(word) else {
             continue;
         };
-        if let Some(r) = attempt(input, &sub, form, &start, &mut spent) {
-            return (Some(r), spent.0, spent.1);
+        if let Some(r) = attempt(input, &sub, form, &start, spent) {
+            return Some(r);
         }
     }
-    (super::aimed::aimed_duty(input, &spent), spent.0, spent.1)
+    None
 }
 
 #[cfg(test)]
@@ -444,6 +480,7 @@ mod tests {
             margin: 0.3,
             inserted_mm: 0.0,
             dead_band_deg: 0.0,
+            arc_duty: 1.0,
         };
         let (found, evaluations, iterations) = replan(&input, &remaining);
         let found = found.expect("a continuation");

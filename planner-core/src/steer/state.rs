@@ -347,6 +347,7 @@ impl Steering {
                 margin,
                 inserted_mm: self.depth,
                 dead_band_deg: self.config.rotation_dead_band_deg,
+                arc_duty: self.scenario.arc_duty(),
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);
