@@ -106,17 +106,41 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         .sum();
     assert!((f(&t["open_loop"]["mean_target_error"]) - weighted / runs as f64).abs() < 1e-6);
     check_figures(t, runs);
-    // The totals by planned form partition the rows.
+    // The totals by form partition the rows: open loop by the open-loop plan's form, closed
+    // loop by the steered plan's.
     let by_form = v["by_form"].as_object().unwrap();
     for (form, ft) in by_form {
-        let mine: Vec<&Value> = rows.iter().filter(|r| r["form"] == form.as_str()).collect();
-        assert_eq!(u(&ft["scenarios"]), mine.len() as u64, "{form}");
-        let reached: u64 = mine.iter().map(|r| u(&r["closed_loop"]["reached"])).sum();
-        assert_eq!(u(&ft["closed_loop"]["reached"]), reached, "{form}");
-        check_figures(ft, 4 * mine.len() as u64);
+        let open: Vec<&Value> = rows.iter().filter(|r| r["form"] == form.as_str()).collect();
+        assert_eq!(u(&ft["scenarios"]), open.len() as u64, "{form}");
+        assert_eq!(u(&ft["runs"]), 4 * open.len() as u64, "{form}");
+        let steered: Vec<&Value> = rows
+            .iter()
+            .filter(|r| r["closed_loop_plan"]["form"] == form.as_str())
+            .collect();
+        assert_eq!(u(&ft["closed_loop_scenarios"]), steered.len() as u64);
+        if steered.is_empty() {
+            assert!(ft["closed_loop"].is_null(), "{form}");
+            continue;
+        }
+        let reached: u64 = steered
+            .iter()
+            .map(|r| u(&r["closed_loop"]["reached"]))
+            .sum();
+        let c = &ft["closed_loop"];
+        assert_eq!(u(&c["reached"]), reached, "{form}");
+        assert_eq!(u(&c["reached"]) + u(&c["stops"]), 4 * steered.len() as u64);
     }
     let counted: u64 = by_form.values().map(|ft| u(&ft["scenarios"])).sum();
     assert_eq!(counted, rows.len() as u64);
+    let steered: u64 = by_form
+        .values()
+        .map(|ft| u(&ft["closed_loop_scenarios"]))
+        .sum();
+    assert_eq!(steered, rows.len() as u64);
+    for row in rows {
+        let reserve = f(&row["closed_loop_plan"]["curvature_reserve"]);
+        assert!(reserve == 0.2 || reserve == 0.1, "{row}");
+    }
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(u(&row["runs"]), 4);
         check_figures(row, 4);

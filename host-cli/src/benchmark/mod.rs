@@ -262,6 +262,12 @@ mod tests {
         };
         let (full, reserved) = (reached(0.0), reached(0.2));
         assert!(full <= 10 && reserved == 20, "{full} {reserved}");
+        // A target only the needle's full bend reaches is refused for steering, with why.
+        let e = measure(unseen_scenario(229), &p, &args(0.2), 229, 2).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("no path keeps a curvature reserve of 0.1"),
+            "{e:#}"
+        );
     }
 
     #[test]
