@@ -235,6 +235,22 @@ mod tests {
 
     /// A scenario with no feasible plan is reported with its reason, not a panic; the table
     /// lists it and the totals count it.
+    /// The command's defaults for `scenarios` scenarios from `seed`, `runs` worlds each.
+    fn args(scenarios: usize, seed: u64, runs: usize) -> BenchmarkArgs {
+        BenchmarkArgs {
+            scenarios,
+            seed,
+            runs,
+            threads: None,
+            json: false,
+            perturb: Vec::new(),
+            write_scenarios: None,
+            max_collision_probability: None,
+            open_loop_only: false,
+            curvature_reserve: CLOSED_LOOP_CURVATURE_RESERVE,
+        }
+    }
+
     /// Keeping curvature in hand is what lets the controller reach the target when the tissue
     /// bends less than the plan assumed: on a scenario planned as one arc, steering the plan
     /// made at the needle's full curvature ends most runs `missed`, the reserved one reaches
@@ -243,16 +259,8 @@ mod tests {
     fn the_curvature_reserve_gives_the_closed_loop_its_reach() {
         let p = Perturbation::default();
         let args = |curvature_reserve| BenchmarkArgs {
-            scenarios: 1,
-            seed: 111,
-            runs: 20,
-            threads: None,
-            json: false,
-            perturb: Vec::new(),
-            write_scenarios: None,
-            max_collision_probability: None,
-            open_loop_only: false,
             curvature_reserve,
+            ..args(1, 111, 20)
         };
         let reached = |reserve| {
             let row = measure(unseen_scenario(111), &p, &args(reserve), 111, 2).unwrap();
@@ -276,18 +284,7 @@ mod tests {
         // The first sphere blocks the straight line, the one path a single line can take.
         s.options.forms.insert(parse_form("L").unwrap());
         let p = Perturbation::default();
-        let args = BenchmarkArgs {
-            scenarios: 2,
-            seed: 101,
-            runs: 2,
-            threads: None,
-            json: false,
-            perturb: Vec::new(),
-            write_scenarios: None,
-            max_collision_probability: None,
-            open_loop_only: false,
-            curvature_reserve: CLOSED_LOOP_CURVATURE_RESERVE,
-        };
+        let args = args(2, 101, 2);
         let reason = format!("{:#}", measure(s.clone(), &p, &args, 101, 1).unwrap_err());
         assert!(
             reason.contains("planning") || reason.contains("reach"),
