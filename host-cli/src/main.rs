@@ -9,7 +9,7 @@ use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
 use needle_cli::scenario::{
     load_execution, load_scenario, load_scenario_shapes, restrict, Execution,
 };
-use planner_core::chance::{plan_within_risk, ChancePlan};
+use planner_core::chance::{plan_within_risk_as, ChancePlan};
 use planner_core::execute::risk::ExecutionRisk;
 use planner_core::execute::schedule::Schedule;
 use planner_core::{PlanReport, Scenario};
@@ -194,9 +194,10 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let execution = load_execution(&args.file)?;
     let start = Instant::now();
     let chance = match execution.max_collision_probability {
-        Some(bound) => {
-            Some(plan_within_risk(&scenario, &execution.model, bound).context("planning failed")?)
-        }
+        Some(bound) => Some(
+            plan_within_risk_as(&scenario, &execution.model, bound, execution.predicted_as())
+                .context("planning failed")?,
+        ),
         None => None,
     };
     let planned = match &chance {
@@ -215,7 +216,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
     };
     let predicted = execution.given.then(|| Predicted {
         execution: &execution,
-        risks: form_risks(&scenario, &planned.report, &execution.model),
+        risks: form_risks(&scenario, &planned.report, &execution),
         chance: chance.as_ref(),
     });
     let report = &planned.report;

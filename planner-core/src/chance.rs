@@ -11,7 +11,7 @@
 //! reported is that of the final plan: the bound is met only when it says so.
 
 use crate::execute::perturbation::Perturbation;
-use crate::execute::risk::{execution_risk_by_obstacle, ExecutionRisk, ObstacleRisk};
+use crate::execute::risk::{risk_by_obstacle, Execution, ExecutionRisk, ObstacleRisk};
 use crate::execute::ScheduledPlan;
 use crate::model::scenario::Scenario;
 use crate::{plan_scheduled, Field, PlanError, MAX_OBSTACLES};
@@ -124,6 +124,17 @@ pub fn plan_within_risk(
     model: &Perturbation,
     bound: f32,
 ) -> Result<ChancePlan, PlanError> {
+    plan_within_risk_as(scenario, model, bound, Execution::OpenLoop)
+}
+
+/// [`plan_within_risk`] for the plan executed as `execution` says: steered, the spread is the
+/// one the closed loop leaves.
+pub fn plan_within_risk_as(
+    scenario: &Scenario,
+    model: &Perturbation,
+    bound: f32,
+    execution: Execution,
+) -> Result<ChancePlan, PlanError> {
     if !bound.is_finite() {
         return Err(PlanError::NotFinite(Field::MaxCollisionProbability));
     }
@@ -140,10 +151,11 @@ pub fn plan_within_risk(
         let planned = plan_scheduled(&grown(scenario, &margins))?;
         let mut by_obstacle = [ObstacleRisk::default(); MAX_OBSTACLES];
         let risk = match &planned.schedule {
-            Some(Ok(schedule)) => Some(execution_risk_by_obstacle(
+            Some(Ok(schedule)) => Some(risk_by_obstacle(
                 scenario,
                 schedule,
                 model,
+                execution,
                 &mut by_obstacle,
             )),
             _ => None,

@@ -3,9 +3,12 @@
 //! (its mean and p95 are those of every run, not an average of the rows').
 
 use crate::simulate::steering::summarise_steering;
+use crate::simulate::Prepared;
 use crate::simulate::Spread;
 use needle_sim::{ClosedRun, Perturbation, Run};
-use planner_core::FormOutcome;
+use planner_core::execute::risk::{risk_by_obstacle, Execution, ObstacleRisk};
+use planner_core::steer::SteerConfig;
+use planner_core::{FormOutcome, Scenario};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -178,16 +181,29 @@ pub struct SteeredPlan {
     pub plan_clearance: f32,
     /// The curvature reserve it keeps (the one asked for, or less where no path keeps that).
     pub curvature_reserve: f32,
+    /// The collision probability the closed loop's spread predicts for it (first order).
+    pub predicted_collision_probability: f64,
 }
 
 impl SteeredPlan {
-    /// The plan `outcome` of `scenario`.
-    pub fn of(scenario: &planner_core::Scenario, outcome: &FormOutcome) -> SteeredPlan {
+    /// The plan `prepared` of `scenario`, its risk predicted steered under `model`.
+    pub fn of(scenario: &Scenario, prepared: &Prepared, model: &Perturbation) -> SteeredPlan {
+        let outcome = &prepared.outcome;
+        let mut by_obstacle = [ObstacleRisk::default(); planner_core::MAX_OBSTACLES];
+        let steered = Execution::Steered(SteerConfig::DEFAULT.noise);
+        let risk = risk_by_obstacle(
+            scenario,
+            &prepared.schedule,
+            model,
+            steered,
+            &mut by_obstacle,
+        );
         SteeredPlan {
             form: outcome.form.to_string(),
             plan_length: outcome.length,
             plan_clearance: outcome.min_clearance,
             curvature_reserve: scenario.options.curvature_reserve,
+            predicted_collision_probability: f64::from(risk.collision_probability),
         }
     }
 }
@@ -215,8 +231,11 @@ pub struct ScenarioRow {
     pub predicted: PredictedFigures,
     /// Open-loop figures.
     pub open_loop: OpenFigures,
-    /// The plan steered closed loop (null with `--open-loop-only`).
+    /// The plan steered closed loop (null with `--open-loop-only` or when refused).
     pub closed_loop_plan: Option<SteeredPlan>,
+    /// Why the scenario was not steered (no steered plan keeps the curvature reserve or the
+    /// bound); null when it was, or with `--open-loop-only`.
+    pub closed_loop_refused: Option<String>,
     /// Closed-loop figures (null with `--open-loop-only`).
     pub closed_loop: Option<ClosedFigures>,
     /// The runs behind the figures (for the totals).
@@ -232,9 +251,13 @@ impl ScenarioRow {
         target_distance: f32,
         outcome: &FormOutcome,
         predicted: PredictedFigures,
-        closed_loop_plan: Option<SteeredPlan>,
+        closed_loop_plan: Result<Option<SteeredPlan>, String>,
         pool: Pool,
     ) -> ScenarioRow {
+        let (closed_loop_plan, closed_loop_refused) = match closed_loop_plan {
+            Ok(plan) => (plan, None),
+            Err(reason) => (None, Some(reason)),
+        };
         ScenarioRow {
             seed,
             spheres,
@@ -247,6 +270,7 @@ impl ScenarioRow {
             predicted,
             open_loop: pool.open(),
             closed_loop_plan,
+            closed_loop_refused,
             closed_loop: pool.closed(),
             pool,
         }
@@ -255,6 +279,7 @@ impl ScenarioRow {
     /// The row in a few words, for the progress line.
     pub fn progress(&self) -> String {
         let o = &self.open_loop;
+        let refused = self.closed_loop_refused.as_ref();
         let closed = self.closed_loop.as_ref().map_or(String::new(), |c| {
             format!(
                 "; closed loop {} reached, {} stopped, {} hit",
@@ -262,13 +287,14 @@ impl ScenarioRow {
             )
         });
         format!(
-            "{} spheres, {} {:.1} mm; open loop {} of {} hit (predicted {:.1} %){closed}",
+            "{} spheres, {} {:.1} mm; open loop {} of {} hit (predicted {:.1} %){closed}{}",
             self.spheres,
             self.form,
             self.plan_length,
             o.hits,
             self.runs,
-            100.0 * self.predicted.collision_probability
+            100.0 * self.predicted.collision_probability,
+            refused.map_or(String::new(), |r| format!("; not steered: {r}"))
         )
     }
 }
@@ -301,6 +327,9 @@ pub struct Totals {
     /// predictions, weighted by their runs).
     pub predicted_collision_probability: f64,
     /// Closed-loop figures over every run (null with `--open-loop-only`).
+    /// Scenarios planned but refused for steering (their rows say why; their open-loop runs
+    /// count).
+    pub closed_loop_refused: usize,
     pub closed_loop: Option<ClosedFigures>,
 }
 
@@ -381,6 +410,10 @@ impl BenchmarkReport {
                 runs: all.runs,
                 open_loop: all.open(),
                 predicted_collision_probability: expected_hits / all.runs.max(1) as f64,
+                closed_loop_refused: rows
+                    .iter()
+                    .filter(|r| r.closed_loop_refused.is_some())
+                    .count(),
                 closed_loop: all.closed(),
             },
             by_form,

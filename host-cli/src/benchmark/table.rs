@@ -59,9 +59,17 @@ fn steered_plans(out: &mut String, asked: f32, r: &BenchmarkReport) {
         if let Some(p) = &row.closed_loop_plan {
             let _ = writeln!(
                 out,
-                "  seed {}: {} {:.1} mm, clearance {:.2} mm, reserve {}",
-                row.seed, p.form, p.plan_length, p.plan_clearance, p.curvature_reserve
+                "  seed {}: {} {:.1} mm, clearance {:.2} mm, reserve {}, predicted {:.2} %",
+                row.seed,
+                p.form,
+                p.plan_length,
+                p.plan_clearance,
+                p.curvature_reserve,
+                100.0 * p.predicted_collision_probability
             );
+        }
+        if let Some(reason) = &row.closed_loop_refused {
+            let _ = writeln!(out, "  seed {}: not steered: {reason}", row.seed);
         }
     }
 }

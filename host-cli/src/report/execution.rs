@@ -8,7 +8,7 @@ use super::json::{finite, PlanJson};
 use crate::scenario::Execution;
 use planner_core::chance::ChancePlan;
 use planner_core::execute::perturbation::Perturbation;
-use planner_core::execute::risk::{execution_risk, ExecutionRisk};
+use planner_core::execute::risk::{risk_by_obstacle, ExecutionRisk, ObstacleRisk};
 use planner_core::execute::schedule::schedule;
 use planner_core::{PlanReport, Scenario};
 use serde::{Deserialize, Serialize};
@@ -36,14 +36,21 @@ pub struct ExecutionJson {
 pub fn form_risks(
     scenario: &Scenario,
     report: &PlanReport,
-    model: &Perturbation,
+    execution: &Execution,
 ) -> Vec<Option<ExecutionRisk>> {
+    let mut by_obstacle = [ObstacleRisk::default(); planner_core::MAX_OBSTACLES];
     report
         .forms
         .iter()
         .map(|o| {
             let s = o.feasible.then(|| schedule(scenario, o).ok()).flatten()?;
-            Some(execution_risk(scenario, &s, model))
+            Some(risk_by_obstacle(
+                scenario,
+                &s,
+                &execution.model,
+                execution.predicted_as(),
+                &mut by_obstacle,
+            ))
         })
         .collect()
 }

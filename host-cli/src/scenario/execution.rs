@@ -6,6 +6,8 @@
 use super::file::ScenarioFile;
 use anyhow::{bail, Context, Result};
 use planner_core::execute::perturbation::Perturbation;
+use planner_core::execute::risk;
+use planner_core::steer::SteerConfig;
 use std::path::Path;
 
 /// The curvature reserve (`planner.curvature_reserve`) of a scenario whose `execution.mode` is
@@ -58,6 +60,17 @@ impl Default for Execution {
     }
 }
 
+impl Execution {
+    /// How the planner predicts the spread: open loop, or the closed loop's (the steering's own
+    /// estimator noise model, never the world's).
+    pub fn predicted_as(&self) -> risk::Execution {
+        match self.mode {
+            ExecutionMode::OpenLoop => risk::Execution::OpenLoop,
+            ExecutionMode::ClosedLoop => risk::Execution::Steered(SteerConfig::DEFAULT.noise),
+        }
+    }
+}
+
 /// The execution of a parsed scenario file.
 pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
     let mut out = Execution::default();
@@ -91,13 +104,6 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
             bail!("planner.max_collision_probability = {bound}: allowed is more than 0 and less than 1");
         }
         out.max_collision_probability = Some(bound);
-    }
-    if out.mode == ExecutionMode::ClosedLoop && out.max_collision_probability.is_some() {
-        bail!(
-            "execution.mode = \"closed_loop\" with planner.max_collision_probability: the spread \
-             the closed loop leaves is not predicted yet; plan for \"open_loop\" (a bound the \
-             closed loop keeps a fortiori)"
-        );
     }
     Ok(out)
 }
@@ -140,19 +146,45 @@ mod tests {
     #[test]
     fn bad_values_name_the_key() {
         for (extra, says) in [
-            ("[execution]\ncurvature = 0.1\n", "unknown perturbation `curvature`"),
-            ("[execution]\ncurvature_spread = -1\n", "curvature_spread = -1 is outside"),
-            ("[execution]\ncurvature_spread = \"x\"\n", "execution.curvature_spread is `\"x\"`"),
-            ("[execution]\nmode = \"fast\"\n", "execution.mode is `\"fast\"`"),
-            ("[planner]\nmax_collision_probability = 1.5\n", "max_collision_probability = 1.5"),
             (
-                "[execution]\nmode = \"closed_loop\"\n[planner]\nmax_collision_probability = 0.01\n",
-                "not predicted yet",
+                "[execution]\ncurvature = 0.1\n",
+                "unknown perturbation `curvature`",
+            ),
+            (
+                "[execution]\ncurvature_spread = -1\n",
+                "curvature_spread = -1 is outside",
+            ),
+            (
+                "[execution]\ncurvature_spread = \"x\"\n",
+                "execution.curvature_spread is `\"x\"`",
+            ),
+            (
+                "[execution]\nmode = \"fast\"\n",
+                "execution.mode is `\"fast\"`",
+            ),
+            (
+                "[planner]\nmax_collision_probability = 1.5\n",
+                "max_collision_probability = 1.5",
             ),
         ] {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");
         }
+    }
+
+    /// A bound with the closed loop is predicted with the steering's own noise model.
+    #[test]
+    fn a_closed_loop_bound_is_predicted_steered() {
+        let e = parse(
+            "[execution]\nmode = \"closed_loop\"\n[planner]\nmax_collision_probability = 0.01\n",
+        )
+        .unwrap();
+        assert_eq!(e.max_collision_probability, Some(0.01));
+        assert_eq!(
+            e.predicted_as(),
+            risk::Execution::Steered(SteerConfig::DEFAULT.noise)
+        );
+        assert_eq!(parse("").unwrap().predicted_as(), risk::Execution::OpenLoop);
     }
 
     /// A scenario steered closed loop keeps curvature in hand unless it says otherwise; one

@@ -68,6 +68,7 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
         .map(|max_collision_probability| PlanBound {
             model: execution.model,
             max_collision_probability,
+            execution: execution.predicted_as(),
         });
     let mut faults = TrackerFaults::default();
     for kv in &a.fault {

@@ -17,7 +17,7 @@ pub use command::run_simulate;
 use anyhow::{anyhow, Context, Result};
 use needle_sim::Perturbation;
 use needle_sim::Run;
-use planner_core::chance::plan_within_risk;
+use planner_core::chance::plan_within_risk_as;
 use planner_core::execute::schedule::{schedule, Schedule};
 use planner_core::{FormOutcome, Scenario};
 
@@ -38,7 +38,30 @@ pub struct PlanBound {
     pub model: Perturbation,
     /// The bound.
     pub max_collision_probability: f32,
+    /// How the plan is executed, so how its spread is predicted.
+    pub execution: planner_core::execute::risk::Execution,
 }
+
+/// No plan keeps the predicted collision probability within the bound.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundNotMet {
+    /// The bound.
+    pub bound: f32,
+    /// The best plan's predicted probability.
+    pub best: f32,
+}
+
+impl std::fmt::Display for BoundNotMet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "no plan keeps the predicted collision probability within {}: the best found has {:.4}",
+            self.bound, self.best
+        )
+    }
+}
+
+impl std::error::Error for BoundNotMet {}
 
 /// Plans `scenario` (already restricted to the form asked for, if any) and schedules the best;
 /// with a bound, the best must keep it (else an error saying so).
@@ -46,18 +69,17 @@ pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepare
     let report = match bound {
         None => planner_core::plan(scenario).context("planning failed")?,
         Some(b) => {
-            let c = plan_within_risk(scenario, &b.model, b.max_collision_probability)
-                .context("planning failed")?;
+            let c =
+                plan_within_risk_as(scenario, &b.model, b.max_collision_probability, b.execution)
+                    .context("planning failed")?;
             if c.planned.report.best().is_none() {
                 return Err(anyhow!(planner_core::PlanError::Unreachable));
             }
             if !c.within_bound {
-                return Err(anyhow!(
-                    "no plan keeps the predicted collision probability within {}: the best \
-                     found has {:.4}",
-                    b.max_collision_probability,
-                    c.risk.map_or(f32::NAN, |r| r.collision_probability)
-                ));
+                return Err(anyhow!(BoundNotMet {
+                    bound: b.max_collision_probability,
+                    best: c.risk.map_or(f32::NAN, |r| r.collision_probability),
+                }));
             }
             c.planned.report
         }
@@ -89,6 +111,8 @@ pub fn prepare_keeping_reserve(
     let mut s = scenario.clone();
     loop {
         match prepare(&s, bound) {
+            // Not where a path keeps the reserve but misses the bound: halving the reserve to meet
+            // it leaves plans that miss the target instead (docs/execution.md).
             Err(e) if s.options.curvature_reserve > 0.0 && is_unreachable(&e) => {
                 let half = 0.5 * s.options.curvature_reserve;
                 if half < LEAST_CURVATURE_RESERVE {

@@ -14,6 +14,8 @@ use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
 use crate::model::kinematics::V3;
 use crate::model::scenario::{Scenario, Workspace};
+use crate::steer::apriori::propagate_steered;
+use crate::steer::estimate::NoiseModel;
 use nalgebra::Matrix3;
 
 /// Where the spread is evaluated along the path (mm between points at most).
@@ -76,11 +78,34 @@ pub fn execution_risk(scenario: &Scenario, schedule: &Schedule, p: &Perturbation
     execution_risk_by_obstacle(scenario, schedule, p, &mut by_obstacle)
 }
 
+/// How the schedule is executed: as it is (open loop), or steered from the tracked tip by the
+/// controller whose estimator has the given noise model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Execution {
+    /// The schedule as it is.
+    OpenLoop,
+    /// Steered: the spread the closed loop leaves
+    /// ([`propagate_steered`](crate::steer::apriori::propagate_steered)).
+    Steered(NoiseModel),
+}
+
 /// [`execution_risk`], with each obstacle's share written to `by_obstacle`.
 pub fn execution_risk_by_obstacle(
     scenario: &Scenario,
     schedule: &Schedule,
     p: &Perturbation,
+    by_obstacle: &mut ObstacleRisks,
+) -> ExecutionRisk {
+    risk_by_obstacle(scenario, schedule, p, Execution::OpenLoop, by_obstacle)
+}
+
+/// The predicted risk of `schedule` executed as `execution` says, each obstacle's share
+/// written to `by_obstacle`.
+pub fn risk_by_obstacle(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    execution: Execution,
     by_obstacle: &mut ObstacleRisks,
 ) -> ExecutionRisk {
     let plane = scenario.options.workspace == Workspace::PlaneYz;
@@ -89,7 +114,7 @@ pub fn execution_risk_by_obstacle(
         clearance: f32::INFINITY,
         sd: 0.0,
     }; crate::MAX_OBSTACLES];
-    let end = propagate(scenario, schedule, p, RISK_SPACING_MM, |tip| {
+    let visit = |tip: &TipSpread| {
         for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
             let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
             if plane {
@@ -118,14 +143,25 @@ pub fn execution_risk_by_obstacle(
                 };
             }
         }
-    });
+    };
+    let (end, shift) = match execution {
+        Execution::OpenLoop => (
+            propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
+            p.target_shift_mm * p.target_shift_mm,
+        ),
+        // Steered, the needle follows the displaced target as it is seen: the end strays from
+        // the plan by the displacement, but misses the target by the estimate's error alone.
+        Execution::Steered(noise) => (
+            propagate_steered(scenario, schedule, p, &noise, RISK_SPACING_MM, visit),
+            -(p.target_shift_mm * p.target_shift_mm),
+        ),
+    };
     let collision_probability = by_obstacle
         .iter()
         .map(|o| o.probability)
         .sum::<f32>()
         .min(1.0);
     let t = scenario.target.position;
-    let shift = p.target_shift_mm * p.target_shift_mm;
     let miss = end.mean - V3::new(t[0], t[1], t[2]);
     let target_error_p95 = norm_quantile(&miss, &(end.covariance + Matrix3::identity() * shift));
     ExecutionRisk {

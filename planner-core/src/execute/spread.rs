@@ -21,7 +21,7 @@ use crate::model::scenario::Scenario;
 use nalgebra::{Matrix3, Matrix6, SMatrix, Vector6};
 
 /// An infinitesimal rigid motion per unit of a source: angular part, then linear part.
-type Twist = Vector6<f32>;
+pub(crate) type Twist = Vector6<f32>;
 
 /// The tip's predicted position at one point of the insertion.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,7 +54,7 @@ fn about(axis: V3, point: V3) -> Twist {
 }
 
 /// `A(P)`: how a twist moves the point `p` (`w × p + v`).
-fn lever(p: &V3) -> SMatrix<f32, 3, 6> {
+pub(crate) fn lever(p: &V3) -> SMatrix<f32, 3, 6> {
     SMatrix::<f32, 3, 6>::from_row_slice(&[
         0.0, p.z, -p.y, 1.0, 0.0, 0.0, //
         -p.z, 0.0, p.x, 0.0, 1.0, 0.0, //
@@ -94,18 +94,18 @@ fn drift_twists(start: &Frame, length: f32) -> [Twist; 2] {
 }
 
 /// The run of the propagation: what has accumulated upstream of the tip.
-struct Sources {
+pub(crate) struct Sources {
     /// Independent sources already complete: Σ σ² s sᵀ.
-    done: Matrix6<f32>,
+    pub done: Matrix6<f32>,
     /// The run's curvature factor, shared by every arc (per unit factor).
-    run_curvature: Twist,
+    pub run_curvature: Twist,
     /// The current segment's curvature factor (consecutive pushes share one draw).
-    segment_curvature: Twist,
+    pub segment_curvature: Twist,
     /// The current spun line's drift rates (consecutive spins share one draw).
-    drift: [Twist; 2],
+    pub drift: [Twist; 2],
 }
 
-fn outer(s: &Twist, variance: f32) -> Matrix6<f32> {
+pub(crate) fn outer(s: &Twist, variance: f32) -> Matrix6<f32> {
     s * s.transpose() * variance
 }
 
@@ -136,6 +136,44 @@ pub fn propagate(
     spacing: f32,
     mut visit: impl FnMut(&TipSpread),
 ) -> TipSpread {
+    let mut tip = None;
+    walk(scenario, schedule, p, spacing, |at| {
+        let t = spread_at(at.src, at.part, p, at.depth, at.planned, at.mean);
+        visit(&t);
+        tip = Some(t);
+    });
+    // The walk visits the posture at least.
+    tip.unwrap_or(TipSpread {
+        depth: 0.0,
+        planned: V3::zeros(),
+        mean: V3::zeros(),
+        covariance: Matrix3::zeros(),
+    })
+}
+
+/// One point of the walk along a schedule: the sources upstream of it and the push under way.
+pub(crate) struct WalkPoint<'a> {
+    pub src: &'a Sources,
+    pub part: &'a Partial,
+    /// Needle inserted (mm, commanded).
+    pub depth: f32,
+    pub planned: V3,
+    pub mean: V3,
+    /// The shared draw of segment curvature and drift under way (counted from 0; one per run
+    /// of pushes of one kind).
+    pub group: usize,
+    /// The push under way (counted from 0; `None` at the posture).
+    pub push: Option<usize>,
+}
+
+/// Walks `schedule` as [`propagate`] describes, handing `at` each point.
+pub(crate) fn walk(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    spacing: f32,
+    mut at: impl FnMut(&WalkPoint),
+) {
     let radius = scenario.needle.curvature_radius;
     let spacing = if spacing > 0.0 { spacing } else { 1.0 };
     let mut planned = posture_frame(scenario, schedule);
@@ -150,8 +188,16 @@ pub fn propagate(
     let mut torsion = TorsionPlay::new(p);
     let mut depth = 0.0f32;
     let mut last = None;
-    let mut tip = spread_at(&src, &Partial::NONE, p, depth, planned.p, mean.p);
-    visit(&tip);
+    let (mut group, mut push) = (0usize, 0usize);
+    at(&WalkPoint {
+        src: &src,
+        part: &Partial::NONE,
+        depth,
+        planned: planned.p,
+        mean: mean.p,
+        group,
+        push: None,
+    });
     for step in &schedule.steps {
         let Some((kind, length, r)) = step.op.segment(radius) else {
             if let Op::Rotate { angle_deg } = step.op {
@@ -166,6 +212,9 @@ pub fn propagate(
         let duty = matches!(step.op, Op::InsertDuty { .. });
         let key = (kind, duty);
         if last != Some(key) {
+            if push > 0 {
+                group += 1;
+            }
             src.flush(p);
         }
         last = Some(key);
@@ -175,14 +224,20 @@ pub fn propagate(
             let t = length * k as f32 / pieces as f32;
             let shared = advance_sd * t / length.max(1e-6);
             let part = Partial::of(kind, duty, &mean, t, r, shared);
-            let at_planned = planned.point_at(kind, t, r);
-            let at_mean = mean.point_at(kind, t, r);
-            tip = spread_at(&src, &part, p, depth + t, at_planned, at_mean);
-            visit(&tip);
+            at(&WalkPoint {
+                src: &src,
+                part: &part,
+                depth: depth + t,
+                planned: planned.point_at(kind, t, r),
+                mean: mean.point_at(kind, t, r),
+                group,
+                push: Some(push),
+            });
             if k == pieces {
                 src.complete(&part, advance_sd);
             }
         }
+        push += 1;
         depth += length;
         planned = planned.advanced(kind, length, r);
         mean = mean.advanced(kind, length, r);
@@ -190,7 +245,6 @@ pub fn propagate(
             mean = mean.rolled(torsion.spin_settles(depth).to_radians());
         }
     }
-    tip
 }
 
 /// The entry's offset (per axis) and tilt (about the posture frame's `e1` and `e2`).
@@ -208,15 +262,15 @@ fn entry_sources(start: &Frame, p: &Perturbation) -> Matrix6<f32> {
 }
 
 /// The sources of the push under way, up to a point of it.
-struct Partial {
-    curvature: Twist,
-    drift: [Twist; 2],
-    advance: Twist,
-    advance_sd: f32,
+pub(crate) struct Partial {
+    pub curvature: Twist,
+    pub drift: [Twist; 2],
+    pub advance: Twist,
+    pub advance_sd: f32,
 }
 
 impl Partial {
-    const NONE: Partial = Partial {
+    pub(crate) const NONE: Partial = Partial {
         curvature: Twist::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
         drift: [Twist::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0); 2],
         advance: Twist::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
@@ -273,7 +327,7 @@ impl Sources {
     }
 
     /// Σ σ² s sᵀ at a point `part` of the way into the push under way.
-    fn at(&self, part: &Partial, p: &Perturbation) -> Matrix6<f32> {
+    pub(crate) fn at(&self, part: &Partial, p: &Perturbation) -> Matrix6<f32> {
         let (run, seg, drift) = (
             p.curvature_spread,
             p.segment_curvature_spread,

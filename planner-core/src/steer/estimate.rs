@@ -343,6 +343,11 @@ impl Estimate {
         crate::fmath::sqrt(v)
     }
 
+    /// Covariance of the position estimate (mm²).
+    pub fn position_covariance(&self) -> Matrix3<f32> {
+        self.cov.fixed_view::<3, 3>(0, 0).into_owned()
+    }
+
     /// Standard deviation of the target estimate, per axis (mm).
     pub fn target_sd(&self) -> f32 {
         crate::fmath::sqrt(self.target_var)

@@ -28,6 +28,7 @@
 //! ```
 
 mod aimed;
+pub mod apriori;
 pub mod estimate;
 mod matmul;
 pub mod replan;
