@@ -98,10 +98,21 @@ pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepare
 /// (docs/execution.md, "Curvature in hand": such plans reached the target in 8 to 45 % of runs).
 pub const LEAST_CURVATURE_RESERVE: f32 = 0.1;
 
+/// The least curvature reserve given up to meet a collision bound: a plan that meets the bound
+/// only with less is refused for it rather than steered with too little curvature in hand
+/// (docs/execution.md, "The closed loop under its own bound": plans kept at 0.1 to meet it
+/// missed the target in 2 % of runs).
+pub const LEAST_CURVATURE_RESERVE_FOR_BOUND: f32 = 0.15;
+
+/// How much curvature reserve one more try at the bound gives up.
+const RESERVE_STEP_FOR_BOUND: f32 = 0.05;
+
 /// [`prepare`], keeping as much of the scenario's curvature reserve as a path allows: where
 /// no path exists at the reserve asked for (a target close behind an obstacle needs the
 /// needle's full bend), the reserve is halved while it stays at least
-/// [`LEAST_CURVATURE_RESERVE`]; under that the scenario is refused, saying why. A scenario
+/// [`LEAST_CURVATURE_RESERVE`]; where paths exist but none keeps the bound, it is lowered by
+/// 0.05 while it stays at least [`LEAST_CURVATURE_RESERVE_FOR_BOUND`] (a wider needle bend has
+/// more room around the spheres). Otherwise the scenario is refused, saying why. A scenario
 /// without a reserve is planned as it is. Returns the scenario with the reserve planned with,
 /// and the plan.
 pub fn prepare_keeping_reserve(
@@ -110,24 +121,32 @@ pub fn prepare_keeping_reserve(
 ) -> Result<(Scenario, Prepared)> {
     let mut s = scenario.clone();
     loop {
-        match prepare(&s, bound) {
-            // Not where a path keeps the reserve but misses the bound: halving the reserve to meet
-            // it leaves plans that miss the target instead (docs/execution.md).
-            Err(e) if s.options.curvature_reserve > 0.0 && is_unreachable(&e) => {
-                let half = 0.5 * s.options.curvature_reserve;
-                if half < LEAST_CURVATURE_RESERVE {
-                    return Err(e.context(format!(
-                        "no path keeps a curvature reserve of {} or more for steering (planned \
-                         at the needle's full curvature, a tissue that bends a little less \
-                         leaves the target out of reach)",
-                        s.options.curvature_reserve
-                    )));
-                }
-                s.options.curvature_reserve = half;
+        let e = match prepare(&s, bound) {
+            Ok(p) => return Ok((s, p)),
+            Err(e) => e,
+        };
+        let reserve = s.options.curvature_reserve;
+        let lowered = reserve - RESERVE_STEP_FOR_BOUND;
+        s.options.curvature_reserve = if reserve > 0.0 && is_unreachable(&e) {
+            let half = 0.5 * reserve;
+            if half < LEAST_CURVATURE_RESERVE {
+                return Err(e.context(format!(
+                    "no path keeps a curvature reserve of {reserve} or more for steering \
+                     (planned at the needle's full curvature, a tissue that bends a little less \
+                     leaves the target out of reach)"
+                )));
             }
-            other => return other.map(|p| (s, p)),
-        }
+            half
+        } else if misses_bound(&e) && lowered >= LEAST_CURVATURE_RESERVE_FOR_BOUND - 1e-4 {
+            lowered
+        } else {
+            return Err(e);
+        };
     }
+}
+
+fn misses_bound(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<BoundNotMet>().is_some())
 }
 
 fn is_unreachable(e: &anyhow::Error) -> bool {
@@ -298,5 +317,49 @@ mod tests {
         let kept: Vec<bool> = runs.iter().map(|r| !r.run.points.is_empty()).collect();
         assert_eq!(kept, [true, true, false, false, false]);
         assert!(runs.iter().all(|r| r.replan_evaluations.is_empty()));
+    }
+}
+
+#[cfg(test)]
+mod reserve_tests {
+    use super::*;
+    use crate::scenario::unseen::unseen_scenario;
+    use planner_core::execute::risk::{risk_by_obstacle, Execution, ObstacleRisk};
+    use planner_core::steer::SteerConfig;
+
+    fn steered(seed: u64) -> (Scenario, PlanBound) {
+        let mut s = unseen_scenario(seed);
+        s.options.curvature_reserve = 0.2;
+        let bound = PlanBound {
+            model: Perturbation::default(),
+            max_collision_probability: 0.01,
+            execution: Execution::Steered(SteerConfig::DEFAULT.noise),
+        };
+        (s, bound)
+    }
+
+    /// Where no plan keeps the steered bound with a fifth of the curvature in hand, a wider
+    /// bend does (seed 223: 2 % at 0.2, within 1 % at 0.15); where none does down to 0.15, the
+    /// scenario is refused with the bound's reason (seed 241: the best 58 %).
+    #[test]
+    fn the_reserve_gives_way_to_the_bound_down_to_its_floor() {
+        let (s, bound) = steered(223);
+        assert!(prepare(&s, Some(&bound)).is_err_and(|e| misses_bound(&e)));
+        let (kept, prepared) = prepare_keeping_reserve(&s, Some(&bound)).unwrap();
+        assert_eq!(kept.options.curvature_reserve, 0.15);
+        let mut by = [ObstacleRisk::default(); planner_core::MAX_OBSTACLES];
+        let r = risk_by_obstacle(
+            &kept,
+            &prepared.schedule,
+            &bound.model,
+            bound.execution,
+            &mut by,
+        );
+        assert!(r.collision_probability <= 0.01, "{r:?}");
+        let (s, bound) = steered(241);
+        let Err(e) = prepare_keeping_reserve(&s, Some(&bound)) else {
+            panic!("seed 241 planned within the bound");
+        };
+        assert!(misses_bound(&e), "{e:#}");
     }
 }
