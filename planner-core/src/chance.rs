@@ -12,7 +12,9 @@
 
 use crate::execute::perturbation::Perturbation;
 use crate::execute::risk::{risk_by_obstacle, Execution, ExecutionRisk, ObstacleRisk};
+use crate::execute::schedule::schedule;
 use crate::execute::ScheduledPlan;
+use crate::model::form::FORM_COUNT;
 use crate::model::scenario::Scenario;
 use crate::{plan_scheduled, Field, PlanError, MAX_OBSTACLES};
 
@@ -191,7 +193,56 @@ pub fn plan_within_risk_as(
         }
     }
     // `last` is set: the first round either returned or set it.
-    last.ok_or(PlanError::Unreachable)
+    let mut last = last.ok_or(PlanError::Unreachable)?;
+    within_bound_by_another_form(scenario, model, bound, execution, &mut last);
+    Ok(last)
+}
+
+/// Where the best form misses the bound, the form of lowest objective among those of the same
+/// plan that keep it becomes the best (a longer form may pass the spheres where the spread is
+/// smaller), if any does.
+fn within_bound_by_another_form(
+    scenario: &Scenario,
+    model: &Perturbation,
+    bound: f32,
+    execution: Execution,
+    plan: &mut ChancePlan,
+) {
+    let report = &plan.planned.report;
+    let mut order = [0u8; FORM_COUNT];
+    let mut n = 0;
+    for (i, o) in report.forms.iter().enumerate() {
+        if o.feasible && Some(i as u8) != report.best && n < order.len() {
+            order[n] = i as u8;
+            n += 1;
+        }
+    }
+    let forms = &report.forms;
+    order[..n].sort_unstable_by(|&a, &b| {
+        let f = |i: u8| {
+            forms
+                .get(usize::from(i))
+                .map_or(f32::INFINITY, |o| o.objective)
+        };
+        f(a).total_cmp(&f(b))
+    });
+    let mut by_obstacle = [ObstacleRisk::default(); MAX_OBSTACLES];
+    for &i in &order[..n] {
+        let Some(outcome) = forms.get(usize::from(i)) else {
+            continue;
+        };
+        let Ok(s) = schedule(scenario, outcome) else {
+            continue;
+        };
+        let risk = risk_by_obstacle(scenario, &s, model, execution, &mut by_obstacle);
+        if risk.collision_probability <= bound {
+            plan.planned.report.best = Some(i);
+            plan.planned.schedule = Some(Ok(s));
+            plan.risk = Some(risk);
+            plan.within_bound = true;
+            return;
+        }
+    }
 }
 
 #[cfg(test)]

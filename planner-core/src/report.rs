@@ -137,8 +137,9 @@ pub type FormOutcomes = heapless::Vec<FormOutcome, FORM_COUNT>;
 pub struct PlanReport {
     /// One outcome per form tried, in catalogue order.
     pub forms: FormOutcomes,
-    /// Index into `forms` of the feasible outcome with the lowest objective; `None` when no form
-    /// is feasible (the target is unreachable with the selected forms: `forms` says how each
+    /// Index into `forms` of the feasible outcome with the lowest objective (planned under a
+    /// collision bound that the lowest misses: the lowest among those that keep it); `None` when
+    /// no form is feasible (the target is unreachable with the selected forms: `forms` says how each
     /// ended).
     pub best: Option<u8>,
 }

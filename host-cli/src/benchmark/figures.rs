@@ -341,8 +341,8 @@ pub struct FormTotals {
     pub scenarios: usize,
     /// Runs over them.
     pub runs: usize,
-    /// Open-loop figures over those runs.
-    pub open_loop: OpenFigures,
+    /// Open-loop figures over those runs (null when no open-loop plan has the form).
+    pub open_loop: Option<OpenFigures>,
     /// Scenarios whose steered plan has the form.
     pub closed_loop_scenarios: usize,
     /// Closed-loop figures over their runs (null when none).
@@ -395,7 +395,7 @@ impl BenchmarkReport {
                 let totals = FormTotals {
                     scenarios,
                     runs: pool.runs,
-                    open_loop: pool.open(),
+                    open_loop: (scenarios > 0).then(|| pool.open()),
                     closed_loop_scenarios,
                     closed_loop: pool.closed(),
                 };

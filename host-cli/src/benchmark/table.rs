@@ -9,13 +9,21 @@ fn mm(v: Option<f64>) -> String {
 }
 
 /// The open- and closed-loop columns (dashes for a closed loop not run).
-fn figures(out: &mut String, predicted: Option<f64>, o: &OpenFigures, c: Option<&ClosedFigures>) {
+fn figures(
+    out: &mut String,
+    predicted: Option<f64>,
+    o: Option<&OpenFigures>,
+    c: Option<&ClosedFigures>,
+) {
     let predicted = predicted.map_or_else(|| "-".to_string(), |p| format!("{:.1}", 100.0 * p));
-    let _ = write!(
-        out,
-        " |{:>7.1}{:>8}{:>8.2}{:>8.2} |",
-        o.hit_percent, predicted, o.mean_target_error, o.p95_target_error
-    );
+    let _ = match o {
+        Some(o) => write!(
+            out,
+            " |{:>7.1}{:>8}{:>8.2}{:>8.2} |",
+            o.hit_percent, predicted, o.mean_target_error, o.p95_target_error
+        ),
+        None => write!(out, " |{:>7}{:>8}{:>8}{:>8} |", "-", "-", "-", "-"),
+    };
     let _ = match c {
         Some(c) => writeln!(
             out,
@@ -45,7 +53,7 @@ fn by_form(out: &mut String, r: &BenchmarkReport) {
                 t.scenarios, t.closed_loop_scenarios
             )
         );
-        figures(out, None, &t.open_loop, t.closed_loop.as_ref());
+        figures(out, None, t.open_loop.as_ref(), t.closed_loop.as_ref());
     }
 }
 
@@ -140,7 +148,7 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         figures(
             &mut out,
             predicted,
-            &row.open_loop,
+            Some(&row.open_loop),
             row.closed_loop.as_ref(),
         );
     }
@@ -151,7 +159,12 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         format!("total: {} scenarios, {} runs", t.planned, t.runs)
     );
     let predicted = Some(t.predicted_collision_probability);
-    figures(&mut out, predicted, &t.open_loop, t.closed_loop.as_ref());
+    figures(
+        &mut out,
+        predicted,
+        Some(&t.open_loop),
+        t.closed_loop.as_ref(),
+    );
     let reasons: Vec<String> = t
         .closed_loop
         .iter()
