@@ -51,5 +51,5 @@ pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
-pub use run::{finish, open_loop, Planned, Run};
+pub use run::{finish, open_loop, Planned, Rotations, Run};
 pub use world::{Drawn, Executed, Measurement, StepDraw, World, MIN_FACTOR};

@@ -4,7 +4,7 @@
 use crate::world::{Drawn, World};
 use crate::{PerturbError, Perturbation};
 use planner_core::check::rebuild;
-use planner_core::execute::schedule::{Schedule, Step};
+use planner_core::execute::schedule::{Op, Schedule, Step};
 use planner_core::model::clearance::closest;
 use planner_core::model::kinematics::{PathGeometry, V3};
 use planner_core::model::scenario::Workspace;
@@ -35,11 +35,57 @@ pub struct Run {
     pub collided: bool,
     /// Smallest clearance of the true path (mm).
     pub min_clearance: f32,
+    /// The bevel rotations the driver executed.
+    pub rotations: Rotations,
     /// The true tip path, at most 1 mm apart.
     pub points: Vec<[f32; 3]>,
     /// What the driver executed.
     #[serde(skip)]
     pub steps: Vec<Step>,
+}
+
+/// The bevel rotations of an insertion: how many, how far in all, the smallest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Rotations {
+    /// Rotations executed (turns of no angle are not counted).
+    pub count: u32,
+    /// Their sizes summed (degrees).
+    pub total_deg: f32,
+    /// The smallest (degrees; null without any).
+    pub smallest_deg: Option<f32>,
+}
+
+impl Rotations {
+    /// The rotations among `steps`.
+    ///
+    /// ```
+    /// use needle_sim::Rotations;
+    /// use planner_core::execute::schedule::{Op, Step};
+    ///
+    /// let step = |op| Step { op, duration_s: 1.0 };
+    /// let steps = [
+    ///     step(Op::Rotate { angle_deg: -30.0 }),
+    ///     step(Op::Insert { length_mm: 5.0 }),
+    ///     step(Op::Rotate { angle_deg: 2.5 }),
+    ///     step(Op::Rotate { angle_deg: 0.0 }),
+    /// ];
+    /// let r = Rotations::of(&steps);
+    /// assert_eq!((r.count, r.total_deg, r.smallest_deg), (2, 32.5, Some(2.5)));
+    /// ```
+    pub fn of(steps: &[Step]) -> Rotations {
+        let mut r = Rotations::default();
+        for step in steps {
+            if let Op::Rotate { angle_deg } = step.op {
+                let size = angle_deg.abs();
+                if size > 0.0 {
+                    r.count += 1;
+                    r.total_deg += size;
+                    r.smallest_deg = Some(r.smallest_deg.map_or(size, |s| s.min(size)));
+                }
+            }
+        }
+        r
+    }
 }
 
 /// The planned path of `outcome`, to measure deviations from.
@@ -122,6 +168,7 @@ pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
         path_max_in_plane: in_plane.then_some(max_in),
         collided: world.min_clearance() < 0.0,
         min_clearance: world.min_clearance(),
+        rotations: Rotations::of(world.executed()),
         points,
         steps: world.executed().to_vec(),
     }

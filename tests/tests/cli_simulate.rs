@@ -31,7 +31,17 @@ fn json_has_exactly_the_contracted_keys() {
             "collisions",
             "min_clearance",
             "path_deviation",
+            "rotations",
             "target_error"
+        ]
+    );
+    assert_eq!(
+        keys(&s["rotations"]),
+        [
+            "max_per_run",
+            "mean_total_deg",
+            "median_per_run",
+            "smallest_deg"
         ]
     );
     assert_eq!(keys(&s["target_error"]), ["max", "mean", "p95", "rms"]);
@@ -489,4 +499,55 @@ fn help_names_both_loops() {
         assert!(!line.contains("(open loop)"), "{line}");
         assert!(line.contains("closed loop"), "{line}");
     }
+}
+
+/// Each steered run reports its bevel rotations, and the summary's figures are those of the
+/// runs: the median count, the most, the smallest turn of any.
+#[test]
+fn rotations_are_reported_per_run_and_summarised() {
+    let v = needle_json(&[
+        "simulate",
+        &paper(),
+        "--runs",
+        "9",
+        "--seed",
+        "3",
+        "--closed-loop",
+        "--json",
+        "--detail",
+    ]);
+    let runs = v["runs_detail"].as_array().unwrap();
+    let mut counts: Vec<u64> = Vec::new();
+    let mut smallest = f64::INFINITY;
+    for r in runs {
+        let turns: Vec<f64> = r["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["op"] == "rotate")
+            .map(|s| s["angle_deg"].as_f64().unwrap().abs())
+            .filter(|a| *a > 0.0)
+            .collect();
+        assert_eq!(
+            r["rotations"]["count"].as_u64().unwrap(),
+            turns.len() as u64
+        );
+        let total: f64 = turns.iter().sum();
+        let reported = r["rotations"]["total_deg"].as_f64().unwrap();
+        assert!(
+            (reported - total).abs() <= 1e-3 * total.max(1.0),
+            "{reported} {total}"
+        );
+        counts.push(turns.len() as u64);
+        smallest = turns.iter().copied().fold(smallest, f64::min);
+    }
+    counts.sort_unstable();
+    let s = &v["summary"]["rotations"];
+    assert!(
+        counts[4] > 0,
+        "a steered paper insertion turns the bevel: {counts:?}"
+    );
+    assert_eq!(s["median_per_run"].as_u64().unwrap(), counts[4]);
+    assert_eq!(s["max_per_run"].as_u64().unwrap(), counts[8]);
+    assert!((s["smallest_deg"].as_f64().unwrap() - smallest).abs() < 1e-4);
 }

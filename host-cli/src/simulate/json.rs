@@ -55,6 +55,9 @@ pub struct SummaryJson {
     pub collisions: usize,
     /// Smallest clearance over all runs (mm; null without obstacles).
     pub min_clearance: f32,
+    /// Bevel rotations per insertion: `median_per_run`, `max_per_run`, `mean_total_deg`,
+    /// `smallest_deg` (each run's own under `rotations` in `runs_detail`).
+    pub rotations: super::RotationFigures,
 }
 
 /// One run: its figures, draws and points, and the steps as executed.
@@ -165,6 +168,7 @@ fn summary_json(summary: &Summary) -> SummaryJson {
         },
         collisions: summary.collisions,
         min_clearance: summary.min_clearance,
+        rotations: summary.rotations,
     }
 }
 

@@ -213,6 +213,43 @@ pub struct Summary {
     pub collisions: usize,
     /// Smallest clearance over all runs (mm).
     pub min_clearance: f32,
+    /// The bevel rotations per insertion.
+    pub rotations: RotationFigures,
+}
+
+/// The bevel rotations over the runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct RotationFigures {
+    /// Median rotations per run (the upper middle of an even count).
+    pub median_per_run: u32,
+    /// Most rotations in one run.
+    pub max_per_run: u32,
+    /// Mean over the runs of their rotations' sizes summed (degrees).
+    pub mean_total_deg: f64,
+    /// The smallest rotation of any run (degrees; null without any).
+    pub smallest_deg: Option<f32>,
+}
+
+impl RotationFigures {
+    /// The figures of `runs`.
+    pub fn of<'a>(runs: impl Iterator<Item = &'a Run>) -> RotationFigures {
+        let mut counts = Vec::new();
+        let (mut total, mut smallest) = (0.0f64, None::<f32>);
+        for r in runs {
+            counts.push(r.rotations.count);
+            total += f64::from(r.rotations.total_deg);
+            if let Some(s) = r.rotations.smallest_deg {
+                smallest = Some(smallest.map_or(s, |m| m.min(s)));
+            }
+        }
+        counts.sort_unstable();
+        RotationFigures {
+            median_per_run: counts.get(counts.len() / 2).copied().unwrap_or(0),
+            max_per_run: counts.last().copied().unwrap_or(0),
+            mean_total_deg: total / counts.len().max(1) as f64,
+            smallest_deg: smallest,
+        }
+    }
 }
 
 /// The summary of `runs` (their figures: what is kept of every run).
@@ -229,6 +266,7 @@ where
         path_rms_in_plane: in_plane(runs.clone(), |r| r.path_rms_in_plane),
         path_max_in_plane: in_plane(runs.clone(), |r| r.path_max_in_plane),
         collisions: runs.clone().filter(|r| r.collided).count(),
+        rotations: RotationFigures::of(runs.clone()),
         min_clearance: runs.map(|r| r.min_clearance).fold(f32::INFINITY, f32::min),
     }
 }

@@ -73,8 +73,22 @@ pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
         "collisions: {} of {} runs; smallest clearance {clear}",
         s.collisions, h.runs
     );
+    rotations_line(&mut out, &s.rotations);
     perturbation_line(&mut out, p);
     out
+}
+
+/// The bevel rotations per insertion.
+fn rotations_line(out: &mut String, r: &super::RotationFigures) {
+    let smallest = r
+        .smallest_deg
+        .map_or_else(|| "none".to_string(), |d| format!("{d:.2} deg"));
+    let _ = writeln!(
+        out,
+        "bevel rotations per insertion: median {}, most {}, {:.0} deg in all on average; \
+         smallest {smallest}",
+        r.median_per_run, r.max_per_run, r.mean_total_deg
+    );
 }
 
 /// A row of spreads, with the open loop's beside it when given.
@@ -154,6 +168,7 @@ pub fn closed_table(
         );
     }
     let _ = writeln!(out);
+    rotations_line(&mut out, &s.rotations);
     let stops: Vec<String> = steering
         .stops
         .iter()
