@@ -33,6 +33,7 @@ pub mod estimate;
 mod matmul;
 pub mod replan;
 mod state;
+mod warm;
 
 pub use estimate::{Estimate, NoiseModel};
 pub use state::Steering;

@@ -182,7 +182,7 @@ pub struct Replanned {
 /// The sub-problem's scenario: the tip as entry, the estimated target and tissue, in 3-D. A
 /// plane scenario's circles become spheres centred in the tip's plane x = tip.x (the cylinder
 /// they stand for, where the path is); the check then measures the true cylinders.
-fn sub_scenario(input: &ReplanInput) -> Scenario {
+pub(super) fn sub_scenario(input: &ReplanInput) -> Scenario {
     let mut s = input.scenario.clone();
     let t = input.target;
     s.target.position = [t.x, t.y, t.z];
@@ -202,7 +202,7 @@ fn sub_scenario(input: &ReplanInput) -> Scenario {
 }
 
 /// Solves `form` from the tip, from `start` (lengths in mm, bevels in degrees before each arc).
-fn attempt(
+pub(super) fn attempt(
     input: &ReplanInput,
     sub: &Scenario,
     form: Form,
@@ -296,66 +296,6 @@ pub(super) fn sound(
     })
 }
 
-/// Variants of the remaining segments with one degree of freedom more, each the same path but
-/// for a millimetre: a short line before the first arc, a short line in the middle of the
-/// longest arc, or that arc split in two (a bevel rotation more between the halves); a lone line
-/// gets an arc aimed at the target before it. A line moves the rest of the path forward along
-/// the heading where it is inserted, which no length or bevel of a fixed-curvature arc can do.
-fn variants(remaining: &[SegmentPlan], aim_deg: f32) -> [Option<Segments>; 3] {
-    let line = SegmentPlan {
-        kind: SegmentKind::Line,
-        length: 1.0,
-        bevel_deg: 0.0,
-    };
-    let longest = (0..remaining.len())
-        .filter(|&i| remaining[i].kind == SegmentKind::Arc)
-        .max_by(|&a, &b| remaining[a].length.total_cmp(&remaining[b].length));
-    let Some(k) = longest else {
-        let mut out = Segments::new();
-        let arc = SegmentPlan {
-            kind: SegmentKind::Arc,
-            length: 1.0,
-            bevel_deg: aim_deg,
-        };
-        let ok = out.push(arc).is_ok() && remaining.iter().all(|s| out.push(*s).is_ok());
-        return [ok.then_some(out), None, None];
-    };
-    let build = |at: usize, middle: &[SegmentPlan]| -> Option<Segments> {
-        let mut out = Segments::new();
-        for (i, seg) in remaining.iter().enumerate() {
-            if i == at {
-                for m in middle {
-                    out.push(*m).ok()?;
-                }
-            } else {
-                out.push(*seg).ok()?;
-            }
-        }
-        Some(out)
-    };
-    let arc = remaining[k];
-    let half = SegmentPlan {
-        length: 0.5 * arc.length,
-        ..arc
-    };
-    let second = SegmentPlan {
-        bevel_deg: 0.0,
-        ..half
-    };
-    let first_arc = (0..remaining.len()).find(|&i| remaining[i].kind == SegmentKind::Arc);
-    let before = first_arc.and_then(|i| {
-        let preceded = i > 0 && remaining[i - 1].kind == SegmentKind::Line;
-        (!preceded)
-            .then(|| build(i, &[line, remaining[i]]))
-            .flatten()
-    });
-    [
-        before,
-        build(k, &[half, line, second]),
-        build(k, &[half, second]),
-    ]
-}
-
 /// Re-plans from the estimate: the remaining segments first (warm start), then the same with a
 /// degree of freedom more ([`variants`]), then the short forms RL, LR and RR aimed at the target,
 /// all at the continuation's arc duty; then the duty-cycled arc aimed through the target; then,
@@ -389,8 +329,14 @@ fn forms_from(
     // Aim the bevel at the target, across the heading.
     let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let bevel_deg = crate::fmath::atan2(-local.x, local.y).to_degrees();
-    let [a, b, c] = variants(remaining, bevel_deg);
-    let warm = [Segments::from_slice(remaining).ok(), a, b, c];
+    let [a, b, c] = super::warm::variants(remaining, bevel_deg);
+    let warm = [
+        Segments::from_slice(remaining).ok(),
+        a,
+        b,
+        c,
+        super::warm::turned_away(input, remaining),
+    ];
     for start in warm.iter().flatten() {
         let Some(form) = form_of(start) else {
             continue;
