@@ -93,7 +93,8 @@ fn raise_margins(
     let k = upper_quantile(bound / active as f32);
     let mut raised = false;
     for i in (0..count).filter(|&i| matters[i]) {
-        let wanted = (k * by_obstacle[i].sd).min(margin_cap(scenario, i));
+        let o = &by_obstacle[i];
+        let wanted = (k * o.sd + o.steering_margin).min(margin_cap(scenario, i));
         if wanted > margins[i] + 1e-3 {
             margins[i] = wanted;
             raised = true;

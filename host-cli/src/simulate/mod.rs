@@ -402,12 +402,17 @@ mod reserve_tests {
     }
 
     /// Where the form of lowest objective misses the bound but a longer one keeps it, the longer
-    /// one is planned (seed 332: no margins bring the best form within 1 %).
+    /// one is planned (seed 242 open loop under 5 %: no margins bring the best form within it).
     #[test]
     fn a_longer_form_within_the_bound_is_taken() {
-        let (s, bound) = steered(332);
+        let s = unseen_scenario(242);
+        let bound = PlanBound {
+            model: Perturbation::default(),
+            max_collision_probability: 0.05,
+            execution: Execution::OpenLoop,
+        };
         let (kept, prepared) = prepare_keeping_reserve(&s, Some(&bound)).unwrap();
-        let c = plan_within_risk_as(&kept, &bound.model, 0.01, bound.execution).unwrap();
+        let c = plan_within_risk_as(&kept, &bound.model, 0.05, bound.execution).unwrap();
         assert!(c.within_bound);
         let report = &c.planned.report;
         let lowest = report

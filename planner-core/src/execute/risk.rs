@@ -14,8 +14,9 @@ use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
 use crate::model::kinematics::V3;
 use crate::model::scenario::{Scenario, Workspace};
-use crate::steer::apriori::propagate_steered;
+use crate::steer::apriori::{estimator_profile, propagate_steered};
 use crate::steer::estimate::NoiseModel;
+use crate::steer::STEER_MARGIN_SDS;
 use nalgebra::Matrix3;
 
 /// Where the spread is evaluated along the path (mm between points at most).
@@ -51,6 +52,10 @@ pub struct ObstacleRisk {
     pub clearance: f32,
     /// The spread of the tip along the direction to it there (mm).
     pub sd: f32,
+    /// Steered: the clearance the steering keeps there by itself
+    /// ([`STEER_MARGIN_SDS`](crate::steer::STEER_MARGIN_SDS) of its estimate), counted out of
+    /// `clearance` (mm; 0 open loop).
+    pub steering_margin: f32,
 }
 
 /// Per-obstacle risks, in the scenario's order.
@@ -113,8 +118,21 @@ pub fn risk_by_obstacle(
         probability: 0.0,
         clearance: f32::INFINITY,
         sd: 0.0,
+        steering_margin: 0.0,
     }; crate::MAX_OBSTACLES];
+    // Steered, a path inside the steering's own margin is one it will not follow: that much of
+    // the clearance does not count.
+    let profile = match execution {
+        Execution::OpenLoop => None,
+        Execution::Steered(noise) => Some(estimator_profile(scenario, schedule, p, &noise)),
+    };
+    let kept = |depth: f32| {
+        profile
+            .as_ref()
+            .map_or(0.0, |e| STEER_MARGIN_SDS * crate::fmath::sqrt(e.at(depth)))
+    };
     let visit = |tip: &TipSpread| {
+        let steering_margin = kept(tip.depth);
         for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
             let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
             if plane {
@@ -127,7 +145,7 @@ pub fn risk_by_obstacle(
             } else {
                 0.0
             };
-            let clearance = distance - ob.radius;
+            let clearance = distance - ob.radius - steering_margin;
             let chance = if sd > 0.0 {
                 normal_cdf(-clearance / sd)
             } else if clearance > 0.0 {
@@ -140,6 +158,7 @@ pub fn risk_by_obstacle(
                     probability: chance,
                     clearance,
                     sd,
+                    steering_margin,
                 };
             }
         }

@@ -194,6 +194,11 @@ pub struct SteerStats {
     pub repeated: u32,
 }
 
+/// Standard deviations of the tip's position estimate a continuation keeps clear of every
+/// obstacle on top of the scenario's floor: the true tip may be that far from where the
+/// estimate has it. A plan steered under a collision bound keeps it too.
+pub const STEER_MARGIN_SDS: f32 = 2.0;
+
 /// How the controller works: the estimator's noise model, when to re-plan and its budget.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -4,6 +4,7 @@ use super::estimate::Estimate;
 use super::replan::{predict, replan, segments_of, Prediction, ReplanInput};
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
+    STEER_MARGIN_SDS,
 };
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
@@ -324,7 +325,7 @@ impl Steering {
         // Two standard deviations of the tip's position estimate are kept clear on top of the
         // scenario's floor: the true tip may be that far from where the estimate has it.
         let floor = self.scenario.options.min_clearance;
-        let margin = 2.0 * self.estimate.position_sd();
+        let margin = STEER_MARGIN_SDS * self.estimate.position_sd();
         let unsafe_now = !(now.min_clearance > floor);
         let too_close = !(now.min_clearance > floor + margin);
         let mut reply = SteerReply {
@@ -387,7 +388,8 @@ impl Steering {
         };
         *last = resized_step(&self.scenario.driver, last, (length + along).max(0.0)).ok()?;
         let prediction = self.predict(&steps);
-        let floor = self.scenario.options.min_clearance + 2.0 * self.estimate.position_sd();
+        let floor =
+            self.scenario.options.min_clearance + STEER_MARGIN_SDS * self.estimate.position_sd();
         let better = prediction.target_error + 1e-4 < now.target_error;
         (better && prediction.min_clearance > floor).then_some(super::replan::Replanned {
             steps,
