@@ -14,7 +14,7 @@ use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
 use crate::model::kinematics::V3;
 use crate::model::scenario::{Scenario, Workspace};
-use crate::steer::apriori::{estimator_profile, propagate_steered};
+use crate::steer::apriori::{estimator_profile, propagate_steered_with};
 use crate::steer::estimate::NoiseModel;
 use crate::steer::STEER_MARGIN_SDS;
 use nalgebra::Matrix3;
@@ -163,15 +163,15 @@ pub fn risk_by_obstacle(
             }
         }
     };
-    let (end, shift) = match execution {
-        Execution::OpenLoop => (
+    let (end, shift) = match &profile {
+        None => (
             propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
             p.target_shift_mm * p.target_shift_mm,
         ),
         // Steered, the needle follows the displaced target as it is seen: the end strays from
         // the plan by the displacement, but misses the target by the estimate's error alone.
-        Execution::Steered(noise) => (
-            propagate_steered(scenario, schedule, p, &noise, RISK_SPACING_MM, visit),
+        Some(estimator) => (
+            propagate_steered_with(scenario, schedule, p, estimator, RISK_SPACING_MM, visit),
             -(p.target_shift_mm * p.target_shift_mm),
         ),
     };

@@ -220,10 +220,22 @@ pub fn propagate_steered(
     p: &Perturbation,
     noise: &NoiseModel,
     spacing: f32,
+    visit: impl FnMut(&TipSpread),
+) -> TipSpread {
+    let estimator = estimator_profile(scenario, schedule, p, noise);
+    propagate_steered_with(scenario, schedule, p, &estimator, spacing, visit)
+}
+
+/// [`propagate_steered`] with the estimator's profile already run along `schedule`.
+pub fn propagate_steered_with(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    estimator: &EstimatorProfile,
+    spacing: f32,
     mut visit: impl FnMut(&TipSpread),
 ) -> TipSpread {
     let t = totals(scenario, schedule, p, spacing);
-    let estimator = estimator_profile(scenario, schedule, p, noise);
     let shift = Matrix3::identity() * (p.target_shift_mm * p.target_shift_mm);
     // A floor under the end's covariance keeps the inverse finite where few sources move the
     // end (one source alone moves it along one line).
