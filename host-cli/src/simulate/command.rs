@@ -14,7 +14,7 @@ use super::PlanBound;
 use crate::analysis::cli::output::{progress, title_of, OutputFile};
 use crate::analysis::parallel;
 use crate::scenario::{load_execution, load_scenario_shapes, restrict, ObstacleShape};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use needle_sim::{ClosedRun, Run, TrackerFaults};
 use std::io::Write;
 
@@ -70,6 +70,15 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
             max_collision_probability,
             execution: execution.predicted_as(),
         });
+    // The device plans without the bound (the spread does not fit its flash): its plan would
+    // not be the host's, and it could not steer the insertion the host simulates.
+    if a.closed_loop && a.link().is_some() && bound.is_some() {
+        bail!(
+            "planner.max_collision_probability is planned on the host only: the device plans \
+             without it, so it cannot steer this plan (steer in-process, or on the device \
+             without the bound; docs/execution.md)"
+        );
+    }
     let mut faults = TrackerFaults::default();
     for kv in &a.fault {
         faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
