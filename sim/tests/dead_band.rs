@@ -1,6 +1,6 @@
 //! The controller's dead band on bevel turns: on the paper's insertion, closed loop in the
-//! default world, it commands a fraction of the turns it would without one (each replan used to
-//! turn the bevel by tenths of a degree), and lands as close.
+//! default world, it commands no turn under the band (without one, each replan turns the bevel
+//! by tenths of a degree), at most 30 turns per insertion (median), and lands as close.
 
 use needle_sim::{closed_loop, in_process, Perturbation, Planned, TrackerFaults};
 use planner_core::execute::schedule::{schedule, Op};
@@ -52,13 +52,11 @@ fn the_dead_band_cuts_the_turns_not_the_accuracy() {
         ..SteerConfig::DEFAULT
     });
     println!("turns per insertion (median), turns under 2 degrees, mean error: with {banded:?}, without {unbanded:?}");
+    assert!(banded.0 <= 30, "{banded:?} against {unbanded:?}");
+    assert_eq!(banded.1, 0, "{banded:?} against {unbanded:?}");
+    assert!(unbanded.1 > 20, "{banded:?} against {unbanded:?}");
     assert!(
-        5 * banded.0 < 2 * unbanded.0,
-        "{banded:?} against {unbanded:?}"
-    );
-    assert!(5 * banded.1 < unbanded.1, "{banded:?} against {unbanded:?}");
-    assert!(
-        banded.2 < unbanded.2 + 0.05,
+        banded.2 < unbanded.2 + 0.05 && banded.2 <= 0.3,
         "{banded:?} against {unbanded:?}"
     );
 }

@@ -1,7 +1,8 @@
 //! The steering's last resort: the duty-cycled arc aimed through the target, when no form's
 //! continuation reaches it.
 
-use super::replan::{dead_banded, sound, wrapped_deg, ReplanInput, Replanned};
+use super::replan::{sound, wrapped_deg, ReplanInput, Replanned};
+use super::turns::{dead_banded, widened_to_band};
 use crate::execute::schedule::duty_continuation;
 
 /// The duty-cycled arc from the tip through the target: the bevel turned towards it, then one
@@ -28,8 +29,9 @@ pub(super) fn aimed_duty(input: &ReplanInput, spent: &(u32, u32)) -> Option<Repl
     };
     let aim = wrapped_deg(crate::fmath::atan2(-local.x, local.y));
     let banded = dead_banded(aim, input.dead_band_deg);
-    let bevels = [banded, aim];
-    let tries = if banded == aim {
+    let widened = widened_to_band(aim, input.dead_band_deg);
+    let bevels = [banded, widened];
+    let tries = if banded == widened {
         &bevels[1..]
     } else {
         &bevels[..]
@@ -79,6 +81,7 @@ mod tests {
             inserted_mm: 50.0,
             dead_band_deg: 2.0,
             arc_duty: 1.0,
+            spend_reserve: true,
         };
         let found = aimed_duty(&input, &(0, 0)).expect("a duty-cycled continuation");
         assert!(

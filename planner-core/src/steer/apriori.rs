@@ -172,13 +172,14 @@ fn estimator_walk(
         let pieces = libm::ceilf(length / spacing).max(1.0) as u32;
         for k in 1..=pieces {
             est.advanced(kind, length / pieces as f32, r);
+            let at = depth + length * k as f32 / pieces as f32;
+            if spun {
+                est.spinning(at);
+            }
             let f = est.tip;
             let _ = est.fuse_position(f.p);
             let _ = est.fuse_orientation(f.e3(), (!spun).then(|| f.e2()));
-            visit(
-                depth + length * k as f32 / pieces as f32,
-                &est.position_covariance(),
-            );
+            visit(at, &est.position_covariance());
         }
         depth += length;
         if spun {

@@ -193,6 +193,13 @@ impl Estimate {
         self.cov[(5, 5)] += play * play;
     }
 
+    /// The shaft spins while it is pushed (a spun line, a duty-cycled push): the tip's roll is
+    /// known no better than the play of the base at this depth, which grows as it goes in.
+    pub fn spinning(&mut self, depth_mm: f32) {
+        let play = (self.noise.torsion_lag_deg_per_mm * depth_mm).to_radians();
+        self.cov[(5, 5)] = self.cov[(5, 5)].max(play * play);
+    }
+
     /// A new arc begins: its curvature may differ from the last one's.
     pub fn new_arc(&mut self) {
         let s = self.noise.segment_curvature_spread;

@@ -130,16 +130,6 @@ pub(super) fn wrapped_deg(rad: f32) -> f32 {
     d
 }
 
-/// `deg`, or no turn at all when it is within `band` of a whole turn.
-pub(super) fn dead_banded(deg: f32, band: f32) -> f32 {
-    let off = libm::fmodf(libm::fabsf(deg), 360.0);
-    if off < band || 360.0 - off < band {
-        0.0
-    } else {
-        deg
-    }
-}
-
 /// What a replan needs: the scenario, the estimate, and the budget.
 #[derive(Clone, Copy)]
 pub struct ReplanInput<'a> {
@@ -164,6 +154,10 @@ pub struct ReplanInput<'a> {
     /// The share of the curvature a continuation's arcs are pushed at (1: plain pushes; below,
     /// duty-cycled, keeping the rest in hand).
     pub arc_duty: f32,
+    /// Whether the continuation may spend the curvature the arcs keep in hand (the target
+    /// would be missed, or the clearance is at stake); one that only restores the margin keeps
+    /// it, and the route.
+    pub spend_reserve: bool,
 }
 
 /// A continuation that passed the check.
@@ -218,44 +212,51 @@ pub(super) fn attempt(
             x0[b] = seg.bevel_deg.to_radians();
         }
     }
-    let sol = solve_within(&p, &x0, input.iterations);
-    let Ok(sol) = sol else {
+    let sol = solved(&p, &x0, input.iterations, spent)?;
+    let exact = solution_segments(&p, &sol)?;
+    super::turns::commanded(input, &exact, spent).or_else(|| {
+        let (held, x) = super::turns::held(&p, &sol, &exact, input.dead_band_deg)?;
+        let sol = solved(&held, &x, input.iterations, spent)?;
+        super::turns::commanded(input, &solution_segments(&held, &sol)?, spent)
+    })
+}
+
+/// The SQP's solution from `x0`, its cost counted in `spent`.
+fn solved(p: &Problem, x0: &Vars, iterations: u32, spent: &mut (u32, u32)) -> Option<Vars> {
+    let Ok(sol) = solve_within(p, x0, iterations) else {
         spent.0 += 1;
         return None;
     };
     spent.0 += sol.evaluations;
     spent.1 += sol.iterations;
-    let lengths = p.lengths(&sol.eval.x);
-    let bevels = p.bevels(&sol.eval.x);
-    let mut exact = Segments::new();
-    for i in 0..form.len() {
-        exact
-            .push(SegmentPlan {
-                kind: form.kind(i),
-                length: lengths[i],
-                bevel_deg: wrapped_deg(bevels[i]),
-            })
-            .ok()?;
+    Some(sol.eval.x)
+}
+
+/// The segments of the solution `x` (bevels in degrees, wrapped).
+fn solution_segments(p: &Problem, x: &Vars) -> Option<Segments> {
+    let lengths = p.lengths(x);
+    let bevels = p.bevels(x);
+    let mut out = Segments::new();
+    for i in 0..p.form.len() {
+        out.push(SegmentPlan {
+            kind: p.form.kind(i),
+            length: lengths[i],
+            bevel_deg: wrapped_deg(bevels[i]),
+        })
+        .ok()?;
     }
-    // The same continuation without its turns under the dead band, when it still passes: a
-    // turn is commanded only where the path needs it.
-    let mut banded = exact.clone();
-    for seg in banded.iter_mut() {
-        seg.bevel_deg = dead_banded(seg.bevel_deg, input.dead_band_deg);
-    }
-    if banded != exact {
-        if let Some(found) = checked(input, &banded, spent) {
-            return Some(found);
-        }
-    }
-    checked(input, &exact, spent)
+    Some(out)
 }
 
 /// `segments` from the tip as motor steps, if executing them passes the check: the target
 /// within tolerance, every clearance above the floor and the margin, the needle's length and
 /// the twist limit kept.
 #[inline(never)]
-fn checked(input: &ReplanInput, segments: &[SegmentPlan], spent: &(u32, u32)) -> Option<Replanned> {
+pub(super) fn checked(
+    input: &ReplanInput,
+    segments: &[SegmentPlan],
+    spent: &(u32, u32),
+) -> Option<Replanned> {
     let (steps, peak) = continuation_steps(
         &input.scenario.driver,
         segments,
@@ -284,7 +285,7 @@ pub(super) fn sound(
         input.target,
     );
     let floor = input.scenario.options.min_clearance + input.margin;
-    let sound = prediction.target_error <= input.scenario.target.tolerance
+    let sound = prediction.target_error <= super::turns::accepted_miss(input)
         && input.inserted_mm + length <= input.scenario.needle.length
         && prediction.min_clearance > floor
         && peak <= input.scenario.driver.max_twist_deg;
@@ -306,10 +307,11 @@ pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replann
     let found = forms_from(input, remaining, &mut spent)
         .or_else(|| super::aimed::aimed_duty(input, &spent))
         .or_else(|| {
-            (input.arc_duty < 1.0)
+            (input.arc_duty < 1.0 && input.spend_reserve)
                 .then(|| {
                     let full = ReplanInput {
                         arc_duty: 1.0,
+                        spend_reserve: true,
                         ..*input
                     };
                     forms_from(&full, &[], &mut spent)
@@ -427,6 +429,7 @@ mod tests {
             inserted_mm: 0.0,
             dead_band_deg: 0.0,
             arc_duty: 1.0,
+            spend_reserve: true,
         };
         let (found, evaluations, iterations) = replan(&input, &remaining);
         let found = found.expect("a continuation");

@@ -4,7 +4,7 @@ use super::estimate::Estimate;
 use super::replan::{predict, replan, segments_of, Prediction, ReplanInput};
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
-    STEER_MARGIN_SDS,
+    REPLAN_DEFER_PER_MM, STEER_MARGIN_SDS,
 };
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
@@ -29,6 +29,9 @@ pub struct Steering {
     depth: f32,
     base: f32,
     last_fix_depth: f32,
+    /// Depth of the last replan: a reading without insertion since (after a turn) re-plans
+    /// only when the continuation has become unsafe.
+    last_replan_depth: f32,
     last_kind: Option<SegmentKind>,
     /// The last reading came during a spun line: its bevel direction is meaningless.
     spinning: bool,
@@ -74,6 +77,7 @@ impl Steering {
             depth: 0.0,
             base: 0.0,
             last_fix_depth: 0.0,
+            last_replan_depth: f32::NEG_INFINITY,
             last_kind: None,
             spinning: false,
             last_seq: None,
@@ -282,6 +286,9 @@ impl Steering {
             self.estimate.advanced(kind, pushed, radius);
             self.last_kind = Some(kind);
             self.spinning = spinning;
+            if spinning {
+                self.estimate.spinning(m.depth_mm);
+            }
         }
         self.depth = self.depth.max(m.depth_mm);
         self.base = m.base_deg;
@@ -337,7 +344,15 @@ impl Steering {
             predicted_clearance_mm: now.min_clearance,
             evaluations: 0,
         };
-        if now.target_error > self.config.replan_error_mm || too_close {
+        let ahead: f32 = remaining.iter().map(|s| s.op.inserted_mm()).sum();
+        let trigger = self.config.replan_error_mm.max(REPLAN_DEFER_PER_MM * ahead);
+        // Without insertion since the last replan (a turn, read), a new one only when the
+        // clearance has lost half its margin: a continuation planned on the margin's edge is
+        // otherwise re-planned after every turn.
+        let advanced = self.depth > self.last_replan_depth + DONE_SLACK;
+        let urgent = !(now.min_clearance > floor + 0.5 * margin);
+        if (advanced && (now.target_error > trigger || too_close)) || urgent {
+            self.last_replan_depth = self.depth;
             let input = ReplanInput {
                 scenario: &self.scenario,
                 tip: self.estimate.tip,
@@ -349,6 +364,7 @@ impl Steering {
                 inserted_mm: self.depth,
                 dead_band_deg: self.config.rotation_dead_band_deg,
                 arc_duty: self.scenario.arc_duty(),
+                spend_reserve: urgent || now.target_error > trigger,
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);

@@ -154,6 +154,7 @@ mod tests {
             inserted_mm: 0.0,
             dead_band_deg: 2.0,
             arc_duty: 1.0,
+            spend_reserve: true,
         };
         let start = turned_away(&input, &remaining).expect("a start turned away");
         assert_eq!(start.len(), 3);
