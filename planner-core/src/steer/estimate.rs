@@ -94,6 +94,9 @@ impl Default for NoiseModel {
 /// outliers: about 5 sigma for three axes.
 const GATE: f32 = 25.0;
 
+/// Weight of a new fix in the running innovation consistency (about the last 20 fixes).
+const CONSISTENCY_WEIGHT: f32 = 0.05;
+
 /// The rotation matrix of the rotation vector `w` (Rodrigues).
 fn exp_so3(w: V3) -> Matrix3<f32> {
     let angle = crate::fmath::sqrt(w.dot(&w));
@@ -139,6 +142,10 @@ pub struct Estimate {
     cov: Cov,
     target_var: f32,
     noise: NoiseModel,
+    /// The position fixes' squared innovations against what the model expects (per axis,
+    /// averaged over the last tens of fixes): about 1 in a world as the model says, more in a
+    /// noisier one.
+    consistency: f32,
 }
 
 impl Estimate {
@@ -160,6 +167,7 @@ impl Estimate {
             cov,
             target_var: noise.target_mm * noise.target_mm,
             noise: *noise,
+            consistency: 1.0,
         }
     }
 
@@ -254,7 +262,11 @@ impl Estimate {
         for k in 0..3 {
             h[(k, k)] = 1.0;
         }
-        self.fuse(&h, y, r)
+        let Some(d2) = self.fuse_rows(&h, y, [r; 3]) else {
+            return false;
+        };
+        self.consistency += CONSISTENCY_WEIGHT * (d2 / 3.0 - self.consistency);
+        true
     }
 
     /// Fuses a measured heading and (when the sensor gives it) bevel direction; `false` (and no
@@ -273,7 +285,7 @@ impl Estimate {
                 for k in 0..3 {
                     h[(k, 3 + k)] = 1.0;
                 }
-                self.fuse(&h, y, r)
+                self.fuse_rows(&h, y, [r; 3]).is_some()
             }
             None => {
                 let Some(hd) = heading.try_normalize(1e-6) else {
@@ -286,34 +298,28 @@ impl Estimate {
                 h[(0, 3)] = 1.0;
                 h[(1, 4)] = 1.0;
                 // The third row observes nothing: a huge variance keeps it out.
-                self.fuse_rows(&h, y, [r, r, 1e12])
+                self.fuse_rows(&h, y, [r, r, 1e12]).is_some()
             }
         }
     }
 
-    fn fuse(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: f32) -> bool {
-        self.fuse_rows(h, y, [r; 3])
-    }
-
-    /// The Kalman update of three rows `h` with innovation `y` and noise variances `r`.
-    fn fuse_rows(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: [f32; 3]) -> bool {
+    /// The Kalman update of three rows `h` with innovation `y` and noise variances `r`: the
+    /// innovation's squared Mahalanobis length, or `None` (and no change) for an outlier or a
+    /// degenerate update.
+    fn fuse_rows(&mut self, h: &SMatrix<f32, 3, STATES>, y: V3, r: [f32; 3]) -> Option<f32> {
         let mut s = sandwich(h, &self.cov);
         for k in 0..3 {
             s[(k, k)] += r[k];
         }
-        let Some(s_inv) = s.try_inverse() else {
-            return false;
-        };
+        let s_inv = s.try_inverse()?;
         let d2 = (y.transpose() * s_inv * y)[(0, 0)];
         if !d2.is_finite() || d2 > GATE {
-            return false;
+            return None;
         }
         let k = mul(&mul(&self.cov, &h.transpose()), &s_inv);
         let d = mul(&k, &SMatrix::<f32, 3, 1>::from(y));
         let (tip, factor) = Estimate::plus(&self.tip, self.factor, &d);
-        let Some(rotation) = orthonormal(&tip.r) else {
-            return false;
-        };
+        let rotation = orthonormal(&tip.r)?;
         self.tip = Frame {
             p: tip.p,
             r: rotation,
@@ -327,7 +333,7 @@ impl Estimate {
         }
         let cov = sandwich(&ikh, &self.cov) + sandwich(&k, &rk);
         self.cov = (cov + cov.transpose()) * 0.5;
-        true
+        Some(d2)
     }
 
     /// Fuses a measured target position; `false` for an outlier.
@@ -348,6 +354,15 @@ impl Estimate {
     pub fn position_sd(&self) -> f32 {
         let v = self.cov[(0, 0)].max(self.cov[(1, 1)]).max(self.cov[(2, 2)]);
         crate::fmath::sqrt(v)
+    }
+
+    /// The standard deviation the steering keeps clear of the obstacles (mm): the position
+    /// estimate's, widened where the fixes' innovations say the world is noisier than the model
+    /// (never narrowed). Widened by their variance ratio, not its square root: a filter tuned
+    /// for a quieter world also estimates worse than its own covariance says (measured in a
+    /// world with every perturbation doubled, docs/execution.md).
+    pub fn margin_sd(&self) -> f32 {
+        self.position_sd() * self.consistency.max(1.0)
     }
 
     /// Covariance of the position estimate (mm²).
@@ -415,5 +430,47 @@ mod tests {
         assert!((e.factor - 1.06).abs() < 0.01, "{}", e.factor);
         let miss = (e.tip.p - truth.p).norm();
         assert!(miss < 0.05, "{miss}");
+    }
+
+    /// Standard normal draws from a fixed xorshift stream (Box-Muller): the core has no RNG.
+    fn normals(seed: u64) -> impl FnMut() -> f32 {
+        let mut x = seed;
+        let mut uniform = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            ((x >> 40) as f32 + 0.5) / (1u64 << 24) as f32
+        };
+        move || {
+            let (u, v) = (uniform(), uniform());
+            libm::sqrtf(-2.0 * libm::logf(u)) * libm::cosf(core::f32::consts::TAU * v)
+        }
+    }
+
+    /// The margin's widening over 80 fixes of a straight insertion whose tracker is `scale`
+    /// times as noisy as the model says.
+    fn widening(scale: f32, seed: u64) -> f32 {
+        let noise = NoiseModel::DEFAULT;
+        let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+        let mut truth = start();
+        let mut n = normals(seed);
+        for _ in 0..80 {
+            e.advanced(SegmentKind::Line, 1.0, 63.7);
+            truth = truth.advanced(SegmentKind::Line, 1.0, 63.7);
+            let sd = scale * noise.position_mm;
+            let z = truth.p + V3::new(n(), n(), n()) * sd;
+            let _ = e.fuse_position(z);
+        }
+        e.margin_sd() / e.position_sd()
+    }
+
+    #[test]
+    fn a_tracker_noisier_than_the_model_widens_the_margin() {
+        for seed in 1..6u64 {
+            let as_told = widening(1.0, seed);
+            let doubled = widening(2.0, seed);
+            assert!(as_told < 1.4, "seed {seed}: {as_told}");
+            assert!(doubled > 2.5, "seed {seed}: {doubled}");
+        }
     }
 }

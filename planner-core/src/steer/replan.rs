@@ -214,11 +214,7 @@ pub(super) fn attempt(
     }
     let sol = solved(&p, &x0, input.iterations, spent)?;
     let exact = solution_segments(&p, &sol)?;
-    super::turns::commanded(input, &exact, spent).or_else(|| {
-        let (held, x) = super::turns::held(&p, &sol, &exact, input.dead_band_deg)?;
-        let sol = solved(&held, &x, input.iterations, spent)?;
-        super::turns::commanded(input, &solution_segments(&held, &sol)?, spent)
-    })
+    super::turns::commanded(input, &exact, spent)
 }
 
 /// The SQP's solution from `x0`, its cost counted in `spent`.

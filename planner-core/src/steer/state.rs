@@ -332,7 +332,7 @@ impl Steering {
         // Two standard deviations of the tip's position estimate are kept clear on top of the
         // scenario's floor: the true tip may be that far from where the estimate has it.
         let floor = self.scenario.options.min_clearance;
-        let margin = STEER_MARGIN_SDS * self.estimate.position_sd();
+        let margin = STEER_MARGIN_SDS * self.estimate.margin_sd();
         let unsafe_now = !(now.min_clearance > floor);
         let too_close = !(now.min_clearance > floor + margin);
         let mut reply = SteerReply {
@@ -405,7 +405,7 @@ impl Steering {
         *last = resized_step(&self.scenario.driver, last, (length + along).max(0.0)).ok()?;
         let prediction = self.predict(&steps);
         let floor =
-            self.scenario.options.min_clearance + STEER_MARGIN_SDS * self.estimate.position_sd();
+            self.scenario.options.min_clearance + STEER_MARGIN_SDS * self.estimate.margin_sd();
         let better = prediction.target_error + 1e-4 < now.target_error;
         (better && prediction.min_clearance > floor).then_some(super::replan::Replanned {
             steps,

@@ -1,17 +1,12 @@
 //! The bevel turns a continuation may command. A turn under the dead band is not commanded at
 //! all: below the shaft's torsional play it does not reach the tip, above it a controller that
 //! turns by tenths of a degree at every reading only wears the driver. The solve's small turns
-//! are rounded to the band's steps (none, or the band), and when neither rounding passes the
-//! check the solve is run again with those turns held at the nearer step, the lengths and the
-//! other turns free to make up for it.
+//! are rounded to the band's steps (none, or the band on their side). (Solving again with such
+//! turns held at the nearer step was tried: it changed no figure of the families, and its code
+//! did not fit the 128 KiB part.)
 
 use super::replan::{checked, ReplanInput, Replanned};
-use crate::optim::problem::{Problem, Vars};
 use crate::report::{SegmentPlan, Segments};
-
-/// How far a held turn may move from its step (degrees): a box, not a point, so the SQP's
-/// bound rows stay apart.
-const HELD_SLACK_DEG: f32 = 0.2;
 
 /// `deg`, or no turn at all when it is within `band` of a whole turn.
 pub(super) fn dead_banded(deg: f32, band: f32) -> f32 {
@@ -33,11 +28,6 @@ pub(super) fn widened_to_band(deg: f32, band: f32) -> f32 {
     } else {
         whole + libm::copysignf(band, off)
     }
-}
-
-/// The side of a whole turn `deg` is on, and how far (degrees).
-fn off_whole(deg: f32) -> f32 {
-    deg - libm::roundf(deg / 360.0) * 360.0
 }
 
 /// The miss a continuation may predict: the target's tolerance, or half of what the smallest
@@ -71,39 +61,19 @@ pub(super) fn commanded(
     })
 }
 
-/// The problem `p` with each turn of `exact` under the band held near the step it rounds to
-/// (none, or the band on its side), and the solution `x` moved inside; `None` when `exact` has
-/// no such turn.
-pub(super) fn held<'a>(
-    p: &Problem<'a>,
-    x: &Vars,
-    exact: &[SegmentPlan],
-    band: f32,
-) -> Option<(Problem<'a>, Vars)> {
-    let (mut q, mut y, mut any) = (p.clone(), *x, false);
-    for (i, seg) in exact.iter().enumerate() {
-        let Some(k) = p.bevel_var(i) else {
-            continue;
-        };
-        let off = off_whole(seg.bevel_deg);
-        if off == 0.0 || libm::fabsf(off) >= band {
-            continue;
-        }
-        any = true;
-        // The step nearer to the solve's turn, and a slack on the side away from zero for the
-        // band, so what the solve returns rounds to that step again.
-        let (low, high) = if libm::fabsf(off) < 0.5 * band {
-            (-HELD_SLACK_DEG, HELD_SLACK_DEG)
-        } else if off > 0.0 {
-            (band, band + HELD_SLACK_DEG)
-        } else {
-            (-band - HELD_SLACK_DEG, -band)
-        };
-        // The variable may hold the turn plus whole turns: the box moves with it.
-        let base = y[k] - off.to_radians();
-        q.lower[k] = base + low.to_radians();
-        q.upper[k] = base + high.to_radians();
-        y[k] = crate::fmath::clamp(y[k], q.lower[k], q.upper[k]);
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_small_turn_becomes_none_or_the_band_on_its_side() {
+        assert_eq!(dead_banded(0.5, 2.0), 0.0);
+        assert_eq!(dead_banded(359.5, 2.0), 0.0);
+        assert_eq!(dead_banded(3.0, 2.0), 3.0);
+        assert_eq!(widened_to_band(0.5, 2.0), 2.0);
+        assert_eq!(widened_to_band(-0.5, 2.0), -2.0);
+        assert_eq!(widened_to_band(359.5, 2.0), 358.0);
+        assert_eq!(widened_to_band(-3.0, 2.0), -3.0);
+        assert_eq!(widened_to_band(0.0, 2.0), 0.0);
     }
-    any.then_some((q, y))
 }
