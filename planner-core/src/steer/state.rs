@@ -333,8 +333,10 @@ impl Steering {
         // scenario's floor: the true tip may be that far from where the estimate has it.
         let floor = self.scenario.options.min_clearance;
         let margin = STEER_MARGIN_SDS * self.estimate.margin_sd();
-        let unsafe_now = !(now.min_clearance > floor);
         let too_close = !(now.min_clearance > floor + margin);
+        // Half the margin lost and nothing passes the check: the estimate puts the tip within
+        // one standard deviation of the floor, so going on risks the obstacle itself.
+        let urgent = !(now.min_clearance > floor + 0.5 * margin);
         let mut reply = SteerReply {
             seq,
             command: Command::Continue,
@@ -350,7 +352,6 @@ impl Steering {
         // clearance has lost half its margin: a continuation planned on the margin's edge is
         // otherwise re-planned after every turn.
         let advanced = self.depth > self.last_replan_depth + DONE_SLACK;
-        let urgent = !(now.min_clearance > floor + 0.5 * margin);
         if (advanced && (now.target_error > trigger || too_close)) || urgent {
             self.last_replan_depth = self.depth;
             let input = ReplanInput {
@@ -380,7 +381,7 @@ impl Steering {
                 }
                 None => {
                     self.stats.replan_failures += 1;
-                    if unsafe_now {
+                    if urgent {
                         reply.command = Command::Stop(StopReason::NoSafeContinuation);
                         self.stopped = Some(StopReason::NoSafeContinuation);
                     }
