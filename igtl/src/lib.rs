@@ -1,14 +1,28 @@
 //! OpenIGTLink codec: `no_std`, no heap, every capacity fixed in the types.
 //!
-//! The 58-byte [`Header`] and the messages TRANSFORM, POSITION, STATUS, STRING, POINT and
-//! POLYDATA ([`messages`]). No networking.
+//! The slice of the protocol that steering a needle from a tracker stream and showing it in 3D
+//! Slicer needs: the 58-byte [`Header`], protocol v3's extended header and key/value
+//! [`Metadata`], the messages TRANSFORM, POSITION, STATUS, STRING, POINT and POLYDATA
+//! ([`messages`]) and whole frames ([`encode_frame`], [`decode_frame`]). No networking.
+//!
+//! Header version 1 frames (protocols v1 and v2) carry the content as their body; header
+//! version 2 frames (protocol v3) wrap it in an extended header and metadata, which
+//! [`FrameInfo::extended`] holds.
 //!
 //! ```
-//! use needle_igtl::Transform;
+//! use needle_igtl::{decode_frame, encode_frame, Extended, FrameInfo, Message, TextEncoding};
+//! use needle_igtl::{Status, StatusCode};
 //!
-//! let mut body = [0u8; 48];
-//! assert_eq!(Transform::IDENTITY.encode(&mut body), Ok(48));
-//! assert_eq!(Transform::decode(&body), Ok(Transform::IDENTITY));
+//! let mut info = FrameInfo::new("Tracker")?;
+//! let mut ext = Extended { message_id: 7, ..Extended::default() };
+//! ext.metadata.insert("Status", TextEncoding::UsAscii, "OK")?;
+//! info.extended = Some(ext);
+//!
+//! let mut buf = [0u8; 512];
+//! let n = encode_frame(&info, &Message::Status(Status::new(StatusCode::NOT_READY)), &mut buf)?;
+//! let (frame, _) = decode_frame(&buf[..n])?;
+//! assert_eq!(frame.info.extended.unwrap().metadata.get("Status"), Some("OK"));
+//! # Ok::<(), needle_igtl::Error>(())
 //! ```
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
@@ -19,11 +33,15 @@
 mod bytes;
 pub mod crc;
 pub mod error;
+pub mod extended;
+pub mod frame;
 pub mod header;
 pub mod messages;
 mod text;
 
 pub use error::Error;
+pub use extended::{Extended, MetaEntry, Metadata};
+pub use frame::{decode_body, decode_frame, encode_frame, Frame, FrameInfo};
 pub use header::{DeviceName, Header, Timestamp, HEADER_SIZE};
 pub use messages::{
     Message, PointElement, PointList, PolyData, Position, Status, StatusCode, StringMessage,
