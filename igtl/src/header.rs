@@ -132,6 +132,13 @@ impl Header {
     }
 }
 
+/// The body size of a header whose device name failed to decode, to skip its body.
+pub(crate) fn body_size_of(header: &[u8; HEADER_SIZE]) -> u64 {
+    let mut size = [0u8; 8];
+    size.copy_from_slice(&header[42..50]);
+    u64::from_be_bytes(size)
+}
+
 /// A type name must be printable ASCII padded with NULs only: this is what tells a header from
 /// stray bytes, since the protocol has no sync marker.
 fn type_name(field: &[u8]) -> Result<TypeName, Error> {
@@ -202,6 +209,7 @@ mod tests {
         let mut d = out;
         d[14] = 0xFF;
         assert_eq!(Header::decode(&d), Err(Error::NotUtf8));
+        assert_eq!(body_size_of(&d), 48);
         let mut small = [0u8; 57];
         assert_eq!(sample().encode(&mut small), Err(Error::BufferTooSmall));
     }

@@ -3,7 +3,8 @@
 //! The slice of the protocol that steering a needle from a tracker stream and showing it in 3D
 //! Slicer needs: the 58-byte [`Header`], protocol v3's extended header and key/value
 //! [`Metadata`], the messages TRANSFORM, POSITION, STATUS, STRING, POINT and POLYDATA
-//! ([`messages`]) and whole frames ([`encode_frame`], [`decode_frame`]). No networking.
+//! ([`messages`]), whole frames ([`encode_frame`], [`decode_frame`]) and a [`FrameDecoder`]
+//! for a TCP byte stream. No networking.
 //!
 //! Header version 1 frames (protocols v1 and v2) carry the content as their body; header
 //! version 2 frames (protocol v3) wrap it in an extended header and metadata, which
@@ -37,6 +38,7 @@ pub mod extended;
 pub mod frame;
 pub mod header;
 pub mod messages;
+pub mod stream;
 mod text;
 
 pub use error::Error;
@@ -47,4 +49,5 @@ pub use messages::{
     Message, PointElement, PointList, PolyData, Position, Status, StatusCode, StringMessage,
     Transform,
 };
+pub use stream::{FrameDecoder, Stats};
 pub use text::TextEncoding;
