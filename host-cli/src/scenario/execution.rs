@@ -47,6 +47,9 @@ pub struct Execution {
     pub max_collision_probability: Option<f32>,
     /// The scenario has an `[execution]` table or a bound: the plan reports its predicted risk.
     pub given: bool,
+    /// What the closed-loop controller is told (`[steering]`; its defaults where silent): the
+    /// steering's estimator noise model also predicts the closed loop's spread.
+    pub steering: SteerConfig,
 }
 
 impl Default for Execution {
@@ -56,24 +59,28 @@ impl Default for Execution {
             mode: ExecutionMode::OpenLoop,
             max_collision_probability: None,
             given: false,
+            steering: SteerConfig::DEFAULT,
         }
     }
 }
 
 impl Execution {
     /// How the planner predicts the spread: open loop, or the closed loop's (the steering's own
-    /// estimator noise model, never the world's).
+    /// estimator noise model, as `[steering]` tells it, never the world's).
     pub fn predicted_as(&self) -> risk::Execution {
         match self.mode {
             ExecutionMode::OpenLoop => risk::Execution::OpenLoop,
-            ExecutionMode::ClosedLoop => risk::Execution::Steered(SteerConfig::DEFAULT.noise),
+            ExecutionMode::ClosedLoop => risk::Execution::Steered(self.steering.noise),
         }
     }
 }
 
 /// The execution of a parsed scenario file.
 pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
-    let mut out = Execution::default();
+    let mut out = Execution {
+        steering: super::steering::steering_of(file)?,
+        ..Execution::default()
+    };
     if let Some(table) = &file.execution {
         out.given = true;
         for (key, value) in table {
@@ -185,6 +192,13 @@ mod tests {
             risk::Execution::Steered(SteerConfig::DEFAULT.noise)
         );
         assert_eq!(parse("").unwrap().predicted_as(), risk::Execution::OpenLoop);
+        let told =
+            parse("[execution]\nmode = \"closed_loop\"\n[steering]\ntracker_position_mm = 1.5\n")
+                .unwrap();
+        let mut noise = SteerConfig::DEFAULT.noise;
+        noise.position_mm = 1.5;
+        assert_eq!(told.predicted_as(), risk::Execution::Steered(noise));
+        assert_eq!(told.steering.noise, noise);
     }
 
     /// A scenario steered closed loop keeps curvature in hand unless it says otherwise; one

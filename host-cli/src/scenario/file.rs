@@ -30,6 +30,9 @@ pub struct ScenarioFile {
     /// The world the plan is executed in: `mode` and the perturbation keys of
     /// `needle simulate --perturb` (read by `execution::execution_of`).
     pub execution: Option<toml::Table>,
+    /// What the closed-loop controller is told of the tracker and the insertion (read by
+    /// `steering::steering_of`).
+    pub steering: Option<toml::Table>,
     /// Directory of the file, for `polygon_file` paths (set by [`ScenarioFile::load`]).
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,

@@ -12,6 +12,7 @@ pub mod file;
 pub mod geometry;
 pub mod polygon;
 pub mod shapes;
+pub mod steering;
 pub mod unseen;
 pub mod write;
 

@@ -88,7 +88,9 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
     if let Some(f) = &a.form {
         restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
     }
-    let setup = Setup::bounded(scenario, p, faults, a.runs, a.seed, bound.as_ref())?;
+    let mut setup = Setup::bounded(scenario, p, faults, a.runs, a.seed, bound.as_ref())?;
+    // The controller is told what `[steering]` says, whatever the world (`--perturb`) is.
+    setup.config = execution.steering;
     Ok((setup, shapes))
 }
 

@@ -1,0 +1,212 @@
+//! The scenario's `[steering]` table: what a lab knows about its tracker and its insertion, told
+//! to the closed-loop controller (`SteerConfig`: the estimator's noise model and when to re-plan
+//! or stop). Never read from the simulated world: `[execution]` describes the world, this table
+//! what the controller assumes of it, and the two may differ, as they do in a lab.
+
+use super::file::ScenarioFile;
+use anyhow::{bail, Context, Result};
+use planner_core::steer::SteerConfig;
+
+/// A key of `[steering]`: its name, what it sets, and whether zero is allowed.
+struct Key {
+    name: &'static str,
+    set: fn(&mut SteerConfig, f32),
+    zero_allowed: bool,
+}
+
+/// Every key, in the order docs/scenario.md lists them.
+const KEYS: &[Key] = &[
+    Key {
+        name: "tracker_position_mm",
+        set: |c, v| c.noise.position_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "tracker_heading_deg",
+        set: |c, v| c.noise.orientation_deg = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "target_mm",
+        set: |c, v| c.noise.target_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "entry_position_mm",
+        set: |c, v| c.noise.entry_position_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "entry_direction_deg",
+        set: |c, v| c.noise.entry_direction_deg = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "curvature_spread",
+        set: |c, v| c.noise.curvature_spread = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "segment_curvature_spread",
+        set: |c, v| c.noise.segment_curvature_spread = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "torsion_lag_deg_per_mm",
+        set: |c, v| c.noise.torsion_lag_deg_per_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "line_walk_deg",
+        set: |c, v| c.noise.line_walk_deg = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "insertion_error_mm",
+        set: |c, v| c.noise.insertion_error_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "replan_error_mm",
+        set: |c, v| c.replan_error_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "tracking_lost_after_mm",
+        set: |c, v| c.max_gap_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "reach_tolerance_mm",
+        set: |c, v| c.reach_tolerance_mm = v,
+        zero_allowed: false,
+    },
+    Key {
+        name: "rotation_dead_band_deg",
+        set: |c, v| c.rotation_dead_band_deg = v,
+        zero_allowed: true,
+    },
+];
+
+/// The controller's configuration a scenario file asks for: the defaults
+/// (`SteerConfig::DEFAULT`) where `[steering]` is silent.
+pub fn steering_of(file: &ScenarioFile) -> Result<SteerConfig> {
+    let mut config = SteerConfig::DEFAULT;
+    let Some(table) = &file.steering else {
+        return Ok(config);
+    };
+    for (name, value) in table {
+        if name == "iterations" {
+            let n = value
+                .as_integer()
+                .filter(|n| (1..=1000).contains(n))
+                .with_context(|| {
+                    format!("steering.iterations is `{value}`: allowed is a whole number from 1 to 1000")
+                })?;
+            config.iterations = n as u32;
+            continue;
+        }
+        let Some(key) = KEYS.iter().find(|k| k.name == name) else {
+            let names: Vec<&str> = KEYS.iter().map(|k| k.name).collect();
+            bail!(
+                "unknown steering key `{name}`: allowed are {}, iterations",
+                names.join(", ")
+            );
+        };
+        let number = value
+            .as_float()
+            .or_else(|| value.as_integer().map(|i| i as f64))
+            .with_context(|| format!("steering.{name} is `{value}`, not a number"))?;
+        let ok = number.is_finite() && (number > 0.0 || (key.zero_allowed && number == 0.0));
+        if !ok {
+            let least = if key.zero_allowed {
+                "0 or more"
+            } else {
+                "more than 0"
+            };
+            bail!("steering.{name} = {number}: allowed is a finite number, {least}");
+        }
+        (key.set)(&mut config, number as f32);
+    }
+    if !config.is_valid() {
+        bail!(
+            "steering.rotation_dead_band_deg = {}: allowed is less than 180",
+            config.rotation_dead_band_deg
+        );
+    }
+    Ok(config)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(extra: &str) -> Result<SteerConfig> {
+        let text = format!(
+            "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
+             direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
+        );
+        steering_of(&ScenarioFile::parse(&text)?)
+    }
+
+    #[test]
+    fn the_table_tells_the_controller_what_the_lab_knows() {
+        assert_eq!(parse("").unwrap(), SteerConfig::DEFAULT);
+        let c = parse(
+            "[steering]\ntracker_position_mm = 1.2\ntracker_heading_deg = 2\n\
+             tracking_lost_after_mm = 4\nrotation_dead_band_deg = 0\niterations = 12\n",
+        )
+        .unwrap();
+        assert_eq!(c.noise.position_mm, 1.2);
+        assert_eq!(c.noise.orientation_deg, 2.0);
+        assert_eq!(c.max_gap_mm, 4.0);
+        assert_eq!(c.rotation_dead_band_deg, 0.0);
+        assert_eq!(c.iterations, 12);
+        assert_eq!(
+            c.noise.curvature_spread,
+            SteerConfig::DEFAULT.noise.curvature_spread
+        );
+        for key in KEYS {
+            let c = parse(&format!("[steering]\n{} = 3.5\n", key.name)).unwrap();
+            assert_ne!(c, SteerConfig::DEFAULT, "{} sets nothing", key.name);
+        }
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        for (extra, says) in [
+            (
+                "[steering]\ntracker_noise = 1\n",
+                "unknown steering key `tracker_noise`",
+            ),
+            (
+                "[steering]\ntracker_position_mm = 0\n",
+                "steering.tracker_position_mm = 0",
+            ),
+            (
+                "[steering]\ntracker_position_mm = -1\n",
+                "allowed is a finite number",
+            ),
+            (
+                "[steering]\ntracker_position_mm = nan\n",
+                "steering.tracker_position_mm = NaN",
+            ),
+            (
+                "[steering]\nreach_tolerance_mm = \"x\"\n",
+                "steering.reach_tolerance_mm is `\"x\"`",
+            ),
+            (
+                "[steering]\nrotation_dead_band_deg = 200\n",
+                "less than 180",
+            ),
+            ("[steering]\niterations = 0\n", "steering.iterations is `0`"),
+            (
+                "[steering]\niterations = 2.5\n",
+                "steering.iterations is `2.5`",
+            ),
+        ] {
+            let e = format!("{:#}", parse(extra).unwrap_err());
+            assert!(e.contains(says), "{extra}: {e}");
+        }
+    }
+}
