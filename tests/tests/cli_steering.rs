@@ -62,6 +62,11 @@ fn the_tracking_gap_is_the_labs_to_set() {
         lost(&short) >= lost(&default) + 5,
         "{short} against {default}"
     );
+    // The flag says the same as the table.
+    let mut flagged = faults.to_vec();
+    flagged.extend(["--steer", "tracking_lost_after_mm=3"]);
+    let by_flag = summary(&example("paper").to_string_lossy(), &flagged);
+    assert_eq!(by_flag, short);
 }
 
 #[test]
@@ -70,7 +75,7 @@ fn a_bad_steering_key_is_a_clear_error() {
     for (table, says) in [
         (
             "[steering]\ntracker_noise = 1\n",
-            "unknown steering key `tracker_noise`",
+            "steering.tracker_noise: unknown steering key",
         ),
         (
             "[steering]\nreach_tolerance_mm = -1\n",
@@ -86,4 +91,21 @@ fn a_bad_steering_key_is_a_clear_error() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(says), "{table}: {err}");
     }
+    let ok = paper_with(&dir, "ok.toml", "");
+    let out = needle()
+        .args(["simulate", &ok, "--closed-loop"])
+        .args(["--steer", "tracker_position_mm=-2"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--steer") && err.contains("tracker_position_mm = -2"),
+        "{err}"
+    );
+    let out = needle()
+        .args(["simulate", &ok, "--steer", "iterations=3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "--steer without --closed-loop");
 }

@@ -92,49 +92,59 @@ const KEYS: &[Key] = &[
 /// (`SteerConfig::DEFAULT`) where `[steering]` is silent.
 pub fn steering_of(file: &ScenarioFile) -> Result<SteerConfig> {
     let mut config = SteerConfig::DEFAULT;
-    let Some(table) = &file.steering else {
-        return Ok(config);
-    };
-    for (name, value) in table {
-        if name == "iterations" {
-            let n = value
-                .as_integer()
-                .filter(|n| (1..=1000).contains(n))
-                .with_context(|| {
-                    format!("steering.iterations is `{value}`: allowed is a whole number from 1 to 1000")
-                })?;
-            config.iterations = n as u32;
-            continue;
-        }
-        let Some(key) = KEYS.iter().find(|k| k.name == name) else {
-            let names: Vec<&str> = KEYS.iter().map(|k| k.name).collect();
-            bail!(
-                "unknown steering key `{name}`: allowed are {}, iterations",
-                names.join(", ")
-            );
-        };
+    for (name, value) in file.steering.iter().flatten() {
         let number = value
             .as_float()
             .or_else(|| value.as_integer().map(|i| i as f64))
             .with_context(|| format!("steering.{name} is `{value}`, not a number"))?;
-        let ok = number.is_finite() && (number > 0.0 || (key.zero_allowed && number == 0.0));
-        if !ok {
-            let least = if key.zero_allowed {
-                "0 or more"
-            } else {
-                "more than 0"
-            };
-            bail!("steering.{name} = {number}: allowed is a finite number, {least}");
-        }
-        (key.set)(&mut config, number as f32);
-    }
-    if !config.is_valid() {
-        bail!(
-            "steering.rotation_dead_band_deg = {}: allowed is less than 180",
-            config.rotation_dead_band_deg
-        );
+        set(&mut config, name, number).map_err(|e| anyhow::anyhow!("steering.{e}"))?;
     }
     Ok(config)
+}
+
+/// `config` with `KEY=VALUE` applied (`needle simulate --steer`), a key of `[steering]`.
+pub fn apply(config: &mut SteerConfig, assignment: &str) -> Result<()> {
+    let (name, value) = assignment
+        .split_once('=')
+        .with_context(|| format!("`{assignment}` is not KEY=VALUE"))?;
+    let number: f64 = value
+        .trim()
+        .parse()
+        .ok()
+        .with_context(|| format!("{name} is `{value}`, not a number"))?;
+    set(config, name.trim(), number)
+}
+
+/// Sets the key `name` to `number`, or says why not (the message starts with the key).
+fn set(config: &mut SteerConfig, name: &str, number: f64) -> Result<()> {
+    if name == "iterations" {
+        if !(number.fract() == 0.0 && (1.0..=1000.0).contains(&number)) {
+            bail!("iterations is `{number}`: allowed is a whole number from 1 to 1000");
+        }
+        config.iterations = number as u32;
+        return Ok(());
+    }
+    let Some(key) = KEYS.iter().find(|k| k.name == name) else {
+        let names: Vec<&str> = KEYS.iter().map(|k| k.name).collect();
+        bail!(
+            "{name}: unknown steering key; allowed are {}, iterations",
+            names.join(", ")
+        );
+    };
+    let ok = number.is_finite() && (number > 0.0 || (key.zero_allowed && number == 0.0));
+    if !ok {
+        let least = if key.zero_allowed {
+            "0 or more"
+        } else {
+            "more than 0"
+        };
+        bail!("{name} = {number}: allowed is a finite number, {least}");
+    }
+    (key.set)(config, number as f32);
+    if !config.is_valid() {
+        bail!("{name} = {number}: allowed is less than 180");
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -177,7 +187,7 @@ mod tests {
         for (extra, says) in [
             (
                 "[steering]\ntracker_noise = 1\n",
-                "unknown steering key `tracker_noise`",
+                "steering.tracker_noise: unknown steering key",
             ),
             (
                 "[steering]\ntracker_position_mm = 0\n",
@@ -207,6 +217,24 @@ mod tests {
         ] {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_flag_sets_a_key_as_the_table_does() {
+        let mut c = parse("[steering]\ntracker_position_mm = 1.2\n").unwrap();
+        apply(&mut c, "tracker_position_mm=0.8").unwrap();
+        apply(&mut c, "iterations=5").unwrap();
+        assert_eq!(c.noise.position_mm, 0.8);
+        assert_eq!(c.iterations, 5);
+        for (bad, says) in [
+            ("tracker_position_mm", "not KEY=VALUE"),
+            ("tracker_position_mm=x", "tracker_position_mm is `x`"),
+            ("noise=1", "noise: unknown steering key"),
+            ("reach_tolerance_mm=0", "reach_tolerance_mm = 0"),
+        ] {
+            let e = format!("{:#}", apply(&mut c, bad).unwrap_err());
+            assert!(e.contains(says), "{bad}: {e}");
         }
     }
 }

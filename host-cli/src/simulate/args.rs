@@ -42,6 +42,11 @@ pub struct SimulateArgs {
     /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
     #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
     pub fault: Vec<String>,
+    /// With --closed-loop: tell the controller one thing of the tracker or the insertion,
+    /// KEY=VALUE (repeatable; a key of the scenario's `[steering]`, docs/scenario.md, over
+    /// what the file says). The world stays as `--perturb` makes it.
+    #[arg(long = "steer", value_name = "KEY=VALUE", requires = "closed_loop")]
+    pub steer: Vec<String>,
     /// With --closed-loop: steer on the device at this TCP address (hil-sim --tcp, QEMU)
     /// instead of in-process; the host runs the simulated robot, tissue and tracker.
     #[arg(long, requires = "closed_loop", conflicts_with = "port")]

@@ -89,8 +89,12 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
         restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
     }
     let mut setup = Setup::bounded(scenario, p, faults, a.runs, a.seed, bound.as_ref())?;
-    // The controller is told what `[steering]` says, whatever the world (`--perturb`) is.
+    // The controller is told what `[steering]` and `--steer` say, whatever the world
+    // (`--perturb`) is.
     setup.config = execution.steering;
+    for kv in &a.steer {
+        crate::scenario::steering::apply(&mut setup.config, kv).context("--steer")?;
+    }
     Ok((setup, shapes))
 }
 
