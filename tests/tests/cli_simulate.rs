@@ -224,6 +224,10 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     );
     let v: Value = serde_json::from_slice(&text).unwrap();
     assert_eq!(v["closed_loop"], true);
+    // What the controller was told sits beside the world: here the defaults.
+    assert_eq!(v["controller"]["tracker_position_mm"], 0.5);
+    assert_eq!(v["controller"]["tracking_lost_after_mm"], 10.0);
+    assert_eq!(v["controller"]["iterations"], 10.0);
     let s = &v["summary"];
     for k in [
         "replans",

@@ -67,6 +67,13 @@ fn the_tracking_gap_is_the_labs_to_set() {
     flagged.extend(["--steer", "tracking_lost_after_mm=3"]);
     let by_flag = summary(&example("paper").to_string_lossy(), &flagged);
     assert_eq!(by_flag, short);
+    // What the controller was told is printed beside the world: the file's, then the flag's.
+    let gap = dir.join("gap.toml");
+    let args = ["simulate", gap.to_str().unwrap(), "--closed-loop", "--json"];
+    let args = [&args[..], &["--runs", "1", "--steer", "target_mm=0.25"]].concat();
+    let told = needle_json(&args)["controller"].clone();
+    assert_eq!(told["tracking_lost_after_mm"], 3.0, "{told}");
+    assert_eq!(told["target_mm"], 0.25, "{told}");
 }
 
 #[test]

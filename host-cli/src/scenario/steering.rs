@@ -6,11 +6,12 @@
 use super::file::ScenarioFile;
 use anyhow::{bail, Context, Result};
 use planner_core::steer::SteerConfig;
+use std::collections::BTreeMap;
 
-/// A key of `[steering]`: its name, what it sets, and whether zero is allowed.
+/// A key of `[steering]`: its name, where it lives, and whether zero is allowed.
 struct Key {
     name: &'static str,
-    set: fn(&mut SteerConfig, f32),
+    field: fn(&mut SteerConfig) -> &mut f32,
     zero_allowed: bool,
 }
 
@@ -18,72 +19,72 @@ struct Key {
 const KEYS: &[Key] = &[
     Key {
         name: "tracker_position_mm",
-        set: |c, v| c.noise.position_mm = v,
+        field: |c| &mut c.noise.position_mm,
         zero_allowed: false,
     },
     Key {
         name: "tracker_heading_deg",
-        set: |c, v| c.noise.orientation_deg = v,
+        field: |c| &mut c.noise.orientation_deg,
         zero_allowed: false,
     },
     Key {
         name: "target_mm",
-        set: |c, v| c.noise.target_mm = v,
+        field: |c| &mut c.noise.target_mm,
         zero_allowed: false,
     },
     Key {
         name: "entry_position_mm",
-        set: |c, v| c.noise.entry_position_mm = v,
+        field: |c| &mut c.noise.entry_position_mm,
         zero_allowed: false,
     },
     Key {
         name: "entry_direction_deg",
-        set: |c, v| c.noise.entry_direction_deg = v,
+        field: |c| &mut c.noise.entry_direction_deg,
         zero_allowed: false,
     },
     Key {
         name: "curvature_spread",
-        set: |c, v| c.noise.curvature_spread = v,
+        field: |c| &mut c.noise.curvature_spread,
         zero_allowed: false,
     },
     Key {
         name: "segment_curvature_spread",
-        set: |c, v| c.noise.segment_curvature_spread = v,
+        field: |c| &mut c.noise.segment_curvature_spread,
         zero_allowed: false,
     },
     Key {
         name: "torsion_lag_deg_per_mm",
-        set: |c, v| c.noise.torsion_lag_deg_per_mm = v,
+        field: |c| &mut c.noise.torsion_lag_deg_per_mm,
         zero_allowed: false,
     },
     Key {
         name: "line_walk_deg",
-        set: |c, v| c.noise.line_walk_deg = v,
+        field: |c| &mut c.noise.line_walk_deg,
         zero_allowed: false,
     },
     Key {
         name: "insertion_error_mm",
-        set: |c, v| c.noise.insertion_error_mm = v,
+        field: |c| &mut c.noise.insertion_error_mm,
         zero_allowed: false,
     },
     Key {
         name: "replan_error_mm",
-        set: |c, v| c.replan_error_mm = v,
+        field: |c| &mut c.replan_error_mm,
         zero_allowed: false,
     },
     Key {
         name: "tracking_lost_after_mm",
-        set: |c, v| c.max_gap_mm = v,
+        field: |c| &mut c.max_gap_mm,
         zero_allowed: false,
     },
     Key {
         name: "reach_tolerance_mm",
-        set: |c, v| c.reach_tolerance_mm = v,
+        field: |c| &mut c.reach_tolerance_mm,
         zero_allowed: false,
     },
     Key {
         name: "rotation_dead_band_deg",
-        set: |c, v| c.rotation_dead_band_deg = v,
+        field: |c| &mut c.rotation_dead_band_deg,
         zero_allowed: true,
     },
 ];
@@ -115,6 +116,18 @@ pub fn apply(config: &mut SteerConfig, assignment: &str) -> Result<()> {
     set(config, name.trim(), number)
 }
 
+/// Every key of `[steering]` with its value in `config` (what the controller was told; `needle
+/// simulate --closed-loop --json` prints it as `controller`).
+pub fn steering_keys(config: &SteerConfig) -> BTreeMap<&'static str, f32> {
+    let mut config = *config;
+    let mut out: BTreeMap<&'static str, f32> = KEYS
+        .iter()
+        .map(|k| (k.name, *(k.field)(&mut config)))
+        .collect();
+    out.insert("iterations", config.iterations as f32);
+    out
+}
+
 /// Sets the key `name` to `number`, or says why not (the message starts with the key).
 fn set(config: &mut SteerConfig, name: &str, number: f64) -> Result<()> {
     if name == "iterations" {
@@ -140,7 +153,7 @@ fn set(config: &mut SteerConfig, name: &str, number: f64) -> Result<()> {
         };
         bail!("{name} = {number}: allowed is a finite number, {least}");
     }
-    (key.set)(config, number as f32);
+    *(key.field)(config) = number as f32;
     if !config.is_valid() {
         bail!("{name} = {number}: allowed is less than 180");
     }
@@ -218,6 +231,16 @@ mod tests {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");
         }
+    }
+
+    #[test]
+    fn the_keys_read_back_what_was_set() {
+        let c = parse("[steering]\ntracker_position_mm = 1.25\niterations = 7\n").unwrap();
+        let keys = steering_keys(&c);
+        assert_eq!(keys.len(), KEYS.len() + 1);
+        assert_eq!(keys["tracker_position_mm"], 1.25);
+        assert_eq!(keys["iterations"], 7.0);
+        assert_eq!(keys["tracking_lost_after_mm"], c.max_gap_mm);
     }
 
     #[test]

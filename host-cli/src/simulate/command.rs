@@ -143,7 +143,15 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
             let summary = summarise(closed.iter().map(|c| &c.run));
             let steering = summarise_steering(closed);
             if a.json {
-                let j = closed_json(p, closed, &summary, &steering, open.as_ref(), a.detail);
+                let j = closed_json(
+                    p,
+                    &setup.config,
+                    closed,
+                    &summary,
+                    &steering,
+                    open.as_ref(),
+                    a.detail,
+                );
                 serde_json::to_string(&j)? + "\n"
             } else {
                 closed_table(&header, p, &summary, &steering, open.as_ref())

@@ -4,7 +4,9 @@ use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
 use needle_sim::{ClosedRun, Perturbation, Run};
+use planner_core::steer::SteerConfig;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// The whole output.
 #[derive(Serialize)]
@@ -131,6 +133,9 @@ pub struct ClosedJson<'a> {
     pub closed_loop: bool,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
+    /// What the controller was told (the `[steering]` keys, from the file, `--steer` and the
+    /// defaults): beside `perturbation`, what the world was.
+    pub controller: BTreeMap<&'static str, f32>,
     /// Figures over the steered runs.
     pub summary: ClosedSummaryJson,
     /// With --compare-open-loop: the same worlds executed open loop.
@@ -175,6 +180,7 @@ fn summary_json(summary: &Summary) -> SummaryJson {
 /// The JSON of a closed-loop simulation.
 pub fn closed_json<'a>(
     p: &Perturbation,
+    controller: &SteerConfig,
     runs: &'a [ClosedRun],
     summary: &Summary,
     steering: &SteeringSummary,
@@ -185,6 +191,7 @@ pub fn closed_json<'a>(
         runs: runs.len(),
         closed_loop: true,
         perturbation: *p,
+        controller: crate::scenario::steering::steering_keys(controller),
         summary: ClosedSummaryJson {
             figures: summary_json(summary),
             steering: steering.clone(),
