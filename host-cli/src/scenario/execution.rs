@@ -126,11 +126,7 @@ mod tests {
     use super::*;
 
     fn parse(extra: &str) -> Result<Execution> {
-        let text = format!(
-            "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
-             direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
-        );
-        execution_of(&ScenarioFile::parse(&text)?)
+        execution_of(&super::super::file::minimal_with(extra)?)
     }
 
     #[test]
@@ -205,13 +201,7 @@ mod tests {
     /// executed open loop plans at the full curvature; a reserve out of range names its key.
     #[test]
     fn the_closed_loop_keeps_curvature_in_hand_by_default() {
-        let scenario = |extra: &str| {
-            let text = format!(
-                "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
-                 direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
-            );
-            ScenarioFile::parse(&text)?.to_scenario()
-        };
+        let scenario = |extra: &str| super::super::file::minimal_with(extra)?.to_scenario();
         let reserve = |extra: &str| scenario(extra).unwrap().options.curvature_reserve;
         assert_eq!(reserve(""), 0.0);
         assert_eq!(reserve("[execution]\nmode = \"open_loop\"\n"), 0.0);

@@ -162,3 +162,13 @@ impl ScenarioFile {
         Ok(toml::from_str(text)?)
     }
 }
+
+/// A scenario file of the least a scenario needs (a needle, an entry and a target 90 mm ahead)
+/// with `extra` appended: the tables' own tests add theirs to it.
+#[cfg(test)]
+pub(crate) fn minimal_with(extra: &str) -> Result<ScenarioFile> {
+    ScenarioFile::parse(&format!(
+        "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
+         direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
+    ))
+}

@@ -165,11 +165,7 @@ mod tests {
     use super::*;
 
     fn parse(extra: &str) -> Result<SteerConfig> {
-        let text = format!(
-            "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 0, 0]\n\
-             direction = [0, 0, 1]\n[target]\nposition = [0, 10, 90]\n{extra}"
-        );
-        steering_of(&ScenarioFile::parse(&text)?)
+        steering_of(&super::super::file::minimal_with(extra)?)
     }
 
     #[test]

@@ -370,7 +370,7 @@ impl Steering {
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);
             reply.evaluations = evaluations;
-            match found.or_else(|| self.trimmed(&remaining, &now)) {
+            match found.or_else(|| self.trimmed(&remaining, &now, floor + margin)) {
                 Some(r) => {
                     self.stats.replans += 1;
                     reply.replanned = true;
@@ -393,9 +393,14 @@ impl Steering {
     }
 
     /// Near the end, where no replan can bend the path any more: the last push lengthened or
-    /// shortened so the predicted end comes abreast of the target, if that passes the check and
-    /// comes closer.
-    fn trimmed(&self, remaining: &Steps, now: &Prediction) -> Option<super::replan::Replanned> {
+    /// shortened so the predicted end comes abreast of the target, if that comes closer and
+    /// keeps `kept_clear` (the floor and the margin) from every obstacle.
+    fn trimmed(
+        &self,
+        remaining: &Steps,
+        now: &Prediction,
+        kept_clear: f32,
+    ) -> Option<super::replan::Replanned> {
         let mut steps = remaining.clone();
         let last = steps.last_mut()?;
         let along = (self.estimate.target - now.end.p).dot(&now.end.e3());
@@ -405,10 +410,8 @@ impl Steering {
         };
         *last = resized_step(&self.scenario.driver, last, (length + along).max(0.0)).ok()?;
         let prediction = self.predict(&steps);
-        let floor =
-            self.scenario.options.min_clearance + STEER_MARGIN_SDS * self.estimate.margin_sd();
         let better = prediction.target_error + 1e-4 < now.target_error;
-        (better && prediction.min_clearance > floor).then_some(super::replan::Replanned {
+        (better && prediction.min_clearance > kept_clear).then_some(super::replan::Replanned {
             steps,
             prediction,
             evaluations: 0,
