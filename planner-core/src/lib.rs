@@ -30,6 +30,7 @@ pub mod device;
 pub mod error;
 pub mod execute;
 pub(crate) mod fmath;
+pub(crate) mod matmul;
 pub mod model;
 pub(crate) mod optim;
 pub mod report;

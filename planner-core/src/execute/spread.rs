@@ -105,8 +105,9 @@ pub(crate) struct Sources {
     pub drift: [Twist; 2],
 }
 
-pub(crate) fn outer(s: &Twist, variance: f32) -> Matrix6<f32> {
-    s * s.transpose() * variance
+/// `m += σ² s sᵀ`.
+pub(crate) fn add_outer(m: &mut Matrix6<f32>, s: &Twist, variance: f32) {
+    crate::matmul::add_outer(m, s, s, variance);
 }
 
 /// Propagates the spread along `schedule` executed in `scenario` under `p`; `visit` sees the
@@ -137,7 +138,7 @@ pub fn propagate(
     mut visit: impl FnMut(&TipSpread),
 ) -> TipSpread {
     let mut tip = None;
-    walk(scenario, schedule, p, spacing, |at| {
+    walk(scenario, schedule, p, spacing, &mut |at| {
         let t = spread_at(at.src, at.part, p, at.depth, at.planned, at.mean);
         visit(&t);
         tip = Some(t);
@@ -166,13 +167,15 @@ pub(crate) struct WalkPoint<'a> {
     pub push: Option<usize>,
 }
 
-/// Walks `schedule` as [`propagate`] describes, handing `at` each point.
+/// Walks `schedule` as [`propagate`] describes, handing `at` each point. One copy serves every
+/// caller (`dyn`, never inlined): on the device each copy cost kilobytes of flash.
+#[inline(never)]
 pub(crate) fn walk(
     scenario: &Scenario,
     schedule: &Schedule,
     p: &Perturbation,
     spacing: f32,
-    mut at: impl FnMut(&WalkPoint),
+    at: &mut dyn FnMut(&WalkPoint),
 ) {
     let radius = scenario.needle.curvature_radius;
     let spacing = if spacing > 0.0 { spacing } else { 1.0 };
@@ -252,11 +255,11 @@ fn entry_sources(start: &Frame, p: &Perturbation) -> Matrix6<f32> {
     let mut m = Matrix6::zeros();
     let offset = p.entry_position_mm * p.entry_position_mm;
     for axis in [V3::x(), V3::y(), V3::z()] {
-        m += outer(&twist(V3::zeros(), axis), offset);
+        add_outer(&mut m, &twist(V3::zeros(), axis), offset);
     }
     let tilt = p.entry_direction_deg.to_radians();
     for axis in [start.e1(), start.e2()] {
-        m += outer(&about(axis, start.p), tilt * tilt);
+        add_outer(&mut m, &about(axis, start.p), tilt * tilt);
     }
     m
 }
@@ -307,10 +310,10 @@ impl Sources {
     /// Ends the shared draw of the segment or line before a change of kind or a rotation.
     fn flush(&mut self, p: &Perturbation) {
         let seg = p.segment_curvature_spread;
-        self.done += outer(&self.segment_curvature, seg * seg);
+        add_outer(&mut self.done, &self.segment_curvature, seg * seg);
         let drift = p.line_drift_mm_per_mm;
         for d in &self.drift {
-            self.done += outer(d, drift * drift);
+            add_outer(&mut self.done, d, drift * drift);
         }
         self.segment_curvature = Twist::zeros();
         self.drift = [Twist::zeros(); 2];
@@ -323,7 +326,7 @@ impl Sources {
         for (d, add) in self.drift.iter_mut().zip(&part.drift) {
             *d += add;
         }
-        self.done += outer(&part.advance, advance_sd * advance_sd);
+        add_outer(&mut self.done, &part.advance, advance_sd * advance_sd);
     }
 
     /// Σ σ² s sᵀ at a point `part` of the way into the push under way.
@@ -334,12 +337,17 @@ impl Sources {
             p.line_drift_mm_per_mm,
         );
         let mut m = self.done;
-        m += outer(&(self.run_curvature + part.curvature), run * run);
-        m += outer(&(self.segment_curvature + part.curvature), seg * seg);
+        add_outer(&mut m, &(self.run_curvature + part.curvature), run * run);
+        add_outer(
+            &mut m,
+            &(self.segment_curvature + part.curvature),
+            seg * seg,
+        );
         for (d, add) in self.drift.iter().zip(&part.drift) {
-            m += outer(&(d + add), drift * drift);
+            add_outer(&mut m, &(d + add), drift * drift);
         }
-        m + outer(&part.advance, part.advance_sd * part.advance_sd)
+        add_outer(&mut m, &part.advance, part.advance_sd * part.advance_sd);
+        m
     }
 }
 
@@ -352,7 +360,7 @@ fn spread_at(
     mean: V3,
 ) -> TipSpread {
     let a = lever(&mean);
-    let covariance = a * src.at(part, p) * a.transpose();
+    let covariance = crate::matmul::sandwich(&a, &src.at(part, p));
     TipSpread {
         depth,
         planned,

@@ -21,6 +21,7 @@ use crate::execute::nominal::posture_frame;
 use crate::execute::perturbation::Perturbation;
 use crate::execute::schedule::{Op, Schedule, MAX_STEPS};
 use crate::execute::spread::{lever, walk, TipSpread, Twist, WalkPoint};
+use crate::matmul::{add_outer, mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::Scenario;
@@ -48,7 +49,7 @@ fn totals(scenario: &Scenario, schedule: &Schedule, p: &Perturbation, spacing: f
         end: V3::zeros(),
         end_covariance: Matrix3::zeros(),
     };
-    walk(scenario, schedule, p, spacing, |at| {
+    walk(scenario, schedule, p, spacing, &mut |at| {
         t.run = at.src.run_curvature + at.part.curvature;
         if let Some(s) = t.segment.get_mut(at.group) {
             *s = at.src.segment_curvature + at.part.curvature;
@@ -63,7 +64,7 @@ fn totals(scenario: &Scenario, schedule: &Schedule, p: &Perturbation, spacing: f
         }
         let a = lever(&at.mean);
         t.end = at.mean;
-        t.end_covariance = a * at.src.at(at.part, p) * a.transpose();
+        t.end_covariance = sandwich(&a, &at.src.at(at.part, p));
     });
     t
 }
@@ -75,25 +76,31 @@ fn cross(at: &WalkPoint, t: &Totals, p: &Perturbation) -> Matrix6<f32> {
         p.segment_curvature_spread,
         p.line_drift_mm_per_mm,
     );
-    let both = |here: &Twist, end: &Twist, variance: f32| here * end.transpose() * variance;
     let mut m = at.src.done;
-    m += both(
+    add_outer(
+        &mut m,
         &(at.src.run_curvature + at.part.curvature),
         &t.run,
         run * run,
     );
     if let (Some(s), Some(d)) = (t.segment.get(at.group), t.drift.get(at.group)) {
-        m += both(
+        add_outer(
+            &mut m,
             &(at.src.segment_curvature + at.part.curvature),
             s,
             seg * seg,
         );
         for k in 0..2 {
-            m += both(&(at.src.drift[k] + at.part.drift[k]), &d[k], drift * drift);
+            add_outer(
+                &mut m,
+                &(at.src.drift[k] + at.part.drift[k]),
+                &d[k],
+                drift * drift,
+            );
         }
     }
     if let Some(a) = at.push.and_then(|k| t.advance.get(k)) {
-        m += both(&(at.part.advance * at.part.advance_sd), a, 1.0);
+        add_outer(&mut m, &(at.part.advance * at.part.advance_sd), a, 1.0);
     }
     m
 }
@@ -246,10 +253,10 @@ pub fn propagate_steered_with(
         .unwrap_or_else(Matrix3::zeros);
     let lever_end = lever(&t.end);
     let mut tip = None;
-    walk(scenario, schedule, p, spacing, |at| {
+    walk(scenario, schedule, p, spacing, &mut |at| {
         let a = lever(&at.mean);
-        let own = a * at.src.at(at.part, p) * a.transpose();
-        let with_end = a * cross(at, &t, p) * lever_end.transpose();
+        let own = sandwich(&a, &at.src.at(at.part, p));
+        let with_end = mul(&mul(&a, &cross(at, &t, p)), &lever_end.transpose());
         let gain = with_end * pinned;
         let bridge = own - gain * with_end.transpose() + gain * shift * gain.transpose();
         let covariance =

@@ -9,7 +9,7 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
-use super::matmul::{mul, sandwich};
+use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{rotate, Frame, V3};
 use nalgebra::{Matrix3, SMatrix, SVector};

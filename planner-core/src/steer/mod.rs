@@ -30,7 +30,6 @@
 mod aimed;
 pub mod apriori;
 pub mod estimate;
-mod matmul;
 pub mod replan;
 mod state;
 mod turns;

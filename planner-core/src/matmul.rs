@@ -1,14 +1,14 @@
-//! Matrix products for the estimator, kept out of line.
+//! Matrix products for the estimator and the spread propagation, kept out of line.
 //!
 //! nalgebra unrolls a fixed-size product completely: the Kalman update alone took 9 KiB of the
-//! firmware's flash (whose budget is 128 KiB). These loops take the sizes at run time, so one
-//! copy serves every shape, and they sum in nalgebra's order (`k` ascending, from the first
-//! product), so the results are the same bit for bit.
+//! firmware's flash (whose budget is 128 KiB), the spread's 6×6 sums 22 KiB more. These loops
+//! take the sizes at run time, so one copy serves every shape, and they sum in nalgebra's order
+//! (`k` ascending, from the first product), so the results are the same bit for bit.
 
 use nalgebra::SMatrix;
 
 /// `a * b`.
-pub(super) fn mul<const R: usize, const K: usize, const C: usize>(
+pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f32, R, K>,
     b: &SMatrix<f32, K, C>,
 ) -> SMatrix<f32, R, C> {
@@ -18,11 +18,27 @@ pub(super) fn mul<const R: usize, const K: usize, const C: usize>(
 }
 
 /// `a * b * aᵀ`, as nalgebra evaluates it (left to right).
-pub(super) fn sandwich<const R: usize, const K: usize>(
+pub(crate) fn sandwich<const R: usize, const K: usize>(
     a: &SMatrix<f32, R, K>,
     b: &SMatrix<f32, K, K>,
 ) -> SMatrix<f32, R, R> {
     mul(&mul(a, b), &a.transpose())
+}
+
+/// `m += here · thereᵀ · variance`, element by element as nalgebra's
+/// `m += here * there.transpose() * variance` rounds it.
+#[inline(never)]
+pub(crate) fn add_outer<const N: usize>(
+    m: &mut SMatrix<f32, N, N>,
+    here: &SMatrix<f32, N, 1>,
+    there: &SMatrix<f32, N, 1>,
+    variance: f32,
+) {
+    for (j, col) in m.as_mut_slice().chunks_exact_mut(N).enumerate() {
+        for (i, o) in col.iter_mut().enumerate() {
+            *o += here[i] * there[j] * variance;
+        }
+    }
 }
 
 /// Column-major `out (rows × cols) = a (rows × inner) · b (inner × cols)`.
@@ -56,5 +72,9 @@ mod tests {
         );
         let c = SMatrix::<f32, 7, 3>::from_fn(|i, j| (i as f32 - j as f32 * 2.5) * 0.1);
         assert_eq!(mul(&b, &c).as_slice(), (b * c).as_slice());
+        let (h, t) = (b.column(2).into_owned(), b.column(5).into_owned());
+        let mut m = b;
+        add_outer(&mut m, &h, &t, 0.37);
+        assert_eq!(m.as_slice(), (b + h * t.transpose() * 0.37).as_slice());
     }
 }
