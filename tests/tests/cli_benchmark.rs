@@ -74,6 +74,7 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         keys(&v),
         [
             "by_form",
+            "generator",
             "perturbation",
             "scenarios",
             "totals",
@@ -151,6 +152,43 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         assert_eq!(plan["best"]["form"], row["form"], "{}", file.display());
         let length = f(&plan["best"]["length"]);
         assert!((length - f(&row["plan_length"])).abs() < 1e-3);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The planted family: every scenario has a path (none unplanned), its files are named after
+/// the family and plan with `needle plan`, and the steered plans keep the bound.
+#[test]
+fn planted_scenarios_all_plan_and_are_written_under_their_name() {
+    let dir = scratch("planted");
+    let v = needle_json(&[
+        "benchmark",
+        "--generator",
+        "planted",
+        "--scenarios",
+        "3",
+        "--runs",
+        "2",
+        "--seed",
+        "201",
+        "--closed-loop-max-collision-probability",
+        "0.01",
+        "--json",
+        "--write-scenarios",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(v["generator"], "planted");
+    assert_eq!(v["unplanned"].as_array().unwrap().len(), 0, "{v}");
+    let rows = v["scenarios"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for row in rows {
+        assert!(row["closed_loop_refused"].is_null(), "{row}");
+        let file = dir.join(format!("planted-{}.toml", u(&row["seed"])));
+        let plan = needle_json(&["plan", file.to_str().unwrap(), "--json"]);
+        assert_eq!(plan["best"]["form"], row["form"], "{}", file.display());
+        assert!(!dir
+            .join(format!("unseen-{}.toml", u(&row["seed"])))
+            .exists());
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -364,12 +364,15 @@ pub struct BenchmarkReport {
     pub unplanned: Vec<Unplanned>,
     /// The perturbation every world drew from.
     pub perturbation: Perturbation,
+    /// The generator of the scenarios.
+    pub generator: super::Generator,
 }
 
 impl BenchmarkReport {
     /// The report of `generated` scenarios: `rows` benchmarked, `unplanned` not.
     pub fn new(
         generated: usize,
+        generator: super::Generator,
         perturbation: Perturbation,
         rows: Vec<ScenarioRow>,
         unplanned: Vec<Unplanned>,
@@ -403,6 +406,7 @@ impl BenchmarkReport {
             })
             .collect();
         BenchmarkReport {
+            generator,
             totals: Totals {
                 scenarios: generated,
                 planned: rows.len(),

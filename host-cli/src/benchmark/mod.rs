@@ -15,6 +15,7 @@ pub use figures::{FormTotals, SteeredPlan, Unplanned, WORLD_SEED_STRIDE};
 
 use crate::analysis::parallel;
 use crate::scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
+use crate::scenario::planted::planted_scenario;
 use crate::scenario::unseen::unseen_scenario;
 use crate::scenario::write::scenario_toml;
 use crate::simulate::at_least_one;
@@ -72,6 +73,39 @@ pub struct BenchmarkArgs {
     /// halved where no path keeps it, down to none; the row says what was kept).
     #[arg(long, value_name = "R", default_value_t = CLOSED_LOOP_CURVATURE_RESERVE, value_parser = reserve)]
     pub curvature_reserve: f32,
+    /// Which generator draws the scenarios: `unseen` (the spheres drawn with no regard for
+    /// whether a path is left) or `planted` (a needle path drawn first, every sphere kept 2 mm
+    /// from it: every scenario has a path).
+    #[arg(long, value_enum, default_value_t = Generator::Unseen)]
+    pub generator: Generator,
+}
+
+/// The seeded families `needle benchmark` draws from (docs/execution.md, "Unseen scenarios").
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Generator {
+    /// [`unseen_scenario`].
+    Unseen,
+    /// [`planted_scenario`].
+    Planted,
+}
+
+impl Generator {
+    /// The scenario of `seed`.
+    pub fn scenario(self, seed: u64) -> Scenario {
+        match self {
+            Generator::Unseen => unseen_scenario(seed),
+            Generator::Planted => planted_scenario(seed),
+        }
+    }
+
+    /// The family's name, as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Generator::Unseen => "unseen",
+            Generator::Planted => "planted",
+        }
+    }
 }
 
 /// A probability strictly between 0 and 1.
@@ -115,9 +149,9 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
     let mut unplanned = Vec::new();
     for i in 0..a.scenarios {
         let seed = a.seed.wrapping_add(i as u64);
-        let scenario = unseen_scenario(seed);
+        let scenario = a.generator.scenario(seed);
         if let Some(dir) = &a.write_scenarios {
-            write_scenario(dir, seed, &scenario)?;
+            write_scenario(dir, a.generator, seed, &scenario)?;
         }
         let started = Instant::now();
         let spheres = scenario.obstacles.len();
@@ -139,7 +173,7 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
             }
         }
     }
-    let report = BenchmarkReport::new(a.scenarios, p, rows, unplanned);
+    let report = BenchmarkReport::new(a.scenarios, a.generator, p, rows, unplanned);
     let text = if a.json {
         serde_json::to_string(&report)? + "\n"
     } else {
@@ -149,18 +183,17 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
     Ok(())
 }
 
-/// Writes `scenario` to `dir/unseen-SEED.toml`.
-fn write_scenario(dir: &Path, seed: u64, scenario: &Scenario) -> Result<()> {
-    let path = dir.join(format!("unseen-{seed}.toml"));
+/// Writes `scenario` to `dir/GENERATOR-SEED.toml`.
+fn write_scenario(dir: &Path, generator: Generator, seed: u64, scenario: &Scenario) -> Result<()> {
+    let name = format!("{}-{seed}", generator.name());
+    let path = dir.join(format!("{name}.toml"));
     let header = format!(
-        "An unseen 3-D scenario: needle_cli::scenario::unseen::unseen_scenario({seed}),\n\
-         written by `needle benchmark` (see docs/execution.md, \"Unseen scenarios\")."
+        "A generated 3-D scenario: needle_cli::scenario::{0}::{0}_scenario({seed}),\n\
+         written by `needle benchmark` (see docs/execution.md, \"Unseen scenarios\").",
+        generator.name()
     );
-    std::fs::write(
-        &path,
-        scenario_toml(scenario, &format!("unseen-{seed}"), &header),
-    )
-    .with_context(|| format!("cannot write {}", path.display()))
+    std::fs::write(&path, scenario_toml(scenario, &name, &header))
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Plans `scenario` (its best form), executes it in `runs` worlds open loop and the same worlds
@@ -270,6 +303,7 @@ mod tests {
             closed_loop_max_collision_probability: None,
             open_loop_only: false,
             curvature_reserve: CLOSED_LOOP_CURVATURE_RESERVE,
+            generator: Generator::Unseen,
         }
     }
 
@@ -350,7 +384,7 @@ mod tests {
             spheres: s.obstacles.len(),
             reason: reason.clone(),
         };
-        let report = BenchmarkReport::new(2, p, vec![planned], vec![lost]);
+        let report = BenchmarkReport::new(2, Generator::Unseen, p, vec![planned], vec![lost]);
         assert_eq!((report.totals.planned, report.totals.unplanned), (1, 1));
         assert_eq!(report.totals.runs, 2);
         let table = table::to_table(&args, &report);

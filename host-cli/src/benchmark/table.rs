@@ -108,9 +108,11 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
     let last = a.seed.wrapping_add((a.scenarios as u64).saturating_sub(1));
     let _ = writeln!(
         out,
-        "unseen 3-D scenarios, seeds {}..={last}: {} simulated worlds each, open loop and the \
+        "{} 3-D scenarios, seeds {}..={last}: {} simulated worlds each, open loop and the \
          same worlds closed loop",
-        a.seed, a.runs
+        a.generator.name(),
+        a.seed,
+        a.runs
     );
     let groups = format!("{:<50} |{:^31} |{:^39}", "", "open loop", "closed loop");
     let _ = writeln!(out, "{}", groups.trim_end());

@@ -10,6 +10,7 @@ mod exact;
 pub mod execution;
 pub mod file;
 pub mod geometry;
+pub mod planted;
 pub mod polygon;
 pub mod shapes;
 pub mod steering;

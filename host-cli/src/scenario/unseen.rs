@@ -40,13 +40,13 @@ pub const CLEARANCE_MM: f64 = 3.0;
 /// Keeps these scenarios' draws apart from every other family seeded from the same numbers.
 const FAMILY: u64 = 0x756E_7365_656E_3364;
 
-type V3 = [f64; 3];
+pub(super) type V3 = [f64; 3];
 
-fn add(a: V3, b: V3, k: f64) -> V3 {
+pub(super) fn add(a: V3, b: V3, k: f64) -> V3 {
     [a[0] + k * b[0], a[1] + k * b[1], a[2] + k * b[2]]
 }
 
-fn cross(a: V3, b: V3) -> V3 {
+pub(super) fn cross(a: V3, b: V3) -> V3 {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -54,16 +54,16 @@ fn cross(a: V3, b: V3) -> V3 {
     ]
 }
 
-fn norm(a: V3) -> f64 {
+pub(super) fn norm(a: V3) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
-fn unit(a: V3) -> V3 {
+pub(super) fn unit(a: V3) -> V3 {
     let n = norm(a);
     [a[0] / n, a[1] / n, a[2] / n]
 }
 
-fn distance(a: V3, b: V3) -> f64 {
+pub(super) fn distance(a: V3, b: V3) -> f64 {
     norm(add(a, b, -1.0))
 }
 
@@ -82,11 +82,33 @@ pub fn unseen_scenario(seed: u64) -> Scenario {
     let length = rng.range(TARGET_DISTANCE_MM.0, TARGET_DISTANCE_MM.1);
     let target = add(entry, axis, length);
     s.target.position = target.map(|v| v as f32);
+    draw_spheres(&mut rng, &mut s, axis, length, usize::MAX, |_, _| true);
+    s
+}
+
+/// Draws the spheres of a scenario whose entry and target are set (the target `length` mm along
+/// the unit `axis` from the entry), as the module describes; a sphere `keep(centre, radius)`
+/// refuses is drawn again. False when `max_draws` draws did not give them all.
+pub(super) fn draw_spheres(
+    rng: &mut impl Draw,
+    s: &mut Scenario,
+    axis: V3,
+    length: f64,
+    max_draws: usize,
+    keep: impl Fn(V3, f64) -> bool,
+) -> bool {
+    let entry = s.entry.position.map(f64::from);
+    let target = add(entry, axis, length);
     // Two directions across the line, to place centres off it.
     let across = unit(cross(axis, [1.0, 0.0, 0.0]));
     let across2 = cross(axis, across);
     let count = rng.int(SPHERES.0, SPHERES.1);
+    let mut draws = 0usize;
     while s.obstacles.len() < count {
+        if draws == max_draws {
+            return false;
+        }
+        draws += 1;
         let blocking = s.obstacles.is_empty();
         let radius = rng.range(RADIUS_MM.0, RADIUS_MM.1);
         let (span, off) = if blocking {
@@ -102,7 +124,7 @@ pub fn unseen_scenario(seed: u64) -> Scenario {
             off * turn.sin(),
         );
         let clear = |p: V3| distance(centre, p) - radius >= CLEARANCE_MM;
-        if clear(entry) && clear(target) {
+        if clear(entry) && clear(target) && keep(centre, radius) {
             // At most 16 spheres: within the capacity (32).
             let _ = s.obstacles.push(Obstacle {
                 center: centre.map(|v| v as f32),
@@ -110,7 +132,7 @@ pub fn unseen_scenario(seed: u64) -> Scenario {
             });
         }
     }
-    s
+    true
 }
 
 #[cfg(test)]
