@@ -29,6 +29,7 @@
 
 mod aimed;
 pub mod apriori;
+mod attempt;
 pub mod estimate;
 pub mod replan;
 mod state;

@@ -5,14 +5,13 @@
 //! before it is commanded, which executes its motor steps on the nominal needle (not the
 //! optimiser's numbers).
 
+use super::attempt::attempt;
 use crate::execute::nominal::execute_from;
 use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
 use crate::model::scenario::{Scenario, Workspace, MAX_OBSTACLES};
-use crate::optim::problem::{Problem, Vars, MAX_VARS};
-use crate::optim::sqp::solve_within;
 use crate::report::{SegmentPlan, Segments};
 
 /// Spacing of the sampled clearance check across a plane scenario's cylinders (mm).
@@ -193,55 +192,6 @@ pub(super) fn sub_scenario(input: &ReplanInput) -> Scenario {
     s.options.workspace = Workspace::Space;
     s.options.min_clearance += input.margin;
     s
-}
-
-/// Solves `form` from the tip, from `start` (lengths in mm, bevels in degrees before each arc).
-pub(super) fn attempt(
-    input: &ReplanInput,
-    sub: &Scenario,
-    form: Form,
-    start: &[SegmentPlan],
-    spent: &mut (u32, u32),
-) -> Option<Replanned> {
-    let p = Problem::continuation(sub, form, input.tip);
-    let mut x0: Vars = [0.0; MAX_VARS];
-    for (i, seg) in start.iter().enumerate().take(form.len()) {
-        let k = p.length_var(i);
-        x0[k] = crate::fmath::clamp(seg.length / p.radius, p.lower[k], p.upper[k]);
-        if let Some(b) = p.bevel_var(i) {
-            x0[b] = seg.bevel_deg.to_radians();
-        }
-    }
-    let sol = solved(&p, &x0, input.iterations, spent)?;
-    let exact = solution_segments(&p, &sol)?;
-    super::turns::commanded(input, &exact, spent)
-}
-
-/// The SQP's solution from `x0`, its cost counted in `spent`.
-fn solved(p: &Problem, x0: &Vars, iterations: u32, spent: &mut (u32, u32)) -> Option<Vars> {
-    let Ok(sol) = solve_within(p, x0, iterations) else {
-        spent.0 += 1;
-        return None;
-    };
-    spent.0 += sol.evaluations;
-    spent.1 += sol.iterations;
-    Some(sol.eval.x)
-}
-
-/// The segments of the solution `x` (bevels in degrees, wrapped).
-fn solution_segments(p: &Problem, x: &Vars) -> Option<Segments> {
-    let lengths = p.lengths(x);
-    let bevels = p.bevels(x);
-    let mut out = Segments::new();
-    for i in 0..p.form.len() {
-        out.push(SegmentPlan {
-            kind: p.form.kind(i),
-            length: lengths[i],
-            bevel_deg: wrapped_deg(bevels[i]),
-        })
-        .ok()?;
-    }
-    Some(out)
 }
 
 /// `segments` from the tip as motor steps, if executing them passes the check: the target

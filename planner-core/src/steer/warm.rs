@@ -107,7 +107,8 @@ mod tests {
     use super::*;
     use crate::model::kinematics::Frame;
     use crate::model::scenario::{Obstacle, Scenario, Workspace};
-    use crate::steer::replan::{attempt, form_of, sub_scenario};
+    use crate::steer::attempt::attempt;
+    use crate::steer::replan::{form_of, sub_scenario};
 
     /// A tip whose line now passes a sphere closer than the margin: no start along the line
     /// is clear of it, the line turned away is, and the replan finds a continuation from it
