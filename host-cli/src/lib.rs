@@ -2,6 +2,7 @@
 //! simulated insertions, the benchmark on generated scenarios.
 
 pub mod analysis;
+pub mod anatomy;
 pub mod bench;
 pub mod benchmark;
 pub mod device;

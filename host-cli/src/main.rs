@@ -66,6 +66,8 @@ enum Command {
     Compare(analysis::CompareArgs),
     /// Turn polygon obstacles into covering circles.
     Approx(analysis::ApproxArgs),
+    /// Cover a label map's segments (NRRD, Slicer .seg.nrrd, NIfTI) with spheres to avoid.
+    Cover(needle_cli::anatomy::command::CoverArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
@@ -300,6 +302,7 @@ fn main() -> ExitCode {
         Command::Rrt(a) => analysis::run_rrt(a),
         Command::Compare(a) => analysis::run_compare(a),
         Command::Approx(a) => analysis::run_approx(a),
+        Command::Cover(a) => needle_cli::anatomy::command::run_cover(a),
         Command::Plot(a) => analysis::run_plot(a),
         Command::Simulate(a) => needle_cli::simulate::run_simulate(a),
         Command::Benchmark(a) => needle_cli::benchmark::run_benchmark(a),

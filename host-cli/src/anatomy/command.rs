@@ -1,0 +1,222 @@
+//! `needle cover`: a label map's segments as spheres a scenario can hold.
+
+use super::cover::{cover_segment, CoverOptions, SegmentCover};
+use super::label_map::{LabelMap, Segment};
+use anyhow::{anyhow, bail, Context, Result};
+use planner_core::MAX_OBSTACLES;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// `needle cover`
+#[derive(clap::Args, Clone, Debug)]
+pub struct CoverArgs {
+    /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`.
+    pub image: PathBuf,
+    /// Cover these label values only (comma-separated; default: every label but 0).
+    #[arg(long, value_delimiter = ',', conflicts_with = "segments")]
+    pub labels: Vec<i64>,
+    /// Cover these segments only, by the names the file gives them (a `.seg.nrrd`).
+    #[arg(long, value_delimiter = ',')]
+    pub segments: Vec<String>,
+    /// Grow every sphere by this much (mm): the segment dilated by it is covered.
+    #[arg(long, default_value_t = 0.0)]
+    pub margin: f64,
+    /// The most spheres one segment's cover may take.
+    #[arg(long, default_value_t = MAX_OBSTACLES)]
+    pub max_spheres: usize,
+    /// Split a sphere while it holds more than this many times its voxels' volume (and a split
+    /// makes the cover smaller). A cube in its sphere is 2.7 times.
+    #[arg(long, default_value_t = 3.0)]
+    pub tightness: f64,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the spheres as `[[obstacles]]` to this file: appended to `--scenario`'s text when
+    /// given (a scenario that plans), else alone (to paste into one).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// The scenario the spheres join in `--out`.
+    #[arg(long, value_name = "SCENARIO", requires = "out")]
+    pub scenario: Option<PathBuf>,
+}
+
+/// What `needle cover --json` prints.
+#[derive(Serialize)]
+struct CoverReport<'a> {
+    file: String,
+    frame: &'static str,
+    margin_mm: f64,
+    segments: &'a [SegmentCover],
+    spheres: usize,
+}
+
+/// The segments `a` selects in `map`.
+fn selected(map: &LabelMap, a: &CoverArgs) -> Result<Vec<Segment>> {
+    let present = map.segments();
+    let labels = || {
+        present
+            .iter()
+            .map(|s| s.label.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if present.is_empty() {
+        bail!("the map has no labelled voxels (every voxel is 0)");
+    }
+    if !a.labels.is_empty() {
+        return a
+            .labels
+            .iter()
+            .map(|&l| {
+                present
+                    .iter()
+                    .find(|s| s.label == l)
+                    .cloned()
+                    .ok_or_else(|| {
+                        anyhow!("label {l} is not in the map (its labels: {})", labels())
+                    })
+            })
+            .collect();
+    }
+    if !a.segments.is_empty() {
+        if map.named.is_empty() {
+            bail!("the map names no segments (only a .seg.nrrd does): select by --labels");
+        }
+        let names = || {
+            present
+                .iter()
+                .map(|s| format!("{:?}", s.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        return a
+            .segments
+            .iter()
+            .map(|n| {
+                present
+                    .iter()
+                    .find(|s| &s.name == n)
+                    .cloned()
+                    .ok_or_else(|| {
+                        anyhow!("no segment named {n:?} has voxels (segments: {})", names())
+                    })
+            })
+            .collect();
+    }
+    Ok(present)
+}
+
+/// The covers `a` asks for.
+pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
+    let map = LabelMap::read(&a.image)?;
+    let at = |e: anyhow::Error| anyhow!("{}: {e}", a.image.display());
+    let options = CoverOptions {
+        margin_mm: a.margin,
+        max_spheres: a.max_spheres.max(1),
+        tightness: a.tightness,
+    };
+    selected(&map, a)
+        .map_err(at)?
+        .iter()
+        .map(|s| cover_segment(&map, s, &options).map_err(at))
+        .collect()
+}
+
+/// Runs `needle cover`.
+pub fn run_cover(a: &CoverArgs) -> Result<()> {
+    let covers = covers(a)?;
+    let total: usize = covers.iter().map(|c| c.spheres.len()).sum();
+    if let Some(out) = &a.out {
+        write_obstacles(out, a, &covers, total)?;
+    }
+    let text = if a.json {
+        let report = CoverReport {
+            file: a.image.display().to_string(),
+            frame: "RAS",
+            margin_mm: a.margin,
+            segments: &covers,
+            spheres: total,
+        };
+        serde_json::to_string(&report)? + "\n"
+    } else {
+        table(a, &covers, total)
+    };
+    print!("{text}");
+    Ok(())
+}
+
+fn table(a: &CoverArgs, covers: &[SegmentCover], total: usize) -> String {
+    let mut out = format!(
+        "sphere cover of {} (RAS, mm; margin {} mm)\n{:<24}{:>7}{:>9}{:>13}{:>9}{:>10}{:>11}\n",
+        a.image.display(),
+        a.margin,
+        "segment",
+        "label",
+        "voxels",
+        "volume mm3",
+        "spheres",
+        "outside",
+        "farthest"
+    );
+    for c in covers {
+        let _ = writeln!(
+            out,
+            "{:<24}{:>7}{:>9}{:>13.1}{:>9}{:>9.0}%{:>8.2} mm",
+            c.name,
+            c.label,
+            c.voxels,
+            c.volume_mm3,
+            c.spheres.len(),
+            100.0 * c.outside_ratio,
+            c.farthest_mm
+        );
+    }
+    let _ = writeln!(
+        out,
+        "{total} spheres; every voxel of each segment lies inside its cover (checked corner by corner)"
+    );
+    out
+}
+
+/// The spheres as `[[obstacles]]` tables.
+fn obstacles_toml(a: &CoverArgs, covers: &[SegmentCover]) -> String {
+    let mut out = format!(
+        "\n# Sphere cover of {} (needle cover, margin {} mm, RAS mm)\n",
+        a.image.display(),
+        a.margin
+    );
+    for c in covers {
+        let _ = writeln!(out, "# {} (label {})", c.name, c.label);
+        for s in &c.spheres {
+            let _ = writeln!(
+                out,
+                "[[obstacles]]\ncenter = [{}, {}, {}]\nradius = {}\n",
+                s.center[0] as f32, s.center[1] as f32, s.center[2] as f32, s.radius as f32
+            );
+        }
+    }
+    out
+}
+
+fn write_obstacles(out: &Path, a: &CoverArgs, covers: &[SegmentCover], total: usize) -> Result<()> {
+    let spheres = obstacles_toml(a, covers);
+    let text = match &a.scenario {
+        Some(base) => {
+            let text = std::fs::read_to_string(base)
+                .with_context(|| format!("cannot read {}", base.display()))?;
+            let joined = text + &spheres;
+            crate::scenario::file::ScenarioFile::parse(&joined)
+                .and_then(|f| f.to_scenario())
+                .map_err(|e| {
+                    anyhow!(
+                        "{} with the cover's {total} spheres is not a scenario: {e:#}",
+                        base.display()
+                    )
+                })?;
+            joined
+        }
+        None => spheres,
+    };
+    std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))
+}

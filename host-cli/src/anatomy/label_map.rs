@@ -1,0 +1,141 @@
+//! A 3-D label map: integer labels on a voxel grid, the grid's place in the world (RAS, mm),
+//! and the names of its segments where the file gives them.
+
+use anyhow::{bail, Result};
+use std::path::Path;
+
+/// One labelled structure of a map.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Segment {
+    /// Its name (Slicer's segment name, or `label N`).
+    pub name: String,
+    /// The voxel value that marks it.
+    pub label: i64,
+}
+
+/// A label map in the world frame: RAS, millimetres.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LabelMap {
+    /// Voxels along i, j and k.
+    pub dims: [usize; 3],
+    /// One label per voxel, i fastest, then j, then k.
+    pub labels: Vec<i64>,
+    /// World position (RAS, mm) of voxel (i, j, k)'s centre: `ijk_to_ras · [i, j, k, 1]`.
+    pub ijk_to_ras: [[f64; 4]; 3],
+    /// The segments the file names (empty when it names none).
+    pub named: Vec<Segment>,
+}
+
+impl LabelMap {
+    /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`.
+    pub fn read(path: &Path) -> Result<LabelMap> {
+        let name = path.to_string_lossy().to_lowercase();
+        let map = if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+            super::nrrd::read(path)?
+        } else if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+            super::nifti_file::read(path)?
+        } else {
+            bail!(
+                "{}: not a label map this reads (by its extension: .nrrd, .seg.nrrd, .nii, .nii.gz)",
+                path.display()
+            )
+        };
+        map.validated()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    }
+
+    /// `self` if its grid, labels and affine are usable.
+    pub fn validated(self) -> Result<LabelMap> {
+        let n: usize = self.dims.iter().product();
+        if n == 0 {
+            bail!("the map has no voxels (sizes {:?})", self.dims);
+        }
+        if n != self.labels.len() {
+            bail!(
+                "the map's sizes {:?} give {n} voxels but it holds {}",
+                self.dims,
+                self.labels.len()
+            );
+        }
+        let a = &self.ijk_to_ras;
+        if a.iter().flatten().any(|v| !v.is_finite()) {
+            bail!("the voxel-to-world transform is not finite");
+        }
+        let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        let scale = self.spacing().iter().product::<f64>();
+        if det.abs().partial_cmp(&(1e-9 * scale.max(1e-30))) != Some(std::cmp::Ordering::Greater)
+            || scale == 0.0
+        {
+            bail!("the voxel-to-world transform is singular (its axes do not span 3-D)");
+        }
+        Ok(self)
+    }
+
+    /// The label of voxel (i, j, k); 0 outside the grid.
+    pub fn at(&self, i: i64, j: i64, k: i64) -> i64 {
+        let [ni, nj, nk] = self.dims.map(|d| d as i64);
+        if i < 0 || j < 0 || k < 0 || i >= ni || j >= nj || k >= nk {
+            return 0;
+        }
+        self.labels[(i + ni * (j + nj * k)) as usize]
+    }
+
+    /// The world point (RAS, mm) of grid coordinates `p` (voxel centres at whole numbers).
+    pub fn world(&self, p: [f64; 3]) -> [f64; 3] {
+        let a = &self.ijk_to_ras;
+        [0, 1, 2].map(|r| a[r][0] * p[0] + a[r][1] * p[1] + a[r][2] * p[2] + a[r][3])
+    }
+
+    /// The length of a step along i, j and k (mm).
+    pub fn spacing(&self) -> [f64; 3] {
+        let a = &self.ijk_to_ras;
+        [0, 1, 2].map(|c| (a[0][c] * a[0][c] + a[1][c] * a[1][c] + a[2][c] * a[2][c]).sqrt())
+    }
+
+    /// The volume of one voxel (mm³).
+    pub fn voxel_volume(&self) -> f64 {
+        let a = &self.ijk_to_ras;
+        (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
+            .abs()
+    }
+
+    /// The segments present: the named ones with at least one voxel, else one per label other
+    /// than 0, in label order.
+    pub fn segments(&self) -> Vec<Segment> {
+        let mut present: Vec<i64> = self.labels.iter().copied().filter(|&l| l != 0).collect();
+        present.sort_unstable();
+        present.dedup();
+        if self.named.is_empty() {
+            return present
+                .into_iter()
+                .map(|label| Segment {
+                    name: format!("label {label}"),
+                    label,
+                })
+                .collect();
+        }
+        self.named
+            .iter()
+            .filter(|s| present.binary_search(&s.label).is_ok())
+            .cloned()
+            .collect()
+    }
+
+    /// The grid coordinates of every voxel labelled `label`.
+    pub fn voxels_of(&self, label: i64) -> Vec<[i64; 3]> {
+        let [ni, nj, _] = self.dims;
+        self.labels
+            .iter()
+            .enumerate()
+            .filter(|(_, &l)| l == label)
+            .map(|(n, _)| {
+                let (i, rest) = (n % ni, n / ni);
+                [i as i64, (rest % nj) as i64, (rest / nj) as i64]
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,172 @@
+//! Covers of label maps made here: a ball, two touching boxes, a thin curved tube and a hollow
+//! shell, on isotropic, anisotropic and oblique grids.
+
+use super::cover::{cover_segment, uncovered_corners, CoverOptions};
+use super::label_map::{LabelMap, Segment};
+
+/// A map of `dims` voxels whose label at (i, j, k) is `f(i, j, k)`.
+fn map_of(
+    dims: [usize; 3],
+    ijk_to_ras: [[f64; 4]; 3],
+    f: impl Fn(i64, i64, i64) -> i64,
+) -> LabelMap {
+    let mut labels = Vec::with_capacity(dims.iter().product());
+    for k in 0..dims[2] as i64 {
+        for j in 0..dims[1] as i64 {
+            for i in 0..dims[0] as i64 {
+                labels.push(f(i, j, k));
+            }
+        }
+    }
+    LabelMap {
+        dims,
+        labels,
+        ijk_to_ras,
+        named: Vec::new(),
+    }
+    .validated()
+    .unwrap()
+}
+
+fn scaled(s: [f64; 3], origin: [f64; 3]) -> [[f64; 4]; 3] {
+    [
+        [s[0], 0.0, 0.0, origin[0]],
+        [0.0, s[1], 0.0, origin[1]],
+        [0.0, 0.0, s[2], origin[2]],
+    ]
+}
+
+const OPTIONS: CoverOptions = CoverOptions {
+    margin_mm: 0.0,
+    max_spheres: 64,
+    tightness: 3.0,
+};
+
+fn segment(label: i64) -> Segment {
+    Segment {
+        name: format!("label {label}"),
+        label,
+    }
+}
+
+/// A ball of radius 9 voxels: one sphere, no more than one voxel larger than the ball.
+#[test]
+fn a_ball_is_one_sphere_hardly_larger_than_the_ball() {
+    let r = 9.0;
+    let map = map_of([25, 25, 25], scaled([1.0; 3], [0.0; 3]), |i, j, k| {
+        let d = [i, j, k].map(|x| x as f64 - 12.0);
+        i64::from((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= r)
+    });
+    let c = cover_segment(&map, &segment(1), &OPTIONS).unwrap();
+    assert_eq!(c.spheres.len(), 1, "{:?}", c.spheres);
+    let s = c.spheres[0];
+    assert!(s.radius <= r + 1.0, "{}", s.radius);
+    assert!(s.center.iter().all(|&x| (x - 12.0).abs() < 1e-9));
+    assert_eq!(uncovered_corners(&map, &map.voxels_of(1), &c.spheres), 0);
+    assert!(c.outside_ratio < 0.5 && c.farthest_mm <= 1.5, "{c:?}");
+}
+
+/// Two boxes that touch, on anisotropic voxels: each covered on its own, every corner inside.
+#[test]
+fn two_touching_boxes_are_covered_apart() {
+    let map = map_of(
+        [30, 16, 12],
+        scaled([0.5, 0.8, 2.0], [-3.0, 4.0, 10.0]),
+        |i, j, k| {
+            let inside = (2..14).contains(&j) && (2..10).contains(&k);
+            match i {
+                2..=13 if inside => 1,
+                14..=27 if inside => 2,
+                _ => 0,
+            }
+        },
+    );
+    for label in [1, 2] {
+        let c = cover_segment(&map, &segment(label), &OPTIONS).unwrap();
+        assert_eq!(
+            uncovered_corners(&map, &map.voxels_of(label), &c.spheres),
+            0
+        );
+        assert!(c.outside_ratio < 2.0, "label {label}: {c:?}");
+    }
+}
+
+/// A thin tube bent in a quarter circle: a chain of spheres, much tighter than one sphere.
+#[test]
+fn a_thin_curved_tube_becomes_a_chain() {
+    let map = map_of([48, 48, 9], scaled([1.0; 3], [0.0; 3]), |i, j, k| {
+        let (x, y, z) = (i as f64, j as f64, k as f64 - 4.0);
+        let off = ((x * x + y * y).sqrt() - 40.0).hypot(z);
+        i64::from(off <= 2.0)
+    });
+    let c = cover_segment(&map, &segment(1), &OPTIONS).unwrap();
+    assert!(c.spheres.len() >= 8, "{}", c.spheres.len());
+    assert_eq!(uncovered_corners(&map, &map.voxels_of(1), &c.spheres), 0);
+    let one = CoverOptions {
+        max_spheres: 1,
+        tightness: 1e9,
+        ..OPTIONS
+    };
+    let single = cover_segment(&map, &segment(1), &one).unwrap();
+    assert!(
+        c.outside_ratio * 10.0 < single.outside_ratio,
+        "{} {}",
+        c.outside_ratio,
+        single.outside_ratio
+    );
+    // Too few spheres for that tightness: a clear error, not a looser cover.
+    let few = CoverOptions {
+        max_spheres: 3,
+        ..OPTIONS
+    };
+    let err = cover_segment(&map, &segment(1), &few)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("needs more than 3 spheres"), "{err}");
+}
+
+/// A hollow shell, on an oblique grid (rotated 30° about z), with a margin: every corner inside
+/// the cover, and the margin adds to every radius.
+#[test]
+fn a_hollow_shell_on_an_oblique_grid_is_covered_with_its_margin() {
+    let (c30, s30) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let a = [
+        [1.2 * c30, -1.2 * s30, 0.0, 5.0],
+        [1.2 * s30, 1.2 * c30, 0.0, -7.0],
+        [0.0, 0.0, 1.5, 2.0],
+    ];
+    let map = map_of([24, 24, 24], a, |i, j, k| {
+        let d = [i, j, k].map(|x| x as f64 - 11.5);
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        i64::from((8.0..=10.0).contains(&r))
+    });
+    let bare = cover_segment(&map, &segment(1), &OPTIONS).unwrap();
+    assert_eq!(uncovered_corners(&map, &map.voxels_of(1), &bare.spheres), 0);
+    let grown = CoverOptions {
+        margin_mm: 1.5,
+        ..OPTIONS
+    };
+    let with = cover_segment(&map, &segment(1), &grown).unwrap();
+    assert_eq!(with.spheres.len(), bare.spheres.len());
+    for (w, b) in with.spheres.iter().zip(&bare.spheres) {
+        assert!((w.radius - b.radius - 1.5).abs() < 1e-12);
+    }
+}
+
+/// A label nothing carries, and a map whose axes do not span 3-D, are errors.
+#[test]
+fn an_empty_segment_and_a_singular_affine_are_errors() {
+    let map = map_of([4, 4, 4], scaled([1.0; 3], [0.0; 3]), |i, _, _| {
+        i64::from(i == 1)
+    });
+    let err = cover_segment(&map, &segment(7), &OPTIONS)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("has no voxels"), "{err}");
+    let flat = LabelMap {
+        ijk_to_ras: scaled([1.0, 1.0, 0.0], [0.0; 3]),
+        ..map
+    };
+    let err = flat.validated().unwrap_err().to_string();
+    assert!(err.contains("singular"), "{err}");
+}

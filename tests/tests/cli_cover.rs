@@ -1,0 +1,228 @@
+//! `needle cover` on label map files written by the tests (NRRD raw and gzip, LPS and RAS, a
+//! Slicer segmentation with names, NIfTI-1): the same anatomy gives the same spheres whatever the
+//! file, the spheres join a scenario that plans, and bad files and selections are clear errors.
+
+use needle_e2e::label_files::{write_nifti, write_nrrd, Labels, NrrdStyle};
+use needle_e2e::{example, needle, needle_json};
+use serde_json::Value;
+use std::path::PathBuf;
+
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("needle-cover-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A ball (label 1) and a box (label 2) on anisotropic voxels, placed at `origin` (RAS, mm).
+fn anatomy(origin: [f64; 3]) -> Labels {
+    let a = [
+        [0.8, 0.0, 0.0, origin[0]],
+        [0.0, 0.9, 0.0, origin[1]],
+        [0.0, 0.0, 1.25, origin[2]],
+    ];
+    Labels::of([30, 28, 20], a, |i, j, k| {
+        let d = [
+            (i - 10) as f64 * 0.8,
+            (j - 12) as f64 * 0.9,
+            (k - 8) as f64 * 1.25,
+        ];
+        if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= 6.0 {
+            1
+        } else if (22..28).contains(&i) && (4..24).contains(&j) && (3..17).contains(&k) {
+            2
+        } else {
+            0
+        }
+    })
+}
+
+fn spheres(v: &Value) -> Vec<(String, [f64; 3], f64)> {
+    let mut out = Vec::new();
+    for seg in v["segments"].as_array().unwrap() {
+        for s in seg["spheres"].as_array().unwrap() {
+            let c: Vec<f64> = s["center"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            out.push((
+                seg["label"].to_string(),
+                [c[0], c[1], c[2]],
+                s["radius"].as_f64().unwrap(),
+            ));
+        }
+    }
+    out
+}
+
+/// The same anatomy as NRRD in LPS (raw), NRRD in RAS (gzip) and NIfTI (RAS): the same spheres
+/// to 1e-4 mm, every segment covered, the ball by one sphere.
+#[test]
+fn lps_ras_and_nifti_give_the_same_spheres() {
+    let dir = scratch("frames");
+    let m = anatomy([-12.0, 20.0, 35.0]);
+    let lps = dir.join("lps.nrrd");
+    let ras = dir.join("ras.nrrd");
+    let nii = dir.join("map.nii");
+    let style = |space, gzip| NrrdStyle {
+        space,
+        gzip,
+        pairs: &[],
+    };
+    write_nrrd(&lps, &m, &style("left-posterior-superior", false));
+    write_nrrd(&ras, &m, &style("right-anterior-superior", true));
+    write_nifti(&nii, &m);
+    let runs: Vec<Value> = [&lps, &ras, &nii]
+        .iter()
+        .map(|p| needle_json(&["cover", p.to_str().unwrap(), "--json"]))
+        .collect();
+    let first = spheres(&runs[0]);
+    assert_eq!(runs[0]["frame"], "RAS");
+    let labels: Vec<&str> = first.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(labels.iter().filter(|l| **l == "1").count(), 1, "{first:?}");
+    assert!(labels.contains(&"2"));
+    // The ball's sphere sits on the ball's centre, in RAS.
+    let ball = first.iter().find(|s| s.0 == "1").unwrap();
+    let centre = [-12.0 + 8.0, 20.0 + 10.8, 35.0 + 10.0];
+    for (got, want) in ball.1.iter().zip(centre) {
+        assert!((got - want).abs() < 1e-4, "{ball:?}");
+    }
+    assert!(ball.2 <= 6.0 + 1.25, "{ball:?}");
+    for other in &runs[1..] {
+        let s = spheres(other);
+        assert_eq!(s.len(), first.len());
+        for (a, b) in s.iter().zip(&first) {
+            assert_eq!(a.0, b.0);
+            for (x, y) in a.1.iter().zip(&b.1) {
+                assert!((x - y).abs() < 1e-4, "{a:?} {b:?}");
+            }
+            assert!((a.2 - b.2).abs() < 1e-4);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A Slicer segmentation names its segments: `--segments` selects by name, the names come back,
+/// and `--out --scenario` appends the spheres to a scenario that still plans (the anatomy lies
+/// far from the path: the same form, nearly the same length; D, the mean of 1/clearance over the
+/// obstacles, counts them all).
+#[test]
+fn named_segments_are_selected_and_join_a_scenario() {
+    let dir = scratch("named");
+    let seg = dir.join("anatomy.seg.nrrd");
+    let pairs = [
+        ("Segment0_Name", "lesion"),
+        ("Segment0_LabelValue", "1"),
+        ("Segment1_Name", "rib"),
+        ("Segment1_LabelValue", "2"),
+    ];
+    let style = NrrdStyle {
+        space: "left-posterior-superior",
+        gzip: true,
+        pairs: &pairs,
+    };
+    write_nrrd(&seg, &anatomy([300.0, 300.0, 300.0]), &style);
+    let out = dir.join("with-rib.toml");
+    let space = example("space");
+    let v = needle_json(&[
+        "cover",
+        seg.to_str().unwrap(),
+        "--segments",
+        "rib",
+        "--margin",
+        "1",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+        "--scenario",
+        space.to_str().unwrap(),
+    ]);
+    let segs = v["segments"].as_array().unwrap();
+    assert_eq!(segs.len(), 1);
+    assert_eq!(segs[0]["name"], "rib");
+    assert_eq!(segs[0]["label"], 2);
+    let base = needle_json(&["plan", space.to_str().unwrap(), "--json"]);
+    let with = needle_json(&["plan", out.to_str().unwrap(), "--json"]);
+    assert_eq!(with["best"]["form"], base["best"]["form"]);
+    let length = |v: &Value| v["best"]["length"].as_f64().unwrap();
+    assert!((length(&with) - length(&base)).abs() < 0.5);
+    let count = |p: &PathBuf| {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .matches("[[obstacles]]")
+            .count()
+    };
+    let added = segs[0]["spheres"].as_array().unwrap().len();
+    assert_eq!(count(&out), count(&space) + added);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn error_of(args: &[&str]) -> String {
+    let out = needle().args(args).output().unwrap();
+    assert!(!out.status.success(), "{args:?} succeeded");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+/// Files that are not what they say, selections the map cannot give, and covers over their
+/// sphere budget: errors naming the file and the problem.
+#[test]
+fn bad_files_and_selections_are_clear_errors() {
+    let dir = scratch("bad");
+    let fake = dir.join("fake.nrrd");
+    std::fs::write(&fake, "this is not a label map\n").unwrap();
+    let err = error_of(&["cover", fake.to_str().unwrap()]);
+    assert!(
+        err.contains("fake.nrrd") && err.contains("not a NRRD file"),
+        "{err}"
+    );
+    let fake_nii = dir.join("fake.nii");
+    std::fs::write(&fake_nii, vec![7u8; 400]).unwrap();
+    let err = error_of(&["cover", fake_nii.to_str().unwrap()]);
+    assert!(
+        err.contains("fake.nii") && err.contains("not a NIfTI-1 file"),
+        "{err}"
+    );
+    let good = dir.join("map.nrrd");
+    let style = NrrdStyle {
+        space: "right-anterior-superior",
+        gzip: false,
+        pairs: &[],
+    };
+    write_nrrd(&good, &anatomy([0.0; 3]), &style);
+    let err = error_of(&["cover", good.to_str().unwrap(), "--labels", "9"]);
+    assert!(
+        err.contains("label 9 is not in the map") && err.contains("1, 2"),
+        "{err}"
+    );
+    let err = error_of(&["cover", good.to_str().unwrap(), "--segments", "rib"]);
+    assert!(err.contains("names no segments"), "{err}");
+    let err = error_of(&[
+        "cover",
+        good.to_str().unwrap(),
+        "--labels",
+        "2",
+        "--max-spheres",
+        "1",
+        "--tightness",
+        "1.5",
+    ]);
+    assert!(err.contains("needs more than 1 spheres"), "{err}");
+    let mut flat = anatomy([0.0; 3]);
+    flat.ijk_to_ras[2][2] = 0.0;
+    let singular = dir.join("flat.nrrd");
+    write_nrrd(&singular, &flat, &style);
+    let err = error_of(&["cover", singular.to_str().unwrap()]);
+    assert!(
+        err.contains("flat.nrrd") && err.contains("singular"),
+        "{err}"
+    );
+    let err = error_of(&["cover", dir.join("missing.nii.gz").to_str().unwrap()]);
+    assert!(err.contains("missing.nii.gz"), "{err}");
+    let err = error_of(&["cover", dir.join("scan.png").to_str().unwrap()]);
+    assert!(err.contains("not a label map this reads"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
