@@ -50,19 +50,35 @@ fn in_scenario<T>(result: Result<T>, path: Option<&Path>) -> Result<T> {
     }
 }
 
-/// The perturbation, the tracker's faults, the scenario (restricted to the form asked for) and
-/// its plan, from the parsed scenario `file` (read from `path`, if it was).
-pub fn set_up(
-    file: &ScenarioFile,
-    path: Option<&Path>,
-    r: &Request,
-) -> Result<(Setup, Vec<ObstacleShape>)> {
+/// Everything a simulation was asked, checked, before anything is planned.
+pub struct Asked {
+    /// The scenario (restricted to the form asked for).
+    pub scenario: planner_core::Scenario,
+    /// Its obstacles as written (for plots).
+    pub shapes: Vec<ObstacleShape>,
+    /// The world's perturbation.
+    pub perturbation: needle_sim::Perturbation,
+    /// The tracker's faults.
+    pub faults: TrackerFaults,
+    /// What the controller is told.
+    pub config: planner_core::steer::SteerConfig,
+    /// The collision bound the plan keeps, if the scenario has one.
+    pub bound: Option<PlanBound>,
+    /// Simulated insertions.
+    pub runs: usize,
+    /// Seed of the first run.
+    pub seed: u64,
+}
+
+/// Checks what a simulation is asked, from the parsed scenario `file` (read from `path`, if it
+/// was): the errors of its input, none of its planning.
+pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<Asked> {
     // The scenario's `[execution]` is the world (the simulator's defaults where it is
     // silent); `--perturb` changes the world, not what the planner was told.
     let execution = in_scenario(execution_of(file), path)?;
-    let mut p = execution.model;
+    let mut perturbation = execution.model;
     for kv in &r.perturb {
-        p.apply(kv).context("--perturb")?;
+        perturbation.apply(kv).context("--perturb")?;
     }
     let bound = execution
         .max_collision_probability
@@ -90,14 +106,44 @@ pub fn set_up(
     if let Some(f) = &r.form {
         restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
     }
-    let mut setup = Setup::bounded(scenario, p, faults, r.runs, r.seed, bound.as_ref())?;
+    perturbation.validate()?;
     // The controller is told what `[steering]` and `--steer` say, whatever the world
     // (`--perturb`) is.
-    setup.config = execution.steering;
+    let mut config = execution.steering;
     for kv in &r.steer {
-        crate::scenario::steering::apply(&mut setup.config, kv).context("--steer")?;
+        crate::scenario::steering::apply(&mut config, kv).context("--steer")?;
     }
-    Ok((setup, shapes))
+    Ok(Asked {
+        scenario,
+        shapes,
+        perturbation,
+        faults,
+        config,
+        bound,
+        runs: r.runs,
+        seed: r.seed,
+    })
+}
+
+impl Asked {
+    /// Plans the scenario (under the bound, keeping what curvature reserve it can) and sets up
+    /// the worlds.
+    pub fn set_up(self) -> Result<(Setup, Vec<ObstacleShape>)> {
+        let bound = self.bound.as_ref();
+        let (p, faults) = (self.perturbation, self.faults);
+        let mut setup = Setup::bounded(self.scenario, p, faults, self.runs, self.seed, bound)?;
+        setup.config = self.config;
+        Ok((setup, self.shapes))
+    }
+}
+
+/// [`asked`], then [`Asked::set_up`].
+pub fn set_up(
+    file: &ScenarioFile,
+    path: Option<&Path>,
+    r: &Request,
+) -> Result<(Setup, Vec<ObstacleShape>)> {
+    asked(file, path, r)?.set_up()
 }
 
 /// The `needle simulate --json` object of the runs made (`detail`: every run's record).
