@@ -31,9 +31,10 @@ create_exception!(
     "A device did not answer, or answered wrong."
 );
 
-/// The command's message of `e`: every cause, outermost first, as `needle` prints it.
+/// The command's message of `e`: every cause, outermost first, as `needle` prints it (without
+/// the line break a TOML error ends with).
 pub fn message(e: &anyhow::Error) -> String {
-    format!("{e:#}")
+    format!("{e:#}").trim_end().to_string()
 }
 
 /// `e` as a `ScenarioError`.

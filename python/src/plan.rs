@@ -59,7 +59,7 @@ pub fn plan<'py>(
                 let made = plan_locally(&core, &execution)?;
                 let json = made.json(&core, &execution);
                 let points = json.best.as_ref().and_then(|b| b.path.points.clone());
-                let verdict = made.verdict().err().map(|e| format!("{e:#}"));
+                let verdict = made.verdict().err().map(|e| crate::errors::message(&e));
                 Ok((json.to_string(), points, verdict))
             })
         })
