@@ -36,11 +36,21 @@ fn in_file<T>(result: anyhow::Result<T>, path: Option<&Path>) -> anyhow::Result<
 impl Scenario {
     /// Parses and checks `text` (read from `path`, if it was).
     fn parse(text: String, path: Option<PathBuf>) -> anyhow::Result<Scenario> {
-        let mut file = in_file(ScenarioFile::parse(&text), path.as_deref())?;
-        file.base_dir = path
+        let base_dir = path
             .as_deref()
             .and_then(Path::parent)
             .map(Path::to_path_buf);
+        Scenario::parse_in(text, path, base_dir)
+    }
+
+    /// [`Scenario::parse`], with `polygon_file` paths relative to `base_dir`.
+    fn parse_in(
+        text: String,
+        path: Option<PathBuf>,
+        base_dir: Option<PathBuf>,
+    ) -> anyhow::Result<Scenario> {
+        let mut file = in_file(ScenarioFile::parse(&text), path.as_deref())?;
+        file.base_dir = base_dir;
         let core = in_file(file.to_scenario(), path.as_deref())?;
         let execution = in_file(execution_of(&file), path.as_deref())?;
         Ok(Scenario {
@@ -80,6 +90,40 @@ impl Scenario {
         }
         let text = toml::to_string(&table).map_err(|e| ScenarioError::new_err(e.to_string()))?;
         Scenario::parse(text, None).map_err(|e| scenario_error(&e))
+    }
+
+    /// A copy with some tables or keys changed: each keyword is a table (`weights={"control":
+    /// 0.5}` changes that key and keeps the others; a key given `None` is removed) or a
+    /// top-level key (`name`, `obstacles`, replaced whole). Checked as a new file would be.
+    #[pyo3(signature = (**tables))]
+    fn replace(&self, tables: Option<&Bound<'_, PyDict>>) -> PyResult<Scenario> {
+        let mut table: toml::Table =
+            toml::from_str(&self.text).map_err(|e| ScenarioError::new_err(e.to_string()))?;
+        for (key, value) in tables.into_iter().flat_map(|t| t.iter()) {
+            let key: String = key.extract()?;
+            match (toml_value(&value, &key)?, table.get_mut(&key)) {
+                (Some(toml::Value::Table(new)), Some(toml::Value::Table(old))) => {
+                    let removed = value.cast::<PyDict>().map(|d| {
+                        d.iter()
+                            .filter(|(_, v)| v.is_none())
+                            .filter_map(|(k, _)| k.extract::<String>().ok())
+                            .collect::<Vec<_>>()
+                    });
+                    old.extend(new);
+                    for k in removed.into_iter().flatten() {
+                        old.remove(&k);
+                    }
+                }
+                (Some(new), _) => {
+                    table.insert(key, new);
+                }
+                (None, _) => {
+                    table.remove(&key);
+                }
+            }
+        }
+        let text = toml::to_string(&table).map_err(|e| ScenarioError::new_err(e.to_string()))?;
+        Scenario::parse_in(text, None, self.file.base_dir.clone()).map_err(|e| scenario_error(&e))
     }
 
     /// A scenario from a file's path (a `str` or `os.PathLike`) or from TOML text (a `str` with

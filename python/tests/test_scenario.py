@@ -4,8 +4,10 @@ import pathlib
 import threading
 import time
 
+import pytest
+
 import needle_planner as npl
-from conftest import ROOT
+from conftest import ROOT, needle_json
 
 
 def report(scenario, **kwargs):
@@ -50,6 +52,23 @@ def _paper_planner(path: pathlib.Path):
     import tomllib
 
     return tomllib.loads(path.read_text()).get("planner", {})
+
+
+def test_replace_changes_the_keys_given(tmp_path):
+    paper = npl.Scenario.from_toml(ROOT / "examples" / "paper.toml")
+    heavy = paper.replace(weights={"control": 10.0}, name="heavy")
+    assert heavy.name == "heavy" and heavy.path is None
+    written = tmp_path / "heavy.toml"
+    written.write_text(heavy.to_toml())
+    cli = needle_json("plan", str(written))
+    assert report(heavy) == {**cli, "stats": {k: v for k, v in cli["stats"].items() if k != "time_us"}}
+    # The other weights stay; control 10 makes one segment the best (the paper's Figure 8).
+    assert npl.plan(heavy).best.control_degree == 1
+    assert report(paper.replace(weights={"control": 2.0})) == report(paper)
+    # None removes a key: the default (2) again.
+    assert report(heavy.replace(weights={"control": None})) == report(paper)
+    with pytest.raises(npl.ScenarioError, match="unknown field `colour`"):
+        paper.replace(weights={"colour": 1.0})
 
 
 def test_a_bad_source_is_a_scenario_error():
