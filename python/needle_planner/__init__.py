@@ -88,26 +88,28 @@ class BestPath(FormOutcome):
 class Plan:
     """Every form's outcome, the best path and the planning statistics: ``needle plan --json``."""
 
-    def __init__(self, text: str, points: Optional[np.ndarray]):
+    def __init__(self, text: str, report: Dict[str, Any], points: Optional[np.ndarray]):
         self.json: str = text
         """The report exactly as ``needle plan --json`` prints it (without its newline)."""
-        report = _json.loads(text)
-        self._report = report
         self.forms: List[FormOutcome] = [FormOutcome(f) for f in report["forms"]]
+        """One outcome per form tried, in the catalogue's order."""
         best = report.get("best")
-        self.best: Optional[BestPath] = (
-            None if best is None else BestPath(best, points if points is not None else np.empty((0, 3)))
-        )
+        if best is not None:
+            best["points"] = points if points is not None else np.empty((0, 3))
+        self.best: Optional[BestPath] = None if best is None else BestPath(best, best["points"])
+        """The chosen form, ``None`` when no form is feasible."""
         self.stats: Dict[str, Any] = report["stats"]
+        """``time_us`` (the planning's wall-clock time), ``iterations``, ``evaluations``."""
         self.execution: Optional[Dict[str, Any]] = report.get("execution")
+        """With an ``[execution]`` table or a collision bound: the world assumed and the bound."""
 
     def to_dict(self) -> Dict[str, Any]:
-        """The report as ``json.loads(needle plan --json)`` gives it."""
+        """The report as ``json.loads(needle plan --json)`` gives it (points as lists)."""
         return _json.loads(self.json)
 
     def __repr__(self) -> str:
-        best = "no feasible form" if self.best is None else f"best {self.best.form}"
-        return f"<Plan of {len(self.forms)} forms, {best}>"
+        chosen = "no feasible form" if self.best is None else f"best {self.best.form}"
+        return f"<Plan of {len(self.forms)} forms, {chosen}>"
 
 
 def plan(
@@ -119,8 +121,8 @@ def plan(
     and ``--max-degree``. Raises ``PlanError`` where the command exits 1 after its report (no
     feasible form, no plan within the collision bound): the exception's ``plan`` holds the
     report."""
-    text, points, verdict = _native.plan(scenario, forms, max_degree)
-    made = Plan(text, points)
+    text, report, points, verdict = _native.plan(scenario, forms, max_degree)
+    made = Plan(text, report, points)
     if verdict is not None:
         error = PlanError(verdict)
         error.plan = made  # type: ignore[attr-defined]

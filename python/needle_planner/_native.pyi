@@ -28,7 +28,7 @@ def plan(
     scenario: Scenario,
     forms: Union[None, str, Sequence[str]] = None,
     max_degree: Optional[int] = None,
-) -> Tuple[str, Optional[np.ndarray], Optional[str]]: ...
+) -> Tuple[str, Dict[str, Any], Optional[np.ndarray], Optional[str]]: ...
 def simulate(
     scenario: Scenario,
     runs: int = 100,
