@@ -28,6 +28,7 @@ from . import _native
 
 __all__ = [
     "Scenario",
+    "Device",
     "Plan",
     "FormOutcome",
     "BestPath",
@@ -121,13 +122,48 @@ def plan(
     and ``--max-degree``. Raises ``PlanError`` where the command exits 1 after its report (no
     feasible form, no plan within the collision bound): the exception's ``plan`` holds the
     report."""
-    text, report, points, verdict = _native.plan(scenario, forms, max_degree)
+    return _made(_native.plan(scenario, forms, max_degree))
+
+
+def _made(native: Any) -> Plan:
+    text, report, points, verdict = native
     made = Plan(text, report, points)
     if verdict is not None:
         error = PlanError(verdict)
         error.plan = made  # type: ignore[attr-defined]
         raise error
     return made
+
+
+class Device:
+    """A planner device (the firmware on a board, in QEMU, or ``hil-sim``), reached as ``needle
+    info`` and ``needle send`` reach it: ``Device(tcp="127.0.0.1:7878")`` or
+    ``Device(port="/dev/ttyACM0")``. Link failures raise ``DeviceError``."""
+
+    def __init__(
+        self,
+        tcp: Optional[str] = None,
+        port: Optional[str] = None,
+        baud: int = 115200,
+        timeout: Optional[float] = None,
+        retries: Optional[int] = None,
+        deadline: float = 120.0,
+    ):
+        self._link = _native.Device(tcp, port, baud, timeout, retries, deadline)
+
+    def info(self) -> Dict[str, Any]:
+        """What ``needle info --json`` prints: protocol, name, firmware, capacities."""
+        return self._link.info()
+
+    def plan(
+        self,
+        scenario: Scenario,
+        forms: Union[None, str, Sequence[str]] = None,
+        max_degree: Optional[int] = None,
+    ) -> Plan:
+        """Plans ``scenario`` on the device as ``needle send`` does (the answer re-checked
+        here); the same report as ``plan`` (``stats.time_us`` is the device's round trip)."""
+        return _made(self._link.plan(scenario, forms, max_degree))
 
 
 class Simulation:

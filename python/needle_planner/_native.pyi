@@ -24,6 +24,24 @@ class Scenario:
     @property
     def name(self) -> Optional[str]: ...
 
+class Device:
+    def __init__(
+        self,
+        tcp: Optional[str] = None,
+        port: Optional[str] = None,
+        baud: int = 115200,
+        timeout: Optional[float] = None,
+        retries: Optional[int] = None,
+        deadline: float = 120.0,
+    ) -> None: ...
+    def info(self) -> Dict[str, Any]: ...
+    def plan(
+        self,
+        scenario: Scenario,
+        forms: Union[None, str, Sequence[str]] = None,
+        max_degree: Optional[int] = None,
+    ) -> Tuple[str, Dict[str, Any], Optional[np.ndarray], Optional[str]]: ...
+
 def plan(
     scenario: Scenario,
     forms: Union[None, str, Sequence[str]] = None,

@@ -47,6 +47,11 @@ pub fn plan_error(e: &anyhow::Error) -> PyErr {
     PlanError::new_err(message(e))
 }
 
+/// `e` as a `DeviceError`.
+pub fn device_error(e: &anyhow::Error) -> PyErr {
+    DeviceError::new_err(message(e))
+}
+
 /// What failed inside [`guarded`] work.
 pub enum Failed {
     /// The work's own error.

@@ -6,6 +6,8 @@
 //! Nothing panics across the boundary: the planner and the simulator run inside
 //! [`errors::guarded`], which turns a panic into a `NeedleError`, with the GIL released.
 
+mod convert;
+mod device;
 mod errors;
 mod plan;
 mod scenario;
@@ -22,6 +24,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PlanError", py.get_type::<errors::PlanError>())?;
     m.add("DeviceError", py.get_type::<errors::DeviceError>())?;
     m.add_class::<scenario::Scenario>()?;
+    m.add_class::<device::Device>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     Ok(())

@@ -1,14 +1,14 @@
 //! `simulate()`: `needle simulate` on a scenario, returning its JSON (the command's, through the
 //! same code) and every run's figures as arrays, built here in one pass over the runs.
 
-use crate::errors::{guarded, plan_error, scenario_error, NeedleError, ScenarioError};
+use crate::convert::points_array;
+use crate::errors::{guarded, plan_error, scenario_error, ScenarioError};
 use crate::scenario::Scenario;
 use needle_cli::analysis::parallel::default_threads;
 use needle_cli::simulate::request::{asked, results_json, Request, Results};
 use needle_cli::simulate::setup::Keep;
 use needle_sim::Run;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -65,13 +65,6 @@ fn assignments(what: &str, d: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String
             Ok(format!("{key}={}", v.str()?.to_cow()?))
         })
         .collect()
-}
-
-fn array<'py>(py: Python<'py>, points: &[[f32; 3]]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let flat: Vec<f64> = points.iter().flatten().map(|v| f64::from(*v)).collect();
-    Array2::from_shape_vec((points.len(), 3), flat)
-        .map(|a| a.into_pyarray(py))
-        .map_err(|e| NeedleError::new_err(e.to_string()))
 }
 
 /// Runs `needle simulate --json` on `scenario`; returns the JSON and a dict of per-run arrays.
@@ -155,7 +148,7 @@ pub fn simulate<'py>(
     let paths = per_run
         .paths
         .iter()
-        .map(|p| array(py, p))
+        .map(|p| points_array(py, p))
         .collect::<PyResult<Vec<_>>>()?;
     out.set_item("paths", PyList::new(py, paths)?)?;
     if closed_loop {
