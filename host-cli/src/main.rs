@@ -4,19 +4,19 @@ use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
-use needle_cli::report::execution::{add_to_json, execution_lines, form_risks};
+use needle_cli::report::execution::{add_to_json, execution_lines};
+use needle_cli::report::local::plan_locally;
 use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
 use needle_cli::scenario::{
     load_execution, load_scenario, load_scenario_shapes, restrict, Execution,
 };
-use planner_core::chance::{plan_within_risk_as, ChancePlan};
+use planner_core::chance::ChancePlan;
 use planner_core::execute::risk::ExecutionRisk;
 use planner_core::execute::schedule::Schedule;
 use planner_core::{PlanReport, Scenario};
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Instant;
 
 #[derive(Parser)]
 #[command(
@@ -194,48 +194,26 @@ fn reachable(report: &PlanReport) -> Result<()> {
 fn plan(args: &PlanArgs) -> Result<()> {
     let scenario = load(args)?;
     let execution = load_execution(&args.file)?;
-    let start = Instant::now();
-    let chance = match execution.max_collision_probability {
-        Some(bound) => Some(
-            plan_within_risk_as(&scenario, &execution.model, bound, execution.predicted_as())
-                .context("planning failed")?,
-        ),
-        None => None,
-    };
-    let planned = match &chance {
-        Some(c) => c.planned.clone(),
-        None => planner_core::plan_scheduled(&scenario).context("planning failed")?,
-    };
-    let stats = Stats {
-        time_us: start.elapsed().as_micros() as u64,
-    };
-    let schedule = match &planned.schedule {
-        Some(made) => Some(
-            made.as_ref()
-                .map_err(|e| anyhow!("no motor schedule for the best path: {e}"))?,
-        ),
-        None => None,
-    };
-    let predicted = execution.given.then(|| Predicted {
+    let made = plan_locally(&scenario, &execution)?;
+    let report = made.report();
+    let predicted = made.risks.clone().map(|risks| Predicted {
         execution: &execution,
-        risks: form_risks(&scenario, &planned.report, &execution),
-        chance: chance.as_ref(),
+        risks,
+        chance: made.chance.as_ref(),
     });
-    let report = &planned.report;
-    print_plan_predicted(args, &scenario, report, schedule, stats, predicted.as_ref())?;
+    let schedule = made.schedule()?;
+    print_plan_predicted(
+        args,
+        &scenario,
+        report,
+        schedule,
+        made.stats,
+        predicted.as_ref(),
+    )?;
     if let Some(out) = &args.plot {
         analysis::write_plan_plot(&args.file, args.approx, &scenario, report, out)?;
     }
-    reachable(report)?;
-    match (&chance, execution.max_collision_probability) {
-        (Some(c), Some(bound)) if !c.within_bound => Err(anyhow!(
-            "no plan keeps the predicted collision probability within {bound}: the best found \
-             has {:.4} (with obstacles grown by up to {:.2} mm)",
-            c.risk.map_or(f32::NAN, |r| r.collision_probability),
-            c.margins.iter().fold(0.0f32, |a, m| a.max(*m))
-        )),
-        _ => Ok(()),
-    }
+    made.verdict()
 }
 
 fn send(args: &SendArgs) -> Result<()> {

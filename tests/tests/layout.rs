@@ -6,7 +6,7 @@ use needle_e2e::workspace;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const CRATES: [&str; 7] = [
+const CRATES: [&str; 8] = [
     "planner-core/src",
     "host-cli/src",
     "hil-sim/src",
@@ -14,6 +14,7 @@ const CRATES: [&str; 7] = [
     "firmware/src",
     "link/src",
     "devtools/src",
+    "python/src",
 ];
 const MAX_LINES: usize = 500;
 

@@ -110,22 +110,26 @@ pub fn ping(link: &LinkArgs, count: u32) -> Result<()> {
     Ok(())
 }
 
+/// The object `needle info --json` prints.
+pub fn info_json(info: &DeviceInfo) -> serde_json::Value {
+    serde_json::json!({
+        "protocol": info.protocol,
+        "name": info.name.as_str(),
+        "firmware": info.firmware.as_str(),
+        "build": info.build.as_str(),
+        "max_obstacles": info.max_obstacles,
+        "max_control_degree": info.max_control_degree,
+        "form_count": info.form_count,
+        "max_chunk": info.max_chunk,
+        "upload_capacity": info.upload_capacity,
+    })
+}
+
 /// `needle info`: who the device is and what it holds.
 pub fn info(link: &LinkArgs, json: bool) -> Result<()> {
     let (_, info) = link.connect()?;
     if json {
-        let v = serde_json::json!({
-            "protocol": info.protocol,
-            "name": info.name.as_str(),
-            "firmware": info.firmware.as_str(),
-            "build": info.build.as_str(),
-            "max_obstacles": info.max_obstacles,
-            "max_control_degree": info.max_control_degree,
-            "form_count": info.form_count,
-            "max_chunk": info.max_chunk,
-            "upload_capacity": info.upload_capacity,
-        });
-        writeln!(std::io::stdout(), "{v}")?;
+        writeln!(std::io::stdout(), "{}", info_json(&info))?;
     } else {
         writeln!(std::io::stdout(), "device:             {}", info.name)?;
         writeln!(std::io::stdout(), "firmware:           {}", info.firmware)?;

@@ -7,6 +7,7 @@
 
 pub mod execution;
 pub mod json;
+pub mod local;
 pub mod schedule;
 pub mod sweep;
 pub mod table;

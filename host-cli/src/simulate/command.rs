@@ -4,25 +4,17 @@
 
 use super::args::SimulateArgs;
 use super::device::on_device;
-use super::json::{closed_json, to_json};
 use super::plot::{simulate_svg, Executed, MAX_DRAWN};
+use super::request::{self, results_json, Request, Results};
 use super::setup::{Keep, Setup};
 use super::steering::summarise_steering;
 use super::summarise;
 use super::table::{closed_table, to_table, Header};
-use super::PlanBound;
 use crate::analysis::cli::output::{progress, title_of, OutputFile};
 use crate::analysis::parallel;
-use crate::scenario::{load_execution, load_scenario_shapes, restrict, ObstacleShape};
-use anyhow::{anyhow, bail, Context, Result};
-use needle_sim::{ClosedRun, Run, TrackerFaults};
+use crate::scenario::{ObstacleShape, ScenarioFile};
+use anyhow::{anyhow, Result};
 use std::io::Write;
-
-/// The runs made: open loop, closed loop, or both (`--compare-open-loop`).
-struct Results {
-    open: Option<Vec<Run>>,
-    closed: Option<Vec<ClosedRun>>,
-}
 
 /// Runs `needle simulate`.
 pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
@@ -56,46 +48,18 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
 
 /// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
 fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
-    // The scenario's `[execution]` is the world (the simulator's defaults where it is
-    // silent); `--perturb` changes the world, not what the planner was told.
-    let execution = load_execution(&a.file)?;
-    let mut p = execution.model;
-    for kv in &a.perturb {
-        p.apply(kv).context("--perturb")?;
-    }
-    let bound = execution
-        .max_collision_probability
-        .map(|max_collision_probability| PlanBound {
-            model: execution.model,
-            max_collision_probability,
-            execution: execution.predicted_as(),
-        });
-    // The device plans without the bound (the spread does not fit its flash): its plan would
-    // not be the host's, and it could not steer the insertion the host simulates.
-    if a.closed_loop && a.link().is_some() && bound.is_some() {
-        bail!(
-            "planner.max_collision_probability is planned on the host only: the device plans \
-             without it, so it cannot steer this plan (steer in-process, or on the device \
-             without the bound; docs/execution.md)"
-        );
-    }
-    let mut faults = TrackerFaults::default();
-    for kv in &a.fault {
-        faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
-    }
-    anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
-    let (mut scenario, shapes) = load_scenario_shapes(&a.file, None)?;
-    if let Some(f) = &a.form {
-        restrict(&mut scenario, None, Some(std::slice::from_ref(f)))?;
-    }
-    let mut setup = Setup::bounded(scenario, p, faults, a.runs, a.seed, bound.as_ref())?;
-    // The controller is told what `[steering]` and `--steer` say, whatever the world
-    // (`--perturb`) is.
-    setup.config = execution.steering;
-    for kv in &a.steer {
-        crate::scenario::steering::apply(&mut setup.config, kv).context("--steer")?;
-    }
-    Ok((setup, shapes))
+    let file = ScenarioFile::load(&a.file)?;
+    let request = Request {
+        runs: a.runs,
+        seed: a.seed,
+        form: a.form.clone(),
+        perturb: a.perturb.clone(),
+        faults: a.fault.clone(),
+        steer: a.steer.clone(),
+        closed_loop: a.closed_loop,
+        on_device: a.link().is_some(),
+    };
+    request::set_up(&file, Some(&a.file), &request)
 }
 
 /// The runs of the mode asked for, with a progress bar on a terminal (not with `--json`).
@@ -136,35 +100,20 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
         runs: a.runs,
         seed: a.seed,
     };
+    if a.json {
+        let json = results_json(setup, r, a.detail)?;
+        writeln!(std::io::stdout(), "{json}")?;
+        return Ok(());
+    }
     let p = &setup.perturbation;
     let text = match (&r.closed, &r.open) {
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
             let summary = summarise(closed.iter().map(|c| &c.run));
             let steering = summarise_steering(closed);
-            if a.json {
-                let j = closed_json(
-                    p,
-                    &setup.config,
-                    closed,
-                    &summary,
-                    &steering,
-                    open.as_ref(),
-                    a.detail,
-                );
-                serde_json::to_string(&j)? + "\n"
-            } else {
-                closed_table(&header, p, &summary, &steering, open.as_ref())
-            }
+            closed_table(&header, p, &summary, &steering, open.as_ref())
         }
-        (None, Some(runs)) => {
-            let summary = summarise(runs);
-            if a.json {
-                serde_json::to_string(&to_json(p, runs, &summary, a.detail))? + "\n"
-            } else {
-                to_table(&header, p, &summary)
-            }
-        }
+        (None, Some(runs)) => to_table(&header, p, &summarise(runs)),
         (None, None) => return Err(anyhow!("no run was made")),
     };
     write!(std::io::stdout(), "{text}")?;

@@ -7,6 +7,7 @@ mod command;
 pub mod device;
 pub mod json;
 pub mod plot;
+pub mod request;
 pub mod setup;
 pub mod steering;
 pub mod table;

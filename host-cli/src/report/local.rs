@@ -1,0 +1,108 @@
+//! `needle plan` as a library call: the plan made on this machine (under the scenario's collision
+//! bound when it has one), its motor schedule and predictions, the JSON report the command prints,
+//! and the verdict it exits with. The command and the Python package both go through here, so
+//! they give the same report and the same messages.
+
+use super::execution::{add_to_json, form_risks};
+use super::json::{plan_json, PlanJson, Stats};
+use crate::scenario::Execution;
+use anyhow::{anyhow, Context, Result};
+use planner_core::chance::{plan_within_risk_as, ChancePlan};
+use planner_core::execute::risk::ExecutionRisk;
+use planner_core::execute::schedule::Schedule;
+use planner_core::{PlanReport, Scenario, ScheduledPlan};
+use std::time::Instant;
+
+/// A plan made here, with everything `needle plan` prints of it.
+pub struct LocalPlan {
+    /// The report and the best form's schedule.
+    pub planned: ScheduledPlan,
+    /// With a collision bound: the rounds that kept it.
+    pub chance: Option<ChancePlan>,
+    /// Each form's predicted risk, when the scenario has an `[execution]` table or a bound.
+    pub risks: Option<Vec<Option<ExecutionRisk>>>,
+    /// The wall-clock time of the planning.
+    pub stats: Stats,
+    /// `planner.max_collision_probability`.
+    bound: Option<f32>,
+}
+
+/// Plans `scenario` as `needle plan` does: under `execution`'s collision bound when it has one,
+/// the best form scheduled. Errors are those the command stops on before printing anything.
+pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalPlan> {
+    let start = Instant::now();
+    let chance = match execution.max_collision_probability {
+        Some(bound) => Some(
+            plan_within_risk_as(scenario, &execution.model, bound, execution.predicted_as())
+                .context("planning failed")?,
+        ),
+        None => None,
+    };
+    let planned = match &chance {
+        Some(c) => c.planned.clone(),
+        None => planner_core::plan_scheduled(scenario).context("planning failed")?,
+    };
+    let stats = Stats {
+        time_us: start.elapsed().as_micros() as u64,
+    };
+    let risks = execution
+        .given
+        .then(|| form_risks(scenario, &planned.report, execution));
+    let made = LocalPlan {
+        planned,
+        chance,
+        risks,
+        stats,
+        bound: execution.max_collision_probability,
+    };
+    made.schedule()?;
+    Ok(made)
+}
+
+impl LocalPlan {
+    /// The report of every form.
+    pub fn report(&self) -> &PlanReport {
+        &self.planned.report
+    }
+
+    /// The best form's motor schedule (`None` without a best form); an error when the best path
+    /// cannot be scheduled.
+    pub fn schedule(&self) -> Result<Option<&Schedule>> {
+        match &self.planned.schedule {
+            Some(made) => {
+                Ok(Some(made.as_ref().map_err(|e| {
+                    anyhow!("no motor schedule for the best path: {e}")
+                })?))
+            }
+            None => Ok(None),
+        }
+    }
+
+    /// The `needle plan --json` report.
+    pub fn json(&self, scenario: &Scenario, execution: &Execution) -> PlanJson {
+        let schedule = self.schedule().ok().flatten();
+        let mut json = plan_json(scenario, self.report(), schedule, self.stats);
+        if let Some(risks) = &self.risks {
+            let chance = self.chance.as_ref();
+            add_to_json(&mut json, scenario, execution, risks, chance, self.report());
+        }
+        json
+    }
+
+    /// Why the command fails after printing the report: no feasible form, or no plan within the
+    /// collision bound.
+    pub fn verdict(&self) -> Result<()> {
+        if self.report().best().is_none() {
+            return Err(anyhow!(planner_core::PlanError::Unreachable));
+        }
+        match (&self.chance, self.bound) {
+            (Some(c), Some(bound)) if !c.within_bound => Err(anyhow!(
+                "no plan keeps the predicted collision probability within {bound}: the best \
+                 found has {:.4} (with obstacles grown by up to {:.2} mm)",
+                c.risk.map_or(f32::NAN, |r| r.collision_probability),
+                c.margins.iter().fold(0.0f32, |a, m| a.max(*m))
+            )),
+            _ => Ok(()),
+        }
+    }
+}

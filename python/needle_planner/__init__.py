@@ -1,0 +1,235 @@
+"""needle-planner from Python: plan and simulate bevel-tip steerable needle insertions.
+
+The numbers are the ``needle`` command's, bit for bit: ``plan`` and ``simulate`` run the same
+library code as ``needle plan --json`` and ``needle simulate --json``, and their errors carry the
+command's messages. The planner and the simulator run with the GIL released.
+
+>>> import needle_planner as npl
+>>> paper = npl.Scenario.from_toml("examples/paper.toml")
+>>> npl.plan(paper).best.form
+'RL'
+"""
+
+from __future__ import annotations
+
+import json as _json
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from ._native import (
+    DeviceError,
+    NeedleError,
+    PlanError,
+    Scenario,
+    ScenarioError,
+)
+from . import _native
+
+__all__ = [
+    "Scenario",
+    "Device",
+    "Plan",
+    "FormOutcome",
+    "BestPath",
+    "Simulation",
+    "plan",
+    "simulate",
+    "NeedleError",
+    "ScenarioError",
+    "PlanError",
+    "DeviceError",
+]
+
+
+class _Record:
+    """A JSON object whose keys read as attributes (``form.length`` for ``form["length"]``)."""
+
+    def __init__(self, fields: Dict[str, Any]):
+        self._fields = fields
+
+    def __getattr__(self, key: str) -> Any:
+        fields = self.__dict__.get("_fields", {})
+        if key in fields:
+            return fields[key]
+        raise AttributeError(f"{type(self).__name__} has no field {key!r}")
+
+    def __getitem__(self, key: str) -> Any:
+        return self._fields[key]
+
+    def keys(self) -> List[str]:
+        """The fields, as the command's JSON names them."""
+        return list(self._fields)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as the command's JSON has them."""
+        return self._fields
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._fields.get('form', '')!r})"
+
+
+class FormOutcome(_Record):
+    """One form's outcome: the keys of a ``forms`` entry of ``needle plan --json`` (``form``,
+    ``feasible``, ``status``, ``length``, ``risk``, ``objective``, ``min_clearance``,
+    ``target_error``, ``kkt_residual``, ``iterations``, ``evaluations``, ``insertion``,
+    ``segments``; with an ``[execution]`` table ``collision_probability`` and
+    ``target_error_p95``)."""
+
+
+class BestPath(FormOutcome):
+    """The chosen form: a form's fields plus ``penalty``, ``control_degree``, ``schedule`` (the
+    driver's motor schedule) and ``points``, an ``(n, 3)`` array of the path at most 1 mm apart."""
+
+    def __init__(self, fields: Dict[str, Any], points: np.ndarray):
+        super().__init__(fields)
+        self.points = points
+
+
+class Plan:
+    """Every form's outcome, the best path and the planning statistics: ``needle plan --json``."""
+
+    def __init__(self, text: str, report: Dict[str, Any], points: Optional[np.ndarray]):
+        self.json: str = text
+        """The report exactly as ``needle plan --json`` prints it (without its newline)."""
+        self.forms: List[FormOutcome] = [FormOutcome(f) for f in report["forms"]]
+        """One outcome per form tried, in the catalogue's order."""
+        best = report.get("best")
+        if best is not None:
+            best["points"] = points if points is not None else np.empty((0, 3))
+        self.best: Optional[BestPath] = None if best is None else BestPath(best, best["points"])
+        """The chosen form, ``None`` when no form is feasible."""
+        self.stats: Dict[str, Any] = report["stats"]
+        """``time_us`` (the planning's wall-clock time), ``iterations``, ``evaluations``."""
+        self.execution: Optional[Dict[str, Any]] = report.get("execution")
+        """With an ``[execution]`` table or a collision bound: the world assumed and the bound."""
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The report as ``json.loads(needle plan --json)`` gives it (points as lists)."""
+        return _json.loads(self.json)
+
+    def __repr__(self) -> str:
+        chosen = "no feasible form" if self.best is None else f"best {self.best.form}"
+        return f"<Plan of {len(self.forms)} forms, {chosen}>"
+
+
+def plan(
+    scenario: Scenario,
+    forms: Union[None, str, Sequence[str]] = None,
+    max_degree: Optional[int] = None,
+) -> Plan:
+    """Plans ``scenario`` as ``needle plan`` does; ``forms`` and ``max_degree`` as ``--forms``
+    and ``--max-degree``. Raises ``PlanError`` where the command exits 1 after its report (no
+    feasible form, no plan within the collision bound): the exception's ``plan`` holds the
+    report."""
+    return _made(_native.plan(scenario, forms, max_degree))
+
+
+def _made(native: Any) -> Plan:
+    text, report, points, verdict = native
+    made = Plan(text, report, points)
+    if verdict is not None:
+        error = PlanError(verdict)
+        error.plan = made  # type: ignore[attr-defined]
+        raise error
+    return made
+
+
+class Device:
+    """A planner device (the firmware on a board, in QEMU, or ``hil-sim``), reached as ``needle
+    info`` and ``needle send`` reach it: ``Device(tcp="127.0.0.1:7878")`` or
+    ``Device(port="/dev/ttyACM0")``. Link failures raise ``DeviceError``."""
+
+    def __init__(
+        self,
+        tcp: Optional[str] = None,
+        port: Optional[str] = None,
+        baud: int = 115200,
+        timeout: Optional[float] = None,
+        retries: Optional[int] = None,
+        deadline: float = 120.0,
+    ):
+        self._link = _native.Device(tcp, port, baud, timeout, retries, deadline)
+
+    def info(self) -> Dict[str, Any]:
+        """What ``needle info --json`` prints: protocol, name, firmware, capacities."""
+        return self._link.info()
+
+    def plan(
+        self,
+        scenario: Scenario,
+        forms: Union[None, str, Sequence[str]] = None,
+        max_degree: Optional[int] = None,
+    ) -> Plan:
+        """Plans ``scenario`` on the device as ``needle send`` does (the answer re-checked
+        here); the same report as ``plan`` (``stats.time_us`` is the device's round trip)."""
+        return _made(self._link.plan(scenario, forms, max_degree))
+
+
+class Simulation:
+    """Simulated insertions: the summary of ``needle simulate --json`` and every run's figures as
+    arrays, in seed order (run ``i`` has seed ``seed + i``)."""
+
+    def __init__(self, text: str, per_run: Dict[str, Any]):
+        self.json: str = text
+        """The output exactly as ``needle simulate --json`` prints it (without its newline)."""
+        report = _json.loads(text)
+        self.summary: Dict[str, Any] = report["summary"]
+        self.perturbation: Dict[str, Any] = report["perturbation"]
+        self.controller: Optional[Dict[str, Any]] = report.get("controller")
+        self.open_loop_summary: Optional[Dict[str, Any]] = report.get("open_loop_summary")
+        self.runs: int = report["runs"]
+        self.closed_loop: bool = report["closed_loop"]
+        self.seeds: np.ndarray = per_run["seeds"]
+        self.target_errors: np.ndarray = per_run["target_errors"]
+        """Distance of each run's true end to its true target (mm)."""
+        self.path_deviations: np.ndarray = per_run["path_rms"]
+        """Each run's RMS distance from the planned path (mm)."""
+        self.path_max_deviations: np.ndarray = per_run["path_max"]
+        """Each run's largest distance from the planned path (mm)."""
+        self.collided: np.ndarray = per_run["collided"]
+        """Whether each run's true path entered an obstacle."""
+        self.min_clearances: np.ndarray = per_run["min_clearances"]
+        self.paths: List[np.ndarray] = per_run["paths"]
+        """Each run's true tip path, an ``(n, 3)`` array of points at most 1 mm apart."""
+        self.stop_reasons: Optional[List[Optional[str]]] = per_run.get("stop_reasons")
+        """Closed loop: why each run stopped before the target, ``None`` where it reached it."""
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The output as ``json.loads(needle simulate --json)`` gives it."""
+        return _json.loads(self.json)
+
+    def __repr__(self) -> str:
+        kind = "closed-loop" if self.closed_loop else "open-loop"
+        return f"<Simulation of {self.runs} {kind} runs>"
+
+
+def simulate(
+    scenario: Scenario,
+    runs: int = 100,
+    seed: int = 1,
+    closed_loop: bool = False,
+    perturb: Optional[Mapping[str, Any]] = None,
+    faults: Optional[Mapping[str, Any]] = None,
+    steer: Optional[Mapping[str, Any]] = None,
+    form: Optional[str] = None,
+    threads: Optional[int] = None,
+    compare_open_loop: bool = False,
+) -> Simulation:
+    """Plans ``scenario`` and executes the plan in ``runs`` perturbed worlds, as ``needle
+    simulate`` does: ``perturb``, ``faults`` and ``steer`` are its ``--perturb``, ``--fault`` and
+    ``--steer`` as a dict (``{"curvature_sd": 0.05}``), ``threads`` its ``--threads`` (default:
+    every core). The result is the same on any thread count."""
+    text, per_run = _native.simulate(
+        scenario,
+        runs,
+        seed,
+        closed_loop,
+        None if perturb is None else dict(perturb),
+        None if faults is None else dict(faults),
+        None if steer is None else dict(steer),
+        form,
+        threads,
+        compare_open_loop,
+    )
+    return Simulation(text, per_run)
