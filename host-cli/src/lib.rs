@@ -5,6 +5,7 @@ pub mod analysis;
 pub mod bench;
 pub mod benchmark;
 pub mod device;
+pub mod lab;
 pub mod random;
 pub mod report;
 pub mod scenario;

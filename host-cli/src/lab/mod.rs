@@ -1,0 +1,4 @@
+//! The lab link: `needle steer` steering an insertion from an OpenIGTLink tracker stream and
+//! commanding a robot, and what the simulated lab (`hil-sim --lab`) shares with it.
+
+pub mod robot;
