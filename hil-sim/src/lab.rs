@@ -17,10 +17,10 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
-use needle_cli::lab::wire::{read_frames, send, send_text, tip_transform};
+use needle_cli::lab::wire::{now, read_frames, send, send_text, send_with, tip_transform};
 use needle_cli::lab::wire::{TARGET_DEVICE, TIP_DEVICE};
 use needle_cli::simulate::setup::Setup;
-use needle_igtl::{Message, Transform};
+use needle_igtl::{Extended, FrameInfo, Message, Status, StatusCode, TextEncoding, Transform};
 use needle_sim::{finish, Measurement, World};
 use planner_core::execute::schedule::Step;
 use serde::Serialize;
@@ -43,6 +43,17 @@ pub struct LabConfig {
     pub tracker_silent_after: Option<u32>,
     /// Test fault: the robot reports nothing after this many pieces in an insertion.
     pub robot_silent_after: Option<u32>,
+    /// Test fault: every this many poses one is flagged invalid, alternately by v3 metadata
+    /// (`TransformStatus` = `INVALID`) and by a tip `STATUS` that is not OK sent before it (and
+    /// an OK one after it).
+    pub invalid_every: Option<u32>,
+}
+
+/// How a pose is flagged invalid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Flag {
+    Metadata,
+    Status,
 }
 
 /// How long the robot waits for a tracker client before its first piece (a pose sent to nobody
@@ -82,19 +93,32 @@ impl TrackerClients {
         Ok(())
     }
 
-    /// Sends the target and the tip of `m` to every client.
-    fn publish(&self, m: &Measurement) -> Result<()> {
+    /// Sends the target and the tip of `m` to every client, the tip flagged invalid by `flag`.
+    fn publish(&self, m: &Measurement, flag: Option<Flag>) -> Result<()> {
         let tip = tip_transform(m.position, m.heading, m.bevel)
             .map_err(|e| anyhow!("the simulated tip is no pose: {e:?}"))?;
         let target = Transform::new(Transform::IDENTITY.rotation(), m.target)
             .map_err(|e| anyhow!("the simulated target is no position: {e:?}"))?;
+        let mut tip_info = FrameInfo::new(TIP_DEVICE).map_err(|e| anyhow!("{e:?}"))?;
+        tip_info.timestamp = now();
+        if flag == Some(Flag::Metadata) {
+            let mut ext = Extended::default();
+            ext.metadata
+                .insert("TransformStatus", TextEncoding::UsAscii, "INVALID")
+                .map_err(|e| anyhow!("{e:?}"))?;
+            tip_info.extended = Some(ext);
+        }
+        let status = |code| Message::Status(Status::new(code));
+        let by_status = flag == Some(Flag::Status);
         let mut list = self
             .0
             .lock()
             .map_err(|_| anyhow!("tracker clients poisoned"))?;
         list.retain_mut(|c| {
             send(c, TARGET_DEVICE, &Message::Transform(target)).is_ok()
-                && send(c, TIP_DEVICE, &Message::Transform(tip)).is_ok()
+                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::NOT_READY)).is_ok())
+                && send_with(c, &tip_info, &Message::Transform(tip)).is_ok()
+                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::OK)).is_ok())
         });
         Ok(())
     }
@@ -271,7 +295,7 @@ impl Lab {
                         .tracker_silent_after
                         .is_none_or(|n| robot.pieces <= n)
                     {
-                        if let Err(e) = self.tracker.publish(m) {
+                        if let Err(e) = self.tracker.publish(m, self.flag(robot.pieces)) {
                             failure = Some(e);
                             return ControlFlow::Break(());
                         }
@@ -322,6 +346,18 @@ impl Lab {
             path_max: run.path_max,
             collided: run.collided,
             min_clearance: run.min_clearance,
+        })
+    }
+
+    /// How the pose of piece `k` is flagged invalid, if it is.
+    fn flag(&self, k: u32) -> Option<Flag> {
+        let every = self.config.invalid_every.filter(|&n| n > 0)?;
+        k.is_multiple_of(every).then(|| {
+            if (k / every) % 2 == 1 {
+                Flag::Metadata
+            } else {
+                Flag::Status
+            }
         })
     }
 

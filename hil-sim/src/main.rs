@@ -72,6 +72,10 @@ struct LabArgs {
     /// With --lab, a fault for tests: the robot stops reporting after this many pieces.
     #[arg(long, requires = "lab")]
     robot_silent_after: Option<u32>,
+    /// With --lab, a fault for tests: every this many poses one is flagged invalid
+    /// (alternately by v3 metadata and by a tip STATUS that is not OK).
+    #[arg(long, requires = "lab")]
+    invalid_every: Option<u32>,
 }
 
 /// Serves the simulated lab until killed.
@@ -103,6 +107,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             latency_ms: l.latency_ms,
             tracker_silent_after: l.tracker_silent_after,
             robot_silent_after: l.robot_silent_after,
+            invalid_every: l.invalid_every,
         },
         tracker: TrackerClients::default(),
     };

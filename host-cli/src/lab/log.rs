@@ -7,11 +7,12 @@ use serde_json::{json, Value};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
+use std::time::Instant;
 
 /// Where the log goes (nowhere without `--log`).
-#[derive(Default)]
 pub struct InsertionLog {
     file: Option<BufWriter<File>>,
+    start: Instant,
     /// The first write that failed (the insertion goes on: the robot must be commanded).
     pub failure: Option<String>,
 }
@@ -26,11 +27,12 @@ impl InsertionLog {
             .transpose()?;
         Ok(InsertionLog {
             file: file.map(BufWriter::new),
+            start: Instant::now(),
             failure: None,
         })
     }
 
-    /// Writes one event: `{"event": EVENT, ...fields}`.
+    /// Writes one event: `{"event": EVENT, "t_ms": ms since the log began, ...fields}`.
     pub fn write(&mut self, event: &str, fields: impl Serialize) {
         let Some(f) = self.file.as_mut() else {
             return;
@@ -42,6 +44,8 @@ impl InsertionLog {
         };
         if let Value::Object(m) = &mut line {
             m.insert("event".into(), Value::from(event));
+            let t_ms = self.start.elapsed().as_secs_f64() * 1e3;
+            m.insert("t_ms".into(), Value::from(t_ms));
         }
         let written = serde_json::to_writer(&mut *f, &line)
             .map_err(std::io::Error::from)

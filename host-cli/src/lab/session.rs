@@ -325,19 +325,21 @@ impl<'a> Session<'a> {
             Command::Stop(reason) => {
                 self.outcome.predicted_miss_mm =
                     Some(reply.predicted_error_mm).filter(|e| e.is_finite());
-                (Vec::new(), Some(Ending::Controller(*reason)))
+                (vec![RobotCommand::Stop], Some(Ending::Controller(*reason)))
             }
         };
-        self.log
-            .write("reading", json!({ "measurement": m, "reply": reply }));
         for w in words {
             if self.command(w).is_err() {
                 return Some(Ending::RobotDisconnected);
             }
         }
-        self.outcome
-            .latencies_ms
-            .push(at.elapsed().as_secs_f64() * 1e3);
+        let latency_ms = at.elapsed().as_secs_f64() * 1e3;
+        self.outcome.latencies_ms.push(latency_ms);
+        // After the commands it caused, with the time from the pose to them.
+        self.log.write(
+            "reading",
+            json!({ "measurement": m, "reply": reply, "latency_ms": latency_ms }),
+        );
         self.robot_clock = Some(Instant::now());
         self.tracker_clock = Instant::now();
         ending
@@ -355,7 +357,9 @@ impl<'a> Session<'a> {
         if ending == Ending::TrackingLost {
             let _ = self.command(RobotCommand::Hold);
         }
-        if self.command(RobotCommand::Stop).is_err() {
+        // The controller's stop went out with its answer.
+        let sent = matches!(ending, Ending::Controller(_));
+        if !sent && self.command(RobotCommand::Stop).is_err() {
             return;
         }
         let deadline = Instant::now() + self.config.robot_timeout;
