@@ -78,13 +78,28 @@ impl TrackerClients {
         });
     }
 
-    fn count(&self) -> usize {
-        self.0.lock().map(|l| l.len()).unwrap_or(0)
+    /// Drops the clients that hung up, and counts the others: a client of an earlier
+    /// insertion must not stand in for the one about to steer.
+    fn live(&self) -> usize {
+        let Ok(mut list) = self.0.lock() else {
+            return 0;
+        };
+        list.retain(|c| {
+            let mut byte = [0u8; 1];
+            let hung_up = c.set_nonblocking(true).is_err()
+                || match c.peek(&mut byte) {
+                    Ok(0) => true,
+                    Ok(_) => false,
+                    Err(e) => e.kind() != std::io::ErrorKind::WouldBlock,
+                };
+            !hung_up && c.set_nonblocking(false).is_ok()
+        });
+        list.len()
     }
 
     fn wait_for_one(&self) -> Result<()> {
         let start = Instant::now();
-        while self.count() == 0 {
+        while self.live() == 0 {
             if start.elapsed() > TRACKER_WAIT {
                 bail!("no tracker client connected");
             }
