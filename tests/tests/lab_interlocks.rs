@@ -167,7 +167,16 @@ fn latency_from_pose_to_command_over_a_thousand_readings() {
     while all.len() < 1000 {
         seed += 1;
         let log = temp_path(&format!("latency-{seed}.jsonl"));
-        lab.steer(&file, &["--log", log.to_str().unwrap()]);
+        let v = lab.steer(&file, &["--log", log.to_str().unwrap()]);
+        let interlocks = [
+            "tracking_lost",
+            "robot_not_answering",
+            "robot_disconnected",
+            "tracker_disconnected",
+            "robot_stopped",
+        ];
+        let reason = v["stop_reason"].as_str().unwrap_or("");
+        assert!(!interlocks.contains(&reason), "no interlock: {v}");
         for l in log_lines(&log) {
             if l["event"] == "reading" {
                 all.push(l["latency_ms"].as_f64().expect("each reading's latency"));
