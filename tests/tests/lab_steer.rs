@@ -103,3 +103,69 @@ fn the_insertion_log_is_complete() {
     }
     let _ = std::fs::remove_file(log);
 }
+
+/// Slicer (played here by a plain OpenIGTLink server) sees the plan, the estimated tip at every
+/// reading, each new continuation, and the state with the stop, every frame with a good CRC.
+#[test]
+fn slicer_sees_the_plan_the_estimate_and_the_stop() {
+    use needle_igtl::{Frame, FrameDecoder, Message};
+    use std::io::Read;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let slicer = std::thread::spawn(move || {
+        let (mut conn, _) = listener.accept().unwrap();
+        let mut decoder: Box<FrameDecoder<8192>> = Box::default();
+        let (mut frames, mut buf) = (Vec::<Frame>::new(), [0u8; 4096]);
+        loop {
+            let n = conn.read(&mut buf).unwrap();
+            if n == 0 {
+                return frames;
+            }
+            let mut input = &buf[..n];
+            while let Some(f) = decoder.feed(&mut input) {
+                frames.push(f.expect("every frame decodes, CRC checked"));
+            }
+        }
+    });
+    let file = path("paper");
+    let log = temp_path("slicer.jsonl");
+    let lab = Lab::start(&file, 3, &[]);
+    let v = lab.steer(
+        &file,
+        &["--slicer", &address, "--log", log.to_str().unwrap()],
+    );
+    let frames = slicer.join().unwrap();
+    let named = |name: &'static str| frames.iter().filter(move |f| f.info.device_name == name);
+    let Message::PolyData(plan) = &frames[0].message else {
+        panic!("the plan first: {:?}", frames[0].info);
+    };
+    assert_eq!(frames[0].info.device_name, "NeedlePlan");
+    assert!(plan.points().len() > 50);
+    assert_eq!(plan.points()[0], [0.0, 0.0, 0.0], "from the paper's entry");
+    let estimates = named("NeedleTipEstimate").count() as u64;
+    assert_eq!(estimates, v["steering"]["readings"].as_u64().unwrap());
+    let new_lists = log_lines(&log)
+        .iter()
+        .filter(|l| l["event"] == "command")
+        .filter(|l| l["text"].as_str().unwrap().starts_with("steps "))
+        .count();
+    assert!(new_lists > 1, "the controller replaced the steps");
+    assert_eq!(named("NeedleContinuation").count(), new_lists - 1);
+    let texts: Vec<String> = named("NeedleSteering")
+        .filter_map(|f| match &f.message {
+            Message::String(s) => Some(s.text.to_string()),
+            _ => None,
+        })
+        .collect();
+    let end = match v["stop_reason"].as_str() {
+        None => "reached".to_string(),
+        Some(r) => format!("stopped: {r}"),
+    };
+    assert_eq!(texts, ["steering".to_string(), end]);
+    assert_eq!(
+        named("NeedleSteering").count(),
+        4,
+        "a STATUS with each STRING"
+    );
+    let _ = std::fs::remove_file(log);
+}

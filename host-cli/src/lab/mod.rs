@@ -4,6 +4,7 @@
 pub mod log;
 pub mod robot;
 pub mod session;
+pub mod slicer;
 pub mod steer;
 pub mod wire;
 

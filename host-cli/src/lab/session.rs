@@ -10,6 +10,7 @@
 
 use super::log::InsertionLog;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
+use super::slicer::Slicer;
 use super::wire::{send_text, tip_pose, Arrival};
 use needle_igtl::{Message, StatusCode};
 use planner_core::steer::{Command, Pose, SteerStats, Steering, StopReason, TipMeasurement};
@@ -43,6 +44,8 @@ pub struct SessionConfig {
     pub tracking_timeout: Duration,
     /// No report from the robot for longer than this after a command: stop.
     pub robot_timeout: Duration,
+    /// The needle's arc radius (mm), to draw continuations for Slicer.
+    pub arc_radius_mm: f32,
 }
 
 /// How an insertion ended.
@@ -115,6 +118,7 @@ pub struct Session<'a> {
     controller: &'a mut Steering,
     robot: TcpStream,
     log: &'a mut InsertionLog,
+    slicer: &'a mut Slicer,
     events: Receiver<Event>,
     target: Option<[f32; 3]>,
     tip: Option<(Option<Pose>, Instant)>,
@@ -136,6 +140,7 @@ impl<'a> Session<'a> {
         controller: &'a mut Steering,
         robot: TcpStream,
         log: &'a mut InsertionLog,
+        slicer: &'a mut Slicer,
         events: Receiver<Event>,
     ) -> Self {
         let steering = controller.stats();
@@ -144,6 +149,7 @@ impl<'a> Session<'a> {
             controller,
             robot,
             log,
+            slicer,
             events,
             target: None,
             tip: None,
@@ -173,6 +179,7 @@ impl<'a> Session<'a> {
     /// Runs the insertion of `steps` to its end; the robot is told to stop (or hold then stop)
     /// whatever ended it, and the log's last line is the stop.
     pub fn run(mut self, steps: &[planner_core::execute::schedule::Step]) -> SessionOutcome {
+        self.slicer.state(None, false);
         let ending = self.steer(steps);
         self.stop_robot(ending);
         let stats = self.controller.stats();
@@ -188,6 +195,7 @@ impl<'a> Session<'a> {
                 "steering": stats,
             }),
         );
+        self.slicer.state(self.outcome.stop_reason, true);
         self.outcome
     }
 
@@ -340,6 +348,13 @@ impl<'a> Session<'a> {
             "reading",
             json!({ "measurement": m, "reply": reply, "latency_ms": latency_ms }),
         );
+        let replaced = match &reply.command {
+            Command::Replace(s) => Some(&s[..]),
+            _ => None,
+        };
+        let tip = self.controller.estimate().tip;
+        self.slicer
+            .reading(&tip, replaced, self.config.arc_radius_mm);
         self.robot_clock = Some(Instant::now());
         self.tracker_clock = Instant::now();
         ending

@@ -5,6 +5,7 @@
 use super::log::InsertionLog;
 use super::robot::step_list;
 use super::session::{Event, Session, SessionConfig, SessionOutcome, INTERRUPTED};
+use super::slicer::Slicer;
 use super::wire::{read_frames, TARGET_DEVICE, TIP_DEVICE};
 use crate::simulate::closed_loop_setup;
 use anyhow::{anyhow, Context, Result};
@@ -34,6 +35,9 @@ pub struct SteerArgs {
     /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
     #[arg(long)]
     pub robot: String,
+    /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
+    #[arg(long)]
+    pub slicer: Option<String>,
     /// Write the insertion log here (JSON lines: the plan, each reading, each command, the stop).
     #[arg(long)]
     pub log: Option<PathBuf>,
@@ -143,6 +147,8 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         "plan",
         json!({ "file": a.file, "form": form, "posture": schedule.posture, "steps": steps }),
     );
+    let mut slicer = Slicer::connect(a.slicer.as_deref())?;
+    slicer.plan(&setup.scenario, schedule);
     let tracker = connect("tracker", &a.tracker)?;
     let robot = connect("robot", &a.robot)?;
     let (tx, rx) = channel();
@@ -156,9 +162,14 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         target_name: a.target_name.clone(),
         tracking_timeout: Duration::from_millis(a.tracking_timeout_ms),
         robot_timeout: Duration::from_millis(a.robot_timeout_ms),
+        arc_radius_mm: setup.scenario.needle.curvature_radius,
     };
-    let outcome = Session::new(config, &mut controller, robot, &mut log, rx).run(&schedule.steps);
+    let outcome = Session::new(config, &mut controller, robot, &mut log, &mut slicer, rx)
+        .run(&schedule.steps);
     let _ = tracker.shutdown(std::net::Shutdown::Both);
+    if let Some(e) = &slicer.failure {
+        eprintln!("needle steer: Slicer was not shown everything: {e}");
+    }
     print(a, form, outcome, &log)
 }
 
