@@ -193,3 +193,21 @@ fn latency_from_pose_to_command_over_a_thousand_readings() {
     assert!(median > 0.0);
     assert!(max <= 25.0, "max {max} ms");
 }
+
+/// Insertion without a usable pose: with every pose flagged invalid, the controller stops with
+/// `tracking_lost` once the robot has pushed `tracking_lost_after_mm` (2 mm here) without a fix,
+/// and the robot is told stop.
+#[test]
+fn insertion_without_a_pose_stops_after_the_set_length() {
+    let file = paper();
+    let mut lab = Lab::start(&file, 2, &["--invalid-every", "1"]);
+    let v = lab.steer(&file, &["--steer", "tracking_lost_after_mm=2"]);
+    assert_eq!(v["stop_reason"], "tracking_lost");
+    assert_eq!(v["robot_stopped"], true);
+    let readings = v["steering"]["readings"].as_u64().unwrap();
+    assert_eq!(v["invalid_poses"], readings);
+    let truth = lab.next_run();
+    assert_eq!(truth["end"], "stopped");
+    let pieces = truth["pieces"].as_u64().unwrap();
+    assert!((2..=4).contains(&pieces), "stopped after about 2 mm: {pieces} pieces");
+}
