@@ -209,5 +209,8 @@ fn insertion_without_a_pose_stops_after_the_set_length() {
     let truth = lab.next_run();
     assert_eq!(truth["end"], "stopped");
     let pieces = truth["pieces"].as_u64().unwrap();
-    assert!((2..=4).contains(&pieces), "stopped after about 2 mm: {pieces} pieces");
+    assert!(
+        (2..=4).contains(&pieces),
+        "stopped after about 2 mm: {pieces} pieces"
+    );
 }

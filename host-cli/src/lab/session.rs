@@ -12,8 +12,13 @@ use super::log::InsertionLog;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
 use super::wire::{send_text, tip_pose, Arrival};
+use crate::simulate::device::LinkController;
 use needle_igtl::{Message, StatusCode};
-use planner_core::steer::{Command, Pose, SteerStats, Steering, StopReason, TipMeasurement};
+use needle_link::Transport;
+use planner_core::model::kinematics::Frame;
+use planner_core::steer::{
+    Command, Pose, SteerReply, SteerStats, Steering, StopReason, TipMeasurement,
+};
 use serde::Serialize;
 use serde_json::json;
 use std::net::TcpStream;
@@ -67,6 +72,8 @@ pub enum Ending {
     TrackerDisconnected,
     /// The robot stopped without being told to.
     RobotStopped,
+    /// The controller (a device) did not answer a reading.
+    ControllerNotAnswering,
 }
 
 impl Ending {
@@ -82,6 +89,7 @@ impl Ending {
             Ending::RobotDisconnected => Some("robot_disconnected"),
             Ending::TrackerDisconnected => Some("tracker_disconnected"),
             Ending::RobotStopped => Some("robot_stopped"),
+            Ending::ControllerNotAnswering => Some("device_not_answering"),
         }
     }
 }
@@ -106,6 +114,40 @@ pub struct SessionOutcome {
     pub robot_stopped: bool,
 }
 
+/// The controller a session consults: in-process, or on a device behind the link.
+pub trait LabController {
+    /// Answers one reading; an error (the device gone quiet) stops the insertion.
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String>;
+    /// Its counters, if it can still give them.
+    fn stats(&mut self) -> Option<SteerStats>;
+    /// Its estimated tip, if it shares it (a device does not).
+    fn estimated_tip(&self) -> Option<Frame>;
+}
+
+impl LabController for Steering {
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String> {
+        Ok(Steering::update(self, m))
+    }
+    fn stats(&mut self) -> Option<SteerStats> {
+        Some(Steering::stats(self))
+    }
+    fn estimated_tip(&self) -> Option<Frame> {
+        Some(self.estimate().tip)
+    }
+}
+
+impl<T: Transport> LabController for LinkController<'_, T> {
+    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String> {
+        needle_sim::Controller::update(self, m).map_err(|e| e.to_string())
+    }
+    fn stats(&mut self) -> Option<SteerStats> {
+        needle_sim::Controller::stats(self).ok()
+    }
+    fn estimated_tip(&self) -> Option<Frame> {
+        None
+    }
+}
+
 /// Set by a Ctrl-C handler: the session stops the robot and ends.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -115,7 +157,7 @@ const POLL: Duration = Duration::from_millis(10);
 /// A steered insertion in progress.
 pub struct Session<'a> {
     config: SessionConfig,
-    controller: &'a mut Steering,
+    controller: &'a mut dyn LabController,
     robot: TcpStream,
     log: &'a mut InsertionLog,
     slicer: &'a mut Slicer,
@@ -137,13 +179,13 @@ impl<'a> Session<'a> {
     /// A session commanding `robot`, fed by `events`.
     pub fn new(
         config: SessionConfig,
-        controller: &'a mut Steering,
+        controller: &'a mut dyn LabController,
         robot: TcpStream,
         log: &'a mut InsertionLog,
         slicer: &'a mut Slicer,
         events: Receiver<Event>,
     ) -> Self {
-        let steering = controller.stats();
+        let steering = controller.stats().unwrap_or_default();
         Session {
             config,
             controller,
@@ -182,7 +224,7 @@ impl<'a> Session<'a> {
         self.slicer.state(None, false);
         let ending = self.steer(steps);
         self.stop_robot(ending);
-        let stats = self.controller.stats();
+        let stats = self.controller.stats().unwrap_or(self.outcome.steering);
         self.outcome.steering = stats;
         self.outcome.stop_reason = ending.stop_reason();
         self.log.write(
@@ -326,7 +368,13 @@ impl<'a> Session<'a> {
             pose,
             target: pose.and(self.target),
         };
-        let reply = self.controller.update(&m);
+        let reply = match self.controller.update(&m) {
+            Ok(r) => r,
+            Err(e) => {
+                self.log.write("controller_failed", json!({ "error": e }));
+                return Some(Ending::ControllerNotAnswering);
+            }
+        };
         let (words, ending) = match &reply.command {
             Command::Continue => (vec![RobotCommand::Go], None),
             Command::Replace(s) => (step_list(s), None),
@@ -352,9 +400,10 @@ impl<'a> Session<'a> {
             Command::Replace(s) => Some(&s[..]),
             _ => None,
         };
-        let tip = self.controller.estimate().tip;
-        self.slicer
-            .reading(&tip, replaced, self.config.arc_radius_mm);
+        if let Some(tip) = self.controller.estimated_tip() {
+            self.slicer
+                .reading(&tip, replaced, self.config.arc_radius_mm);
+        }
         self.robot_clock = Some(Instant::now());
         self.tracker_clock = Instant::now();
         ending

@@ -4,10 +4,12 @@
 
 use super::log::InsertionLog;
 use super::robot::step_list;
-use super::session::{Event, Session, SessionConfig, SessionOutcome, INTERRUPTED};
+use super::session::{Event, LabController, Session, SessionConfig, SessionOutcome, INTERRUPTED};
 use super::slicer::Slicer;
 use super::wire::{read_frames, TARGET_DEVICE, TIP_DEVICE};
+use crate::device::commands::LinkArgs;
 use crate::simulate::closed_loop_setup;
+use crate::simulate::device::{device_planning, start_steering, LinkController};
 use anyhow::{anyhow, Context, Result};
 use needle_sim::in_process;
 use serde::Serialize;
@@ -58,6 +60,32 @@ pub struct SteerArgs {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Steer on the device at this TCP address (hil-sim --tcp, QEMU) instead of in-process.
+    #[arg(long, conflicts_with = "port")]
+    pub tcp: Option<String>,
+    /// Steer on the device at this serial port instead of in-process.
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// Seconds of silence allowed per exchange with the device.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
+}
+
+impl SteerArgs {
+    /// The device to steer on (`--tcp` or `--port`), if any.
+    pub fn link(&self) -> Option<LinkArgs> {
+        (self.tcp.is_some() || self.port.is_some()).then(|| LinkArgs {
+            port: self.port.clone(),
+            baud: self.baud,
+            tcp: self.tcp.clone(),
+            timeout: self.timeout,
+            retries: needle_link::ClientConfig::DEFAULT.retries,
+            deadline: 120.0,
+        })
+    }
 }
 
 /// Median and largest latency (ms) over the readings.
@@ -132,11 +160,32 @@ fn forward(
 
 /// Runs `needle steer`.
 pub fn run_steer(a: &SteerArgs) -> Result<()> {
-    let flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+    // The same refusal as `needle simulate` (a plan bound the device cannot plan).
+    if let Some(t) = &a.tcp {
+        flags.push(format!("--tcp={t}"));
+    }
+    if let Some(p) = &a.port {
+        flags.push(format!("--port={p}"));
+    }
     let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &flags)?;
     let schedule = &setup.prepared.schedule;
-    let mut controller = in_process(&setup.scenario, schedule, &setup.config)
-        .map_err(|e| anyhow!("steering cannot start: {e}"))?;
+    let mut in_process_controller;
+    let mut device;
+    let mut on_device;
+    let controller: &mut dyn LabController = match a.link() {
+        None => {
+            in_process_controller = in_process(&setup.scenario, schedule, &setup.config)
+                .map_err(|e| anyhow!("steering cannot start: {e}"))?;
+            &mut in_process_controller
+        }
+        Some(link) => {
+            device = device_planning(&setup, &link)?;
+            start_steering(&mut device, &setup)?;
+            on_device = LinkController(&mut device);
+            &mut on_device
+        }
+    };
     let mut log = InsertionLog::create(a.log.as_deref())?;
     let form = setup.prepared.outcome.form.to_string();
     let steps: Vec<String> = step_list(&schedule.steps)
@@ -164,8 +213,8 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         robot_timeout: Duration::from_millis(a.robot_timeout_ms),
         arc_radius_mm: setup.scenario.needle.curvature_radius,
     };
-    let outcome = Session::new(config, &mut controller, robot, &mut log, &mut slicer, rx)
-        .run(&schedule.steps);
+    let outcome =
+        Session::new(config, controller, robot, &mut log, &mut slicer, rx).run(&schedule.steps);
     let _ = tracker.shutdown(std::net::Shutdown::Both);
     if let Some(e) = &slicer.failure {
         eprintln!("needle steer: Slicer was not shown everything: {e}");

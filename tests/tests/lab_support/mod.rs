@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 #[path = "../wire_support/mod.rs"]
-mod wire_support;
+pub mod wire_support;
 
 use needle_e2e::needle;
 use serde_json::Value;
