@@ -47,6 +47,8 @@ pub struct LabConfig {
     /// (`TransformStatus` = `INVALID`) and by a tip `STATUS` that is not OK sent before it (and
     /// an OK one after it).
     pub invalid_every: Option<u32>,
+    /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
+    pub robot_misreport_after: Option<u32>,
 }
 
 /// How a pose is flagged invalid.
@@ -317,7 +319,7 @@ impl Lab {
                     }
                     robot.report(RobotReport::Progress {
                         piece: robot.pieces,
-                        depth_mm: m.depth_mm,
+                        depth_mm: m.depth_mm + self.misreport(robot.pieces),
                         base_deg: m.base_deg,
                     });
                     match robot.word() {
@@ -362,6 +364,14 @@ impl Lab {
             collided: run.collided,
             min_clearance: run.min_clearance,
         })
+    }
+
+    /// The error the robot adds to the depth it reports for piece `k`.
+    fn misreport(&self, k: u32) -> f32 {
+        match self.config.robot_misreport_after {
+            Some(n) if k > n => 5.0,
+            _ => 0.0,
+        }
     }
 
     /// How the pose of piece `k` is flagged invalid, if it is.

@@ -76,6 +76,10 @@ struct LabArgs {
     /// (alternately by v3 metadata and by a tip STATUS that is not OK).
     #[arg(long, requires = "lab")]
     invalid_every: Option<u32>,
+    /// With --lab, a fault for tests: after this many pieces the robot reports 5 mm more depth
+    /// than it did.
+    #[arg(long, requires = "lab")]
+    robot_misreport_after: Option<u32>,
 }
 
 /// Serves the simulated lab until killed.
@@ -108,6 +112,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             tracker_silent_after: l.tracker_silent_after,
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
+            robot_misreport_after: l.robot_misreport_after,
         },
         tracker: TrackerClients::default(),
     };

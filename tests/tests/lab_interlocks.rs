@@ -214,3 +214,30 @@ fn insertion_without_a_pose_stops_after_the_set_length() {
         "stopped after about 2 mm: {pieces} pieces"
     );
 }
+
+/// The robot reports 5 mm more depth than it inserted (after 10 pieces): progress its commands
+/// cannot give stops it, and the log says why.
+#[test]
+fn a_robot_whose_progress_disagrees_is_stopped() {
+    let file = paper();
+    let log = temp_path("disagrees.jsonl");
+    let mut lab = Lab::start(&file, 2, &["--robot-misreport-after", "10"]);
+    let v = lab.steer(&file, &["--log", log.to_str().unwrap()]);
+    assert_eq!(v["stop_reason"], "robot_disagrees");
+    assert_eq!(v["robot_stopped"], true);
+    assert_eq!(v["steering"]["readings"], 10);
+    let truth = lab.next_run();
+    assert_eq!(
+        (truth["end"].as_str(), truth["pieces"].as_u64()),
+        (Some("stopped"), Some(11))
+    );
+    let lines = log_lines(&log);
+    let why = lines
+        .iter()
+        .find(|l| l["event"] == "robot_disagrees")
+        .unwrap();
+    assert!(why["why"].as_str().unwrap().contains("jumped"), "{why}");
+    assert_eq!(commands(&lines).last().unwrap(), "stop");
+    assert_eq!(lines.last().unwrap()["stop_reason"], "robot_disagrees");
+    let _ = std::fs::remove_file(log);
+}

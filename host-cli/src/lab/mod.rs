@@ -2,6 +2,7 @@
 //! commanding a robot, and what the simulated lab (`hil-sim --lab`) shares with it.
 
 pub mod log;
+pub mod progress;
 pub mod robot;
 pub mod session;
 pub mod slicer;

@@ -9,6 +9,7 @@
 //! not OK) is a reading without a pose, as a tracker dropout is in the simulation.
 
 use super::log::InsertionLog;
+use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
 use super::wire::{send_text, tip_pose, Arrival};
@@ -74,6 +75,8 @@ pub enum Ending {
     RobotStopped,
     /// The controller (a device) did not answer a reading.
     ControllerNotAnswering,
+    /// The robot reported progress its commands cannot give.
+    RobotDisagrees,
 }
 
 impl Ending {
@@ -90,6 +93,7 @@ impl Ending {
             Ending::TrackerDisconnected => Some("tracker_disconnected"),
             Ending::RobotStopped => Some("robot_stopped"),
             Ending::ControllerNotAnswering => Some("device_not_answering"),
+            Ending::RobotDisagrees => Some("robot_disagrees"),
         }
     }
 }
@@ -167,6 +171,8 @@ pub struct Session<'a> {
     tip_status_ok: bool,
     /// The robot reported a piece that is not answered yet: (depth, base roll).
     pending: Option<(f32, f32)>,
+    /// What the robot was commanded, to check its progress against.
+    commanded: Commanded,
     /// When the tracker was last heard of, or last given cause to move.
     tracker_clock: Instant,
     /// When the robot was last commanded, while its report is awaited.
@@ -197,6 +203,7 @@ impl<'a> Session<'a> {
             tip: None,
             tip_status_ok: true,
             pending: None,
+            commanded: Commanded::default(),
             tracker_clock: Instant::now(),
             robot_clock: None,
             seq: 0,
@@ -242,6 +249,7 @@ impl<'a> Session<'a> {
     }
 
     fn steer(&mut self, steps: &[planner_core::execute::schedule::Step]) -> Ending {
+        self.commanded.list_sent(steps);
         for c in step_list(steps) {
             if self.command(c).is_err() {
                 return Ending::RobotDisconnected;
@@ -339,6 +347,10 @@ impl<'a> Session<'a> {
                 depth_mm, base_deg, ..
             }) => {
                 self.robot_clock = None;
+                if let Err(why) = self.commanded.check(depth_mm, base_deg) {
+                    self.log.write("robot_disagrees", json!({ "why": why }));
+                    return Some(Ending::RobotDisagrees);
+                }
                 self.pending = Some((depth_mm, base_deg));
                 None
             }
@@ -377,7 +389,10 @@ impl<'a> Session<'a> {
         };
         let (words, ending) = match &reply.command {
             Command::Continue => (vec![RobotCommand::Go], None),
-            Command::Replace(s) => (step_list(s), None),
+            Command::Replace(s) => {
+                self.commanded.list_sent(s);
+                (step_list(s), None)
+            }
             Command::Stop(reason) => {
                 self.outcome.predicted_miss_mm =
                     Some(reply.predicted_error_mm).filter(|e| e.is_finite());
