@@ -9,7 +9,8 @@
 //!
 //! Host to robot (device name [`COMMAND_DEVICE`]):
 //! - `steps count=N`, then N step messages: the step list to execute, replacing what is left of
-//!   the current one at the next piece boundary;
+//!   the current one at the next piece boundary (N at most the planner's `MAX_STEPS`, so that a
+//!   robot can hold any list it is sent);
 //! - a step: `insert length_mm=L duration_s=T speed_mm_s=V` (an arc, bevel held),
 //!   `rotate angle_deg=A duration_s=T speed_deg_s=W` (the base, signed, no insertion),
 //!   `spin-insert length_mm=L turns=N duration_s=T speed_mm_s=V` (N whole turns alternating
@@ -24,7 +25,7 @@
 //!   done; X the commanded insertion so far, Y the commanded base roll so far (accumulated);
 //! - `done`: the step list ran out; `holding`; `stopped`.
 
-use planner_core::execute::schedule::{Op, Step};
+use planner_core::execute::schedule::{Op, Step, MAX_STEPS};
 use std::fmt;
 
 /// Device name of the host's commands.
@@ -271,7 +272,7 @@ impl std::str::FromStr for RobotCommand {
             }
             "steps" => {
                 let p = Pairs::of(rest, &["count"])?;
-                let count = p.required("count", |_: &usize| true)?;
+                let count = p.required("count", |n: &usize| *n <= MAX_STEPS)?;
                 Ok(RobotCommand::Steps { count })
             }
             "insert" => {

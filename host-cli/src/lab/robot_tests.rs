@@ -54,7 +54,7 @@ fn each_step_kind_and_word_round_trips() {
         RobotCommand::Go,
         RobotCommand::Hold,
         RobotCommand::Stop,
-        RobotCommand::Steps { count: 12 },
+        RobotCommand::Steps { count: MAX_STEPS },
     ] {
         round_trip_command(c);
     }
@@ -139,6 +139,9 @@ fn bad_strings_are_typed_errors() {
         .parse::<RobotCommand>()
         .is_err());
     assert!("steps count=-2".parse::<RobotCommand>().is_err());
+    let too_many = format!("steps count={}", MAX_STEPS + 1);
+    assert!(too_many.parse::<RobotCommand>().is_err());
+    assert!("steps count=99999999999".parse::<RobotCommand>().is_err());
     assert!("progress piece=1 depth_mm=inf base_deg=0"
         .parse::<RobotReport>()
         .is_err());
