@@ -169,3 +169,22 @@ fn slicer_sees_the_plan_the_estimate_and_the_stop() {
     );
     let _ = std::fs::remove_file(log);
 }
+
+/// `--rate` and `--latency-ms` pace the lab (132 pieces at most 200 a second, each pose 2 ms
+/// late: at least 0.66 s) and change no figure.
+#[test]
+fn pacing_and_latency_change_no_figure() {
+    let file = path("paper");
+    let expected = simulated(&file, 3, 1).remove(0);
+    let mut lab = Lab::start(&file, 3, &["--rate", "200", "--latency-ms", "2"]);
+    let started = std::time::Instant::now();
+    let steered = lab.steer(&file, &[]);
+    let elapsed = started.elapsed();
+    let truth = lab.next_run();
+    assert_eq!(truth["target_error"], expected["target_error"]);
+    assert_eq!(steered["steering"], expected["steering"]);
+    let pieces = truth["pieces"].as_u64().unwrap();
+    assert!(pieces > 100);
+    let least = std::time::Duration::from_millis(5 * pieces);
+    assert!(elapsed >= least, "{elapsed:?} for {pieces} paced pieces");
+}
