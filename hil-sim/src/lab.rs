@@ -17,12 +17,14 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
+use needle_cli::lab::wire::{inverse, registered_point, registered_pose};
 use needle_cli::lab::wire::{now, read_frames, send, send_text, send_with, tip_transform};
 use needle_cli::lab::wire::{TARGET_DEVICE, TIP_DEVICE};
 use needle_cli::simulate::setup::Setup;
 use needle_igtl::{Extended, FrameInfo, Message, Status, StatusCode, TextEncoding, Transform};
 use needle_sim::{finish, Measurement, World};
 use planner_core::execute::schedule::Step;
+use planner_core::steer::Pose;
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
 use std::ops::ControlFlow;
@@ -49,6 +51,9 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
+    /// The registration the host is given (tracker to scenario frame): the tracker reports in
+    /// the frame it maps from. None: the tracker's frame is the scenario's.
+    pub registration: Option<Transform>,
 }
 
 /// How a pose is flagged invalid.
@@ -111,7 +116,16 @@ impl TrackerClients {
     }
 
     /// Sends the target and the tip of `m` to every client, the tip flagged invalid by `flag`.
-    fn publish(&self, m: &Measurement, flag: Option<Flag>) -> Result<()> {
+    fn publish(
+        &self,
+        m: &Measurement,
+        flag: Option<Flag>,
+        to_tracker: Option<&Transform>,
+    ) -> Result<()> {
+        let m = &match to_tracker {
+            Some(t) => in_frame(t, m),
+            None => *m,
+        };
         let tip = tip_transform(m.position, m.heading, m.bevel)
             .map_err(|e| anyhow!("the simulated tip is no pose: {e:?}"))?;
         let target = Transform::new(Transform::IDENTITY.rotation(), m.target)
@@ -138,6 +152,25 @@ impl TrackerClients {
                 && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::OK)).is_ok())
         });
         Ok(())
+    }
+}
+
+/// A measurement in the frame `t` maps the scenario's frame to.
+fn in_frame(t: &Transform, m: &Measurement) -> Measurement {
+    let pose = registered_pose(
+        t,
+        Pose {
+            position: m.position,
+            heading: m.heading,
+            bevel: Some(m.bevel),
+        },
+    );
+    Measurement {
+        position: pose.position,
+        heading: pose.heading,
+        bevel: pose.bevel.unwrap_or(m.bevel),
+        target: registered_point(t, m.target),
+        ..*m
     }
 }
 
@@ -298,6 +331,10 @@ impl Lab {
         }
         .context("the host sent no step list")?;
         self.tracker.wait_for_one()?;
+        let to_tracker = match &self.config.registration {
+            Some(reg) => Some(inverse(reg).map_err(|e| anyhow!("registration: {e:?}"))?),
+            None => None,
+        };
         let mut end = None;
         let mut last_piece = Instant::now();
         while end.is_none() {
@@ -312,7 +349,10 @@ impl Lab {
                         .tracker_silent_after
                         .is_none_or(|n| robot.pieces <= n)
                     {
-                        if let Err(e) = self.tracker.publish(m, self.flag(robot.pieces)) {
+                        if let Err(e) =
+                            self.tracker
+                                .publish(m, self.flag(robot.pieces), to_tracker.as_ref())
+                        {
                             failure = Some(e);
                             return ControlFlow::Break(());
                         }

@@ -80,6 +80,10 @@ struct LabArgs {
     /// than it did.
     #[arg(long, requires = "lab")]
     robot_misreport_after: Option<u32>,
+    /// With --lab: the registration `needle steer --registration` is given (JSON, tracker to
+    /// scenario frame); the tracker then reports in the tracker's frame.
+    #[arg(long, requires = "lab")]
+    registration: Option<std::path::PathBuf>,
 }
 
 /// Serves the simulated lab until killed.
@@ -113,6 +117,11 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
+            registration: l
+                .registration
+                .as_deref()
+                .map(needle_cli::lab::wire::load_registration)
+                .transpose()?,
         },
         tracker: TrackerClients::default(),
     };

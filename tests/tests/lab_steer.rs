@@ -188,3 +188,42 @@ fn pacing_and_latency_change_no_figure() {
     let least = std::time::Duration::from_millis(5 * pieces);
     assert!(elapsed >= least, "{elapsed:?} for {pieces} paced pieces");
 }
+
+/// A tracker whose reference frame is not the scenario's (turned 90 degrees about z and moved):
+/// with the registration `needle steer` steers as in the scenario's frame (to rounding: the
+/// translation is taken off and put back in f32); without it, the poses are nowhere near the plan.
+#[test]
+fn a_registered_tracker_steers_as_simulated() {
+    let file = path("paper");
+    let expected = simulated(&file, 3, 1).remove(0);
+    let registration = temp_path("registration.json");
+    std::fs::write(
+        &registration,
+        r#"{"rotation": [[0, -1, 0], [1, 0, 0], [0, 0, 1]], "translation_mm": [100, -50, 25]}"#,
+    )
+    .unwrap();
+    let reg = registration.to_str().unwrap();
+    let mut lab = Lab::start(&file, 3, &["--registration", reg]);
+    let steered = lab.steer(&file, &["--registration", reg]);
+    let truth = lab.next_run();
+    assert_eq!(steered["stop_reason"], expected["stop_reason"]);
+    let error = truth["target_error"].as_f64().unwrap();
+    let simulated_error = expected["target_error"].as_f64().unwrap();
+    assert!(
+        (error - simulated_error).abs() < 1e-3,
+        "{error} vs {simulated_error}"
+    );
+    assert_eq!(
+        steered["steering"]["readings"],
+        expected["steering"]["readings"]
+    );
+
+    let unregistered = lab.steer(&file, &[]);
+    let truth = lab.next_run();
+    assert!(
+        unregistered["stop_reason"] != expected["stop_reason"]
+            || truth["target_error"].as_f64().unwrap() > 5.0,
+        "poses 100 mm off cannot steer as well: {unregistered}"
+    );
+    let _ = std::fs::remove_file(registration);
+}

@@ -12,9 +12,9 @@ use super::log::InsertionLog;
 use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
-use super::wire::{send_text, tip_pose, Arrival};
+use super::wire::{registered_point, registered_pose, send_text, tip_pose, Arrival};
 use crate::simulate::device::LinkController;
-use needle_igtl::{Message, StatusCode};
+use needle_igtl::{Message, StatusCode, Transform};
 use needle_link::Transport;
 use planner_core::model::kinematics::Frame;
 use planner_core::steer::{
@@ -52,6 +52,8 @@ pub struct SessionConfig {
     pub robot_timeout: Duration,
     /// The needle's arc radius (mm), to draw continuations for Slicer.
     pub arc_radius_mm: f32,
+    /// The tracker's reference frame to the scenario's (none: the same frame).
+    pub registration: Option<Transform>,
 }
 
 /// How an insertion ended.
@@ -314,11 +316,16 @@ impl<'a> Session<'a> {
                         if !valid {
                             self.outcome.invalid_poses += 1;
                         }
-                        self.tip = Some((valid.then(|| tip_pose(&t)), at));
+                        let pose = valid.then(|| self.registered(tip_pose(&t)));
+                        self.tip = Some((pose, at));
                         self.tracker_clock = Instant::now();
                     }
                     Message::Transform(t) if name == self.config.target_name => {
-                        self.target = Some(t.translation());
+                        let p = t.translation();
+                        self.target = Some(match &self.config.registration {
+                            Some(reg) => registered_point(reg, p),
+                            None => p,
+                        });
                     }
                     Message::Status(s) if name == self.config.tip_name => {
                         self.tip_status_ok = s.code == StatusCode::OK;
@@ -328,6 +335,13 @@ impl<'a> Session<'a> {
                 None
             }
             Event::Robot((frame, _)) => self.on_robot(frame),
+        }
+    }
+
+    fn registered(&self, pose: Pose) -> Pose {
+        match &self.config.registration {
+            Some(reg) => registered_pose(reg, pose),
+            None => pose,
         }
     }
 

@@ -6,7 +6,7 @@ use super::log::InsertionLog;
 use super::robot::step_list;
 use super::session::{Event, LabController, Session, SessionConfig, SessionOutcome, INTERRUPTED};
 use super::slicer::Slicer;
-use super::wire::{read_frames, TARGET_DEVICE, TIP_DEVICE};
+use super::wire::{load_registration, read_frames, TARGET_DEVICE, TIP_DEVICE};
 use crate::device::commands::LinkArgs;
 use crate::simulate::closed_loop_setup;
 use crate::simulate::device::{device_planning, start_steering, LinkController};
@@ -34,6 +34,10 @@ pub struct SteerArgs {
     /// Device name of the target's TRANSFORM.
     #[arg(long, default_value = TARGET_DEVICE)]
     pub target_name: String,
+    /// The registration: a JSON file with `rotation` (row-major) and `translation_mm`, taking a
+    /// point of the tracker's reference frame to the scenario's (default: the same frame).
+    #[arg(long)]
+    pub registration: Option<PathBuf>,
     /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
     #[arg(long)]
     pub robot: String,
@@ -169,6 +173,11 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         flags.push(format!("--port={p}"));
     }
     let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &flags)?;
+    let registration = a
+        .registration
+        .as_deref()
+        .map(load_registration)
+        .transpose()?;
     let schedule = &setup.prepared.schedule;
     let mut in_process_controller;
     let mut device;
@@ -212,6 +221,7 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         tracking_timeout: Duration::from_millis(a.tracking_timeout_ms),
         robot_timeout: Duration::from_millis(a.robot_timeout_ms),
         arc_radius_mm: setup.scenario.needle.curvature_radius,
+        registration,
     };
     let outcome =
         Session::new(config, controller, robot, &mut log, &mut slicer, rx).run(&schedule.steps);

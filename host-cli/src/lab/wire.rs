@@ -87,6 +87,58 @@ pub fn tip_pose(t: &Transform) -> Pose {
     }
 }
 
+/// The registration file: the rigid transform taking a point in the tracker's reference frame
+/// to the scenario's frame, `p_scenario = rotation · p_tracker + translation_mm`.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RegistrationFile {
+    /// Row-major rotation.
+    rotation: [[f32; 3]; 3],
+    /// Translation (mm).
+    translation_mm: [f32; 3],
+}
+
+/// Reads a registration file (JSON: `rotation`, row-major, and `translation_mm`); a rotation
+/// that is not rigid is refused.
+pub fn load_registration(path: &std::path::Path) -> anyhow::Result<Transform> {
+    use anyhow::Context;
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the registration {}", path.display()))?;
+    let r: RegistrationFile =
+        serde_json::from_str(&text).with_context(|| format!("registration {}", path.display()))?;
+    Transform::new(r.rotation, r.translation_mm)
+        .map_err(|e| anyhow::anyhow!("registration {}: {e:?}", path.display()))
+}
+
+fn rotated(r: &[[f32; 3]; 3], v: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|i| r[i][0] * v[0] + r[i][1] * v[1] + r[i][2] * v[2])
+}
+
+/// `reg` applied to a point.
+pub fn registered_point(reg: &Transform, p: [f32; 3]) -> [f32; 3] {
+    let (r, t) = (reg.rotation(), reg.translation());
+    let q = rotated(&r, p);
+    [q[0] + t[0], q[1] + t[1], q[2] + t[2]]
+}
+
+/// `reg` applied to a pose (its position moved, its heading and bevel turned).
+pub fn registered_pose(reg: &Transform, pose: Pose) -> Pose {
+    let r = reg.rotation();
+    Pose {
+        position: registered_point(reg, pose.position),
+        heading: rotated(&r, pose.heading),
+        bevel: pose.bevel.map(|b| rotated(&r, b)),
+    }
+}
+
+/// The inverse of a rigid `reg` (the scenario's frame to the tracker's).
+pub fn inverse(reg: &Transform) -> Result<Transform, Error> {
+    let r = reg.rotation();
+    let rt = [0, 1, 2].map(|i| [r[0][i], r[1][i], r[2][i]]);
+    let t = rotated(&rt, reg.translation()).map(|v| -v);
+    Transform::new(rt, t)
+}
+
 /// A frame off a connection and when it arrived.
 pub type Arrival = (Result<Frame, Error>, Instant);
 
@@ -121,6 +173,35 @@ pub fn read_frames(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_registration_and_its_inverse_undo_each_other() {
+        let (c, s) = (0.6_f32, 0.8_f32);
+        let reg = Transform::new(
+            [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+            [100.0, -50.0, 25.0],
+        )
+        .unwrap();
+        let back = inverse(&reg).unwrap();
+        let p = [1.5, -2.0, 80.0];
+        let there = registered_point(&reg, p);
+        assert_eq!(
+            there,
+            [100.0 + c * 1.5 + s * 2.0, -50.0 + s * 1.5 - c * 2.0, 105.0]
+        );
+        let again = registered_point(&back, there);
+        for (a, b) in again.iter().zip(p) {
+            assert!((a - b).abs() < 1e-4, "{again:?}");
+        }
+        let pose = Pose {
+            position: p,
+            heading: [0.0, 0.0, 1.0],
+            bevel: Some([1.0, 0.0, 0.0]),
+        };
+        let turned = registered_pose(&reg, pose);
+        assert_eq!(turned.heading, [0.0, 0.0, 1.0]);
+        assert_eq!(turned.bevel, Some([c, s, 0.0]));
+    }
 
     #[test]
     fn a_tip_pose_crosses_as_a_transform_bit_for_bit() {
