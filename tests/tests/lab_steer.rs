@@ -104,8 +104,9 @@ fn the_insertion_log_is_complete() {
     let _ = std::fs::remove_file(log);
 }
 
-/// Slicer (played here by a plain OpenIGTLink server) sees the plan, the estimated tip at every
-/// reading, each new continuation, and the state with the stop, every frame with a good CRC.
+/// Slicer (played here by a plain OpenIGTLink server) sees the plan, the obstacles, the estimated
+/// tip at every reading, each new continuation, and the state with the stop, every frame with a
+/// good CRC.
 #[test]
 fn slicer_sees_the_plan_the_estimate_and_the_stop() {
     use needle_igtl::{Frame, FrameDecoder, Message};
@@ -142,6 +143,15 @@ fn slicer_sees_the_plan_the_estimate_and_the_stop() {
     assert_eq!(frames[0].info.device_name, "NeedlePlan");
     assert!(plan.points().len() > 50);
     assert_eq!(plan.points()[0], [0.0, 0.0, 0.0], "from the paper's entry");
+    let Message::Point(obstacles) = &frames[1].message else {
+        panic!("then the obstacles: {:?}", frames[1].info);
+    };
+    assert_eq!(frames[1].info.device_name, "NeedleObstacles");
+    assert!(!obstacles.points.is_empty());
+    for (i, ob) in obstacles.points.iter().enumerate() {
+        assert_eq!(ob.name.as_str(), format!("obstacle {}", i + 1));
+        assert!(ob.diameter > 0.0);
+    }
     let estimates = named("NeedleTipEstimate").count() as u64;
     assert_eq!(estimates, v["steering"]["readings"].as_u64().unwrap());
     let new_lists = log_lines(&log)

@@ -5,8 +5,9 @@
 
 use super::wire::{send, send_text, tip_transform};
 use anyhow::{anyhow, Context, Result};
+use needle_igtl::messages::point::MAX_POINTS;
 use needle_igtl::messages::polydata::MAX_POLY_POINTS;
-use needle_igtl::{Message, PolyData, Status, StatusCode};
+use needle_igtl::{Message, PointElement, PointList, PolyData, Status, StatusCode};
 use planner_core::execute::nominal::{execute_from, sample};
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::model::kinematics::Frame;
@@ -16,6 +17,8 @@ use std::time::Duration;
 
 /// Device name of the planned path.
 pub const PLAN_DEVICE: &str = "NeedlePlan";
+/// Device name of the obstacles (the first 16; then `NeedleObstacles2`, ...).
+pub const OBSTACLES_DEVICE: &str = "NeedleObstacles";
 /// Device name of the newest continuation.
 pub const CONTINUATION_DEVICE: &str = "NeedleContinuation";
 /// Device name of the estimated tip.
@@ -85,6 +88,30 @@ impl Slicer {
             points.push([p.x, p.y, p.z]);
         });
         self.path(PLAN_DEVICE, &points);
+        self.obstacles(scenario);
+    }
+
+    /// The obstacles as fiducials of their diameter, [`MAX_POINTS`] a message: `NeedleObstacles`,
+    /// then `NeedleObstacles2`, ... (a plane scenario's circles drawn as spheres).
+    fn obstacles(&mut self, scenario: &Scenario) {
+        for (k, chunk) in scenario.obstacles.chunks(MAX_POINTS).enumerate() {
+            let mut list = PointList::default();
+            for (i, ob) in chunk.iter().enumerate() {
+                let name = format!("obstacle {}", k * MAX_POINTS + i + 1);
+                let Ok(mut point) = PointElement::at(&name, ob.center) else {
+                    continue;
+                };
+                point.diameter = 2.0 * ob.radius;
+                point.rgba = [230, 80, 60, 160];
+                let _ = point.group.push_str("Obstacle");
+                let _ = list.points.push(point);
+            }
+            let device = match k {
+                0 => OBSTACLES_DEVICE.to_string(),
+                _ => format!("{OBSTACLES_DEVICE}{}", k + 1),
+            };
+            self.send(&device, &Message::Point(list));
+        }
     }
 
     /// The estimated tip, and the new continuation from it when the controller replaced the
