@@ -63,9 +63,6 @@ struct LabArgs {
     /// With --lab: delay of each pose after its piece (ms).
     #[arg(long, requires = "lab", default_value_t = 0)]
     latency_ms: u64,
-    /// With --lab: what the controller is told, KEY=VALUE (as `needle simulate --steer`).
-    #[arg(long = "steer", value_name = "KEY=VALUE", requires = "lab")]
-    steer: Vec<String>,
     /// With --lab, a fault for tests: the tracker goes quiet after this many poses.
     #[arg(long, requires = "lab")]
     tracker_silent_after: Option<u32>,
@@ -93,8 +90,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
         l.rate.is_finite() && l.rate >= 0.0,
         "--rate must be 0 or more"
     );
-    let steer: Vec<String> = l.steer.iter().map(|kv| format!("--steer={kv}")).collect();
-    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &steer)?;
+    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &[])?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
     let robot = TcpListener::bind(("127.0.0.1", l.robot_port))
