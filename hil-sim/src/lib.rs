@@ -4,12 +4,13 @@
 //! Use [`InProcess`] in tests (no threads, no clock), or [`serve`] on any byte stream (the
 //! `hil-sim` binary serves a pseudo-terminal or a TCP socket).
 //!
-//! It is only the device: the simulated robot, tissue and tracker of an insertion are the
-//! `needle-sim` crate.
+//! The device: the simulated robot, tissue and tracker of an insertion are the `needle-sim`
+//! crate, which [`lab`] serves over OpenIGTLink as a tracker and a robot (`hil-sim --lab`).
 
 #![forbid(unsafe_code)]
 
 pub mod in_process;
+pub mod lab;
 pub mod line;
 pub mod serve;
 

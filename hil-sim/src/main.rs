@@ -2,9 +2,14 @@
 //!
 //! Prints the device's address (the /dev/pts path, or the TCP address) as the first line on
 //! stdout, then serves until killed.
+//!
+//! `hil-sim --lab SCENARIO --tracker-port P --robot-port Q` is the simulated lab instead
+//! (`hil_sim::lab`): its first line is `tracker ADDRESS robot ADDRESS`, then one JSON line of
+//! true figures per insertion.
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use hil_sim::lab::{Lab, LabConfig, TrackerClients};
 use hil_sim::serve::{serve, ServeConfig};
 use hil_sim::{DeviceService, LineConfig, IDENTITY};
 use std::io::Write;
@@ -28,16 +33,108 @@ struct Args {
     /// Bytes corrupted by one burst.
     #[arg(long, default_value_t = 20)]
     burst_len: u32,
-    /// Seed of the fault pattern.
+    /// Seed of the fault pattern; with --lab, of the first insertion's world (the k-th
+    /// insertion from 0 runs in the world of seed + k, as `needle simulate` numbers runs).
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Pace bytes as a UART at this baud rate would (8N1); 0 for no pacing.
     #[arg(long, default_value_t = 0)]
     baud: u32,
+    #[command(flatten)]
+    lab: LabArgs,
+}
+
+/// The simulated lab's flags.
+#[derive(clap::Args)]
+struct LabArgs {
+    /// Serve the simulated lab of this scenario file: an OpenIGTLink tracker and robot over the
+    /// world of `needle simulate` (docs/lab.md).
+    #[arg(long, value_name = "SCENARIO", conflicts_with = "tcp")]
+    lab: Option<std::path::PathBuf>,
+    /// With --lab: the tracker's TCP port on 127.0.0.1 (0 picks a free one).
+    #[arg(long, requires = "lab", default_value_t = 18944)]
+    tracker_port: u16,
+    /// With --lab: the robot's TCP port on 127.0.0.1 (0 picks a free one).
+    #[arg(long, requires = "lab", default_value_t = 18945)]
+    robot_port: u16,
+    /// With --lab: pieces per second at most (0: lock-step, as fast as the host answers).
+    #[arg(long, requires = "lab", default_value_t = 0.0)]
+    rate: f64,
+    /// With --lab: delay of each pose after its piece (ms).
+    #[arg(long, requires = "lab", default_value_t = 0)]
+    latency_ms: u64,
+    /// With --lab, a fault for tests: the tracker goes quiet after this many poses.
+    #[arg(long, requires = "lab")]
+    tracker_silent_after: Option<u32>,
+    /// With --lab, a fault for tests: the robot stops reporting after this many pieces.
+    #[arg(long, requires = "lab")]
+    robot_silent_after: Option<u32>,
+    /// With --lab, a fault for tests: every this many poses one is flagged invalid
+    /// (alternately by v3 metadata and by a tip STATUS that is not OK).
+    #[arg(long, requires = "lab")]
+    invalid_every: Option<u32>,
+    /// With --lab, a fault for tests: after this many pieces the robot reports 5 mm more depth
+    /// than it did.
+    #[arg(long, requires = "lab")]
+    robot_misreport_after: Option<u32>,
+    /// With --lab: the registration `needle steer --registration` is given (JSON, tracker to
+    /// scenario frame); the tracker then reports in the tracker's frame.
+    #[arg(long, requires = "lab")]
+    registration: Option<std::path::PathBuf>,
+}
+
+/// Serves the simulated lab until killed.
+fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
+    let l = &a.lab;
+    anyhow::ensure!(
+        l.rate.is_finite() && l.rate >= 0.0,
+        "--rate must be 0 or more"
+    );
+    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &[])?;
+    let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
+        .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
+    let robot = TcpListener::bind(("127.0.0.1", l.robot_port))
+        .with_context(|| format!("cannot listen on robot port {}", l.robot_port))?;
+    let mut out = std::io::stdout();
+    writeln!(
+        out,
+        "tracker {} robot {}",
+        tracker.local_addr()?,
+        robot.local_addr()?
+    )?;
+    out.flush()?;
+    let lab = Lab {
+        setup,
+        config: LabConfig {
+            seed: a.seed,
+            rate_hz: l.rate,
+            latency_ms: l.latency_ms,
+            tracker_silent_after: l.tracker_silent_after,
+            robot_silent_after: l.robot_silent_after,
+            invalid_every: l.invalid_every,
+            robot_misreport_after: l.robot_misreport_after,
+            registration: l
+                .registration
+                .as_deref()
+                .map(needle_cli::lab::wire::load_registration)
+                .transpose()?,
+        },
+        tracker: TrackerClients::default(),
+    };
+    lab.tracker.accept(tracker);
+    lab.serve(robot, |run| {
+        if let Ok(line) = serde_json::to_string(run) {
+            let _ = writeln!(out, "{line}");
+            let _ = out.flush();
+        }
+    })
 }
 
 fn main() -> Result<()> {
     let a = Args::parse();
+    if let Some(file) = &a.lab.lab {
+        return serve_lab(file, &a);
+    }
     for (name, rate) in [
         ("--flip-rate", a.flip_rate),
         ("--drop-rate", a.drop_rate),

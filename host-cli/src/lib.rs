@@ -6,6 +6,7 @@ pub mod anatomy;
 pub mod bench;
 pub mod benchmark;
 pub mod device;
+pub mod lab;
 pub mod random;
 pub mod report;
 pub mod scenario;

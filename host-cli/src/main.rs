@@ -72,6 +72,9 @@ enum Command {
     Plot(analysis::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
     Simulate(needle_cli::simulate::SimulateArgs),
+    /// Steer an insertion in a lab: OpenIGTLink tracker poses in, robot commands out
+    /// (docs/lab.md; `hil-sim --lab` is a simulated lab).
+    Steer(needle_cli::lab::SteerArgs),
     /// Plan and simulate (open and closed loop) seeded 3-D scenarios nobody tuned on.
     Benchmark(needle_cli::benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
@@ -283,6 +286,7 @@ fn main() -> ExitCode {
         Command::Cover(a) => needle_cli::anatomy::command::run_cover(a),
         Command::Plot(a) => analysis::run_plot(a),
         Command::Simulate(a) => needle_cli::simulate::run_simulate(a),
+        Command::Steer(a) => needle_cli::lab::run_steer(a),
         Command::Benchmark(a) => needle_cli::benchmark::run_benchmark(a),
         Command::Send(a) => send(a),
         Command::Ping { link, count } => device::commands::ping(link, *count),

@@ -2,7 +2,8 @@
 //! every example there and in the first session runs as written (from a working directory that
 //! sees the repository's `examples/` and `tests/`, the device commands against
 //! `hil-sim --tcp 127.0.0.1:7878` as the README starts it; `device-bench`'s, which runs both boards
-//! in QEMU, is run by the firmware budgets test), the paper table it prints is what `needle plan`
+//! in QEMU, is run by the firmware budgets test; `needle steer` against the simulated lab the README
+//! starts), the paper table it prints is what `needle plan`
 //! prints, and the scenario it shows plans.
 
 mod wire_support;
@@ -15,6 +16,10 @@ use wire_support::SimProcess;
 
 /// The address the README's device examples use.
 const README_DEVICE: &str = "127.0.0.1:7878";
+
+/// How the README starts the simulated lab its `needle steer` example steers, when it shows one.
+const README_LAB: &str =
+    "hil-sim --lab examples/paper.toml --tracker-port 18944 --robot-port 18945 &";
 
 /// `needle`'s subcommands, as its help lists them.
 fn subcommands() -> Vec<String> {
@@ -113,6 +118,13 @@ fn every_example_in_the_readme_runs_as_written() {
         "the README starts hil-sim as {start}"
     );
     let _device = SimProcess::start(&["--tcp", README_DEVICE]);
+    let paper = workspace().join("examples/paper.toml");
+    let _lab = text.contains(README_LAB).then(|| {
+        let mut args: Vec<&str> = README_LAB.split_whitespace().skip(1).collect();
+        args.pop(); // the shell's `&`
+        args[1] = paper.to_str().unwrap();
+        SimProcess::start(&args)
+    });
     let dir = scratch("examples");
     let mut ran = 0;
     for line in every_example(&text) {

@@ -46,6 +46,25 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
+/// The setup of one closed-loop run of `file` as `needle simulate FILE --closed-loop --runs 1
+/// --seed SEED` makes it, with `flags` added (e.g. `--steer KEY=VALUE`): the simulated lab and
+/// `needle steer` plan and steer the very insertion the simulation does.
+pub fn closed_loop_setup(file: &std::path::Path, seed: u64, flags: &[String]) -> Result<Setup> {
+    #[derive(clap::Parser)]
+    struct Simulate {
+        #[command(flatten)]
+        args: SimulateArgs,
+    }
+    let seed = seed.to_string();
+    let mut argv = vec!["simulate".as_ref(), file.as_os_str()];
+    for a in ["--closed-loop", "--runs", "1", "--seed", &seed] {
+        argv.push(a.as_ref());
+    }
+    argv.extend(flags.iter().map(std::ffi::OsStr::new));
+    let parsed = <Simulate as clap::Parser>::try_parse_from(argv)?;
+    Ok(set_up(&parsed.args)?.0)
+}
+
 /// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
 fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
     let file = ScenarioFile::load(&a.file)?;

@@ -23,6 +23,31 @@ impl<T: Transport> Controller for LinkController<'_, T> {
     }
 }
 
+/// Connects to the device at `link` and has it plan `setup`'s scenario: its plan must be the
+/// host's, bit for bit, for it to steer the insertion the host plans.
+pub fn device_planning(setup: &Setup, link: &LinkArgs) -> Result<Client<Box<dyn Transport>>> {
+    let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
+    let planned_there = client
+        .plan(&setup.scenario, &mut |_| {})
+        .context("planning on the device")?
+        .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
+    match &planned_there.schedule {
+        Some(Ok(s)) if *s == setup.prepared.schedule => Ok(client),
+        _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
+    }
+}
+
+/// Starts the device's controller on its plan, with `setup`'s `[steering]`.
+pub fn start_steering<T: Transport>(client: &mut Client<T>, setup: &Setup) -> Result<()> {
+    let steps = client
+        .steer_start(&setup.config)
+        .context("starting to steer")?;
+    if steps[..] != setup.prepared.schedule.steps[..] {
+        bail!("the device starts steering with other steps than the plan's");
+    }
+    Ok(())
+}
+
 /// Every run of `setup`, one after the other, each steered by the device at `link` (which plans
 /// the scenario first: its plan must be the host's, bit for bit).
 pub fn on_device(
@@ -31,25 +56,11 @@ pub fn on_device(
     link: &LinkArgs,
     done: impl Fn(),
 ) -> Result<Vec<ClosedRun>> {
-    let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
-    let planned_there = client
-        .plan(&setup.scenario, &mut |_| {})
-        .context("planning on the device")?
-        .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
-    let schedule = &setup.prepared.schedule;
-    match &planned_there.schedule {
-        Some(Ok(s)) if s == schedule => {}
-        _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
-    }
+    let mut client = device_planning(setup, link)?;
     setup.collect(keep, |items| {
         let mut out = Vec::with_capacity(items.len());
         for &(i, seed) in items {
-            let steps = client
-                .steer_start(&setup.config)
-                .context("starting to steer")?;
-            if steps[..] != schedule.steps[..] {
-                bail!("the device starts steering with other steps than the plan's");
-            }
+            start_steering(&mut client, setup)?;
             let run = setup
                 .steer(&mut LinkController(&mut client), seed)
                 .map_err(|e| anyhow!("run {}: {e}", i + 1))?;

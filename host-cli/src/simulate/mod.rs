@@ -13,7 +13,7 @@ pub mod steering;
 pub mod table;
 
 pub use args::{at_least_one, SimulateArgs};
-pub use command::run_simulate;
+pub use command::{closed_loop_setup, run_simulate};
 
 use anyhow::{anyhow, Context, Result};
 use needle_sim::Perturbation;

@@ -1,0 +1,441 @@
+//! The simulated lab: the robot, tissue and tracker of `needle simulate` (needle-sim's
+//! [`World`]) behind the lab link, so that `needle steer` runs end to end on one machine.
+//!
+//! - The tracker is an OpenIGTLink server as PLUS is: every client gets each pose the world
+//!   measures, a `TRANSFORM` named `TargetToReference` (the target as imaging sees it) then one
+//!   named `NeedleTipToReference` (the tip frame: e2 the bevel, e3 the heading).
+//! - The robot is an OpenIGTLink server speaking the robot mapping of
+//!   [`needle_cli::lab::robot`]: it takes a step list, executes it piece by piece exactly as
+//!   [`World::execute`] does, reports each piece's progress and waits for the host's word (go
+//!   on, a new step list replacing the rest from that piece, hold, or stop). One robot connection
+//!   is one insertion; the k-th (from 0) runs in the world of seed `seed + k`.
+//!
+//! Lock-step: the tracker sends a piece's pose before the robot reports the piece, and nothing
+//! moves until the host answers, so an insertion equals `needle simulate --closed-loop` for that
+//! seed bit for bit. `rate_hz` paces the pieces (at most that many a second), `latency_ms`
+//! delays each pose; neither changes a figure.
+
+use anyhow::{anyhow, bail, Context, Result};
+use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
+use needle_cli::lab::wire::{inverse, registered_point, registered_pose};
+use needle_cli::lab::wire::{now, read_frames, send, send_text, send_with, tip_transform};
+use needle_cli::lab::wire::{TARGET_DEVICE, TIP_DEVICE};
+use needle_cli::simulate::setup::Setup;
+use needle_igtl::{Extended, FrameInfo, Message, Status, StatusCode, TextEncoding, Transform};
+use needle_sim::{finish, Measurement, World};
+use planner_core::execute::schedule::Step;
+use planner_core::steer::Pose;
+use serde::Serialize;
+use std::net::{TcpListener, TcpStream};
+use std::ops::ControlFlow;
+use std::sync::mpsc::{channel, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// How the lab runs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LabConfig {
+    /// Seed of the first insertion's world.
+    pub seed: u64,
+    /// Pieces a second at most (0: as fast as the host answers).
+    pub rate_hz: f64,
+    /// Delay of each pose after its piece (ms).
+    pub latency_ms: u64,
+    /// Test fault: the tracker sends no pose after this many in an insertion.
+    pub tracker_silent_after: Option<u32>,
+    /// Test fault: the robot reports nothing after this many pieces in an insertion.
+    pub robot_silent_after: Option<u32>,
+    /// Test fault: every this many poses one is flagged invalid, alternately by v3 metadata
+    /// (`TransformStatus` = `INVALID`) and by a tip `STATUS` that is not OK sent before it (and
+    /// an OK one after it).
+    pub invalid_every: Option<u32>,
+    /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
+    pub robot_misreport_after: Option<u32>,
+    /// The registration the host is given (tracker to scenario frame): the tracker reports in
+    /// the frame it maps from. None: the tracker's frame is the scenario's.
+    pub registration: Option<Transform>,
+}
+
+/// How a pose is flagged invalid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Flag {
+    Metadata,
+    Status,
+}
+
+/// How long the robot waits for a tracker client before its first piece (a pose sent to nobody
+/// would be lost to the host).
+const TRACKER_WAIT: Duration = Duration::from_secs(10);
+
+/// The tracker's clients; a client whose socket fails is dropped.
+#[derive(Clone, Default)]
+pub struct TrackerClients(Arc<Mutex<Vec<TcpStream>>>);
+
+impl TrackerClients {
+    /// Accepts tracker clients on `listener` for the life of the process.
+    pub fn accept(&self, listener: TcpListener) {
+        let clients = self.clone();
+        std::thread::spawn(move || {
+            for conn in listener.incoming().flatten() {
+                let _ = conn.set_nodelay(true);
+                if let Ok(mut list) = clients.0.lock() {
+                    list.push(conn);
+                }
+            }
+        });
+    }
+
+    /// Drops the clients that hung up, and counts the others: a client of an earlier
+    /// insertion must not stand in for the one about to steer.
+    fn live(&self) -> usize {
+        let Ok(mut list) = self.0.lock() else {
+            return 0;
+        };
+        list.retain(|c| {
+            let mut byte = [0u8; 1];
+            let hung_up = c.set_nonblocking(true).is_err()
+                || match c.peek(&mut byte) {
+                    Ok(0) => true,
+                    Ok(_) => false,
+                    Err(e) => e.kind() != std::io::ErrorKind::WouldBlock,
+                };
+            !hung_up && c.set_nonblocking(false).is_ok()
+        });
+        list.len()
+    }
+
+    fn wait_for_one(&self) -> Result<()> {
+        let start = Instant::now();
+        while self.live() == 0 {
+            if start.elapsed() > TRACKER_WAIT {
+                bail!("no tracker client connected");
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        Ok(())
+    }
+
+    /// Sends the target and the tip of `m` to every client, the tip flagged invalid by `flag`.
+    fn publish(
+        &self,
+        m: &Measurement,
+        flag: Option<Flag>,
+        to_tracker: Option<&Transform>,
+    ) -> Result<()> {
+        let m = &match to_tracker {
+            Some(t) => in_frame(t, m),
+            None => *m,
+        };
+        let tip = tip_transform(m.position, m.heading, m.bevel)
+            .map_err(|e| anyhow!("the simulated tip is no pose: {e:?}"))?;
+        let target = Transform::new(Transform::IDENTITY.rotation(), m.target)
+            .map_err(|e| anyhow!("the simulated target is no position: {e:?}"))?;
+        let mut tip_info = FrameInfo::new(TIP_DEVICE).map_err(|e| anyhow!("{e:?}"))?;
+        tip_info.timestamp = now();
+        if flag == Some(Flag::Metadata) {
+            let mut ext = Extended::default();
+            ext.metadata
+                .insert("TransformStatus", TextEncoding::UsAscii, "INVALID")
+                .map_err(|e| anyhow!("{e:?}"))?;
+            tip_info.extended = Some(ext);
+        }
+        let status = |code| Message::Status(Status::new(code));
+        let by_status = flag == Some(Flag::Status);
+        let mut list = self
+            .0
+            .lock()
+            .map_err(|_| anyhow!("tracker clients poisoned"))?;
+        list.retain_mut(|c| {
+            send(c, TARGET_DEVICE, &Message::Transform(target)).is_ok()
+                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::NOT_READY)).is_ok())
+                && send_with(c, &tip_info, &Message::Transform(tip)).is_ok()
+                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::OK)).is_ok())
+        });
+        Ok(())
+    }
+}
+
+/// A measurement in the frame `t` maps the scenario's frame to.
+fn in_frame(t: &Transform, m: &Measurement) -> Measurement {
+    let pose = registered_pose(
+        t,
+        Pose {
+            position: m.position,
+            heading: m.heading,
+            bevel: Some(m.bevel),
+        },
+    );
+    Measurement {
+        position: pose.position,
+        heading: pose.heading,
+        bevel: pose.bevel.unwrap_or(m.bevel),
+        target: registered_point(t, m.target),
+        ..*m
+    }
+}
+
+/// How an insertion ended, from the robot's side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum End {
+    /// The host said stop.
+    Stopped,
+    /// The step list ran out (then the host said stop, or left).
+    Done,
+    /// The host left mid-insertion.
+    ConnectionLost,
+}
+
+/// One insertion's true figures, printed as a JSON line: the world's truth, which the host
+/// cannot see.
+#[derive(Clone, Debug, Serialize)]
+pub struct LabRun {
+    /// The world's seed.
+    pub seed: u64,
+    /// How it ended.
+    pub end: End,
+    /// Pieces executed.
+    pub pieces: u32,
+    /// Distance of the true tip to the true target (mm).
+    pub target_error: f32,
+    /// RMS distance of the true path to the planned one (mm).
+    pub path_rms: f32,
+    /// Largest distance of the true path to the planned one (mm).
+    pub path_max: f32,
+    /// The true path entered an obstacle.
+    pub collided: bool,
+    /// Smallest clearance of the true path (mm).
+    pub min_clearance: f32,
+}
+
+/// What the robot heard.
+enum Word {
+    Go,
+    Replace(Vec<Step>),
+    Stop,
+    Lost,
+}
+
+/// The simulated robot of one insertion: its connection and what arrives on it.
+struct Robot {
+    conn: TcpStream,
+    commands: Receiver<RobotCommand>,
+    pieces: u32,
+    silent_after: Option<u32>,
+}
+
+impl Robot {
+    fn new(conn: TcpStream, silent_after: Option<u32>) -> Result<Robot> {
+        conn.set_nodelay(true)?;
+        let (tx, commands) = channel();
+        read_frames(
+            conn.try_clone()?,
+            move |(frame, _)| match frame {
+                Ok(f) if f.info.device_name == COMMAND_DEVICE => match f.message {
+                    Message::String(s) => match s.text.parse::<RobotCommand>() {
+                        Ok(c) => tx.send(c).is_ok(),
+                        Err(e) => {
+                            eprintln!("hil-sim lab: robot command refused: {e}");
+                            true
+                        }
+                    },
+                    _ => true,
+                },
+                _ => true,
+            },
+            || {},
+        );
+        Ok(Robot {
+            conn,
+            commands,
+            pieces: 0,
+            silent_after,
+        })
+    }
+
+    fn report(&mut self, r: RobotReport) {
+        if self.silent_after.is_some_and(|n| self.pieces > n) {
+            return;
+        }
+        // A host that left is seen when its next word does not come.
+        let _ = send_text(&mut self.conn, REPORT_DEVICE, &r.to_string());
+    }
+
+    /// The `count` steps of a list whose `steps` word has arrived.
+    fn steps(&mut self, count: usize) -> Option<Vec<Step>> {
+        let mut out = Vec::with_capacity(count);
+        while out.len() < count {
+            match self.commands.recv().ok()? {
+                RobotCommand::Step(s) => out.push(s),
+                _ => return None,
+            }
+        }
+        Some(out)
+    }
+
+    /// The host's next word; `hold` is reported and waited out.
+    fn word(&mut self) -> Word {
+        loop {
+            match self.commands.recv() {
+                Err(_) => return Word::Lost,
+                Ok(RobotCommand::Go) => return Word::Go,
+                Ok(RobotCommand::Stop) => return Word::Stop,
+                Ok(RobotCommand::Hold) => self.report(RobotReport::Holding),
+                Ok(RobotCommand::Steps { count }) => {
+                    return self.steps(count).map_or(Word::Lost, Word::Replace)
+                }
+                Ok(RobotCommand::Step(_)) => {
+                    eprintln!("hil-sim lab: a step outside a step list is ignored");
+                }
+            }
+        }
+    }
+}
+
+/// The simulated lab: one planned insertion, served to robot clients one after the other.
+pub struct Lab {
+    /// The insertion (as `needle simulate --closed-loop` sets it up).
+    pub setup: Setup,
+    /// How it runs.
+    pub config: LabConfig,
+    /// The tracker's clients.
+    pub tracker: TrackerClients,
+}
+
+impl Lab {
+    /// Serves insertions on `robot` for ever, each one's figures to `on_run`.
+    pub fn serve(&self, robot: TcpListener, mut on_run: impl FnMut(&LabRun)) -> Result<()> {
+        for (k, conn) in (0u64..).zip(robot.incoming()) {
+            let seed = self.config.seed.wrapping_add(k);
+            match conn
+                .map_err(anyhow::Error::from)
+                .and_then(|c| self.insert(c, seed))
+            {
+                Ok(run) => on_run(&run),
+                Err(e) => eprintln!("hil-sim lab: insertion {k} (seed {seed}): {e:#}"),
+            }
+        }
+        Ok(())
+    }
+
+    /// One insertion in the world of `seed`, commanded over `conn`.
+    pub fn insert(&self, conn: TcpStream, seed: u64) -> Result<LabRun> {
+        let s = &self.setup;
+        let schedule = &s.prepared.schedule;
+        let mut world = World::new(&s.scenario, &schedule.posture, &s.perturbation, seed)
+            .map_err(|e| anyhow!("{e}"))?;
+        let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
+        let mut steps = match robot.commands.recv() {
+            Ok(RobotCommand::Steps { count }) => robot.steps(count),
+            _ => None,
+        }
+        .context("the host sent no step list")?;
+        self.tracker.wait_for_one()?;
+        let to_tracker = match &self.config.registration {
+            Some(reg) => Some(inverse(reg).map_err(|e| anyhow!("registration: {e:?}"))?),
+            None => None,
+        };
+        let mut end = None;
+        let mut last_piece = Instant::now();
+        while end.is_none() {
+            let mut next = None;
+            for step in &steps {
+                let mut failure = None;
+                world.execute(step, |m| {
+                    self.pace(&mut last_piece);
+                    robot.pieces += 1;
+                    if self
+                        .config
+                        .tracker_silent_after
+                        .is_none_or(|n| robot.pieces <= n)
+                    {
+                        if let Err(e) =
+                            self.tracker
+                                .publish(m, self.flag(robot.pieces), to_tracker.as_ref())
+                        {
+                            failure = Some(e);
+                            return ControlFlow::Break(());
+                        }
+                    }
+                    robot.report(RobotReport::Progress {
+                        piece: robot.pieces,
+                        depth_mm: m.depth_mm + self.misreport(robot.pieces),
+                        base_deg: m.base_deg,
+                    });
+                    match robot.word() {
+                        Word::Go => return ControlFlow::Continue(()),
+                        Word::Replace(s) => next = Some(s),
+                        Word::Stop => end = Some(End::Stopped),
+                        Word::Lost => end = Some(End::ConnectionLost),
+                    }
+                    ControlFlow::Break(())
+                });
+                if let Some(e) = failure {
+                    return Err(e);
+                }
+                if end.is_some() || next.is_some() {
+                    break;
+                }
+            }
+            match next {
+                Some(s) => steps = s,
+                None if end.is_none() => {
+                    robot.report(RobotReport::Done);
+                    // The insertion is over whatever the host says now; a stop is answered.
+                    if let Word::Stop = robot.word() {
+                        robot.report(RobotReport::Stopped);
+                    }
+                    end = Some(End::Done);
+                }
+                None => {}
+            }
+        }
+        if end == Some(End::Stopped) {
+            robot.report(RobotReport::Stopped);
+        }
+        let run = finish(&world, &s.planned, seed);
+        Ok(LabRun {
+            seed,
+            end: end.unwrap_or(End::ConnectionLost),
+            pieces: robot.pieces,
+            target_error: run.target_error,
+            path_rms: run.path_rms,
+            path_max: run.path_max,
+            collided: run.collided,
+            min_clearance: run.min_clearance,
+        })
+    }
+
+    /// The error the robot adds to the depth it reports for piece `k`.
+    fn misreport(&self, k: u32) -> f32 {
+        match self.config.robot_misreport_after {
+            Some(n) if k > n => 5.0,
+            _ => 0.0,
+        }
+    }
+
+    /// How the pose of piece `k` is flagged invalid, if it is.
+    fn flag(&self, k: u32) -> Option<Flag> {
+        let every = self.config.invalid_every.filter(|&n| n > 0)?;
+        k.is_multiple_of(every).then(|| {
+            if (k / every) % 2 == 1 {
+                Flag::Metadata
+            } else {
+                Flag::Status
+            }
+        })
+    }
+
+    /// Waits out the rate and the latency before a piece's pose goes out.
+    fn pace(&self, last_piece: &mut Instant) {
+        if self.config.rate_hz > 0.0 {
+            let period = Duration::from_secs_f64(1.0 / self.config.rate_hz);
+            let due = *last_piece + period;
+            if let Some(wait) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(wait);
+            }
+        }
+        *last_piece = Instant::now();
+        std::thread::sleep(Duration::from_millis(self.config.latency_ms));
+    }
+}

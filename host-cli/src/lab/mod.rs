@@ -1,0 +1,12 @@
+//! The lab link: `needle steer` steering an insertion from an OpenIGTLink tracker stream and
+//! commanding a robot, and what the simulated lab (`hil-sim --lab`) shares with it.
+
+pub mod log;
+pub mod progress;
+pub mod robot;
+pub mod session;
+pub mod slicer;
+pub mod steer;
+pub mod wire;
+
+pub use steer::{run_steer, SteerArgs};

@@ -1,0 +1,106 @@
+//! Shared helpers of the `lab_*` tests: the simulated lab (`hil-sim --lab`) as a process, and
+//! `needle steer` against it.
+#![allow(dead_code)]
+
+#[path = "../wire_support/mod.rs"]
+pub mod wire_support;
+
+use needle_e2e::needle;
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, ChildStdout, Command, Output, Stdio};
+
+/// A running `hil-sim --lab`; killed (by its own handle) when dropped.
+pub struct Lab {
+    child: Child,
+    /// The tracker's address.
+    pub tracker: String,
+    /// The robot's address.
+    pub robot: String,
+    runs: BufReader<ChildStdout>,
+}
+
+impl Lab {
+    /// Starts the lab of `file` on free ports, first insertion in the world of `seed`.
+    pub fn start(file: &str, seed: u64, extra: &[&str]) -> Lab {
+        let seed = seed.to_string();
+        let mut child = Command::new(wire_support::hil_sim_bin())
+            .args(["--lab", file, "--tracker-port", "0", "--robot-port", "0"])
+            .args(["--seed", &seed])
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start hil-sim --lab");
+        let mut runs = BufReader::new(child.stdout.take().expect("stdout"));
+        let mut line = String::new();
+        runs.read_line(&mut line).expect("hil-sim prints its ports");
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(words.len(), 4, "`tracker ADDRESS robot ADDRESS`: {line}");
+        assert_eq!((words[0], words[2]), ("tracker", "robot"), "{line}");
+        Lab {
+            tracker: words[1].to_string(),
+            robot: words[3].to_string(),
+            child,
+            runs,
+        }
+    }
+
+    /// The true figures of the next insertion served (waits for its end).
+    pub fn next_run(&mut self) -> Value {
+        let mut line = String::new();
+        self.runs.read_line(&mut line).expect("read a run");
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
+    }
+
+    /// A `needle steer` command against this lab, with `args` after the scenario.
+    pub fn steer_command(&self, file: &str, args: &[&str]) -> Command {
+        let mut c = needle();
+        c.args([
+            "steer",
+            file,
+            "--tracker",
+            &self.tracker,
+            "--robot",
+            &self.robot,
+        ])
+        .args(args);
+        c
+    }
+
+    /// Runs `needle steer FILE --json ARGS` against this lab and returns its JSON.
+    pub fn steer(&self, file: &str, args: &[&str]) -> Value {
+        let out: Output = self
+            .steer_command(file, args)
+            .arg("--json")
+            .output()
+            .expect("run needle steer");
+        assert!(
+            out.status.success(),
+            "needle steer {args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("needle steer prints JSON")
+    }
+}
+
+impl Drop for Lab {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The lines of an insertion log.
+pub fn log_lines(path: &std::path::Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .expect("read the insertion log")
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+/// A fresh path in the temporary directory.
+pub fn temp_path(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("needle-lab-{}-{name}", std::process::id()))
+}
