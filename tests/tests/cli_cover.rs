@@ -226,3 +226,92 @@ fn bad_files_and_selections_are_clear_errors() {
     assert!(err.contains("not a label map this reads"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// examples/anatomy.toml: the label map's segments become obstacles, the plan keeps clear of
+/// every sphere `needle cover` makes of them, and the closed loop reaches the target without a
+/// hit (simulated).
+#[test]
+fn a_scenario_with_anatomy_plans_and_steers() {
+    let file = example("anatomy");
+    let plan = needle_json(&["plan", file.to_str().unwrap(), "--json"]);
+    assert!(plan["best"]["form"].is_string(), "{plan}");
+    let map = example("anatomy").with_file_name("anatomy.seg.nrrd");
+    let cover = needle_json(&["cover", map.to_str().unwrap(), "--margin", "1", "--json"]);
+    let points = plan["best"]["points"].as_array().unwrap();
+    for (_, centre, radius) in spheres(&cover) {
+        for p in points {
+            let p: Vec<f64> = p
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            let d = ((p[0] - centre[0]).powi(2)
+                + (p[1] - centre[1]).powi(2)
+                + (p[2] - centre[2]).powi(2))
+            .sqrt();
+            assert!(d > radius - 1e-3, "the plan enters a sphere at {p:?}");
+        }
+    }
+    let sim = needle_json(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--runs",
+        "20",
+        "--closed-loop",
+        "--json",
+    ]);
+    let s = &sim["summary"];
+    assert_eq!(s["collisions"], 0, "{s}");
+    let stops: u64 = s["stops"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert_eq!(stops, 0, "{s}");
+}
+
+/// `[[anatomy]]` entries that cannot work: a missing file, a target inside a cover, a plane
+/// scenario; each an error naming the entry and the problem.
+#[test]
+fn bad_anatomy_entries_are_clear_errors() {
+    let dir = scratch("entries");
+    let map = example("anatomy").with_file_name("anatomy.seg.nrrd");
+    let write = |name: &str, target: &str, extra: &str, file: &str| {
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [8, 32.6, 0]\n\
+                 direction = [0, 0, 1]\n[target]\nposition = {target}\n{extra}\n\
+                 [[anatomy]]\nfile = {file:?}\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let map_path = map.to_str().unwrap();
+    let missing = write("missing.toml", "[8, 32.6, 90]", "", "nowhere.nii.gz");
+    let err = error_of(&["plan", missing.to_str().unwrap()]);
+    assert!(
+        err.contains("anatomy[0]") && err.contains("nowhere.nii.gz"),
+        "{err}"
+    );
+    // The lesion's centre, inside its own cover.
+    let inside = write("inside.toml", "[-4, 30.8, 45]", "", map_path);
+    let err = error_of(&["plan", inside.to_str().unwrap()]);
+    assert!(
+        err.contains("the target lies inside the cover of segment \"lesion\""),
+        "{err}"
+    );
+    let plane = write(
+        "plane.toml",
+        "[8, 32.6, 90]",
+        "[planner]\nplane = \"yz\"",
+        map_path,
+    );
+    let err = error_of(&["plan", plane.to_str().unwrap()]);
+    assert!(err.contains("anatomy is 3-D"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,6 @@
 //! `needle cover`: a label map's segments as spheres a scenario can hold.
 
-use super::cover::{cover_segment, CoverOptions, SegmentCover};
+use super::cover::{cover_segment, CoverOptions, SegmentCover, DEFAULT_TIGHTNESS};
 use super::label_map::{LabelMap, Segment};
 use anyhow::{anyhow, bail, Context, Result};
 use planner_core::MAX_OBSTACLES;
@@ -27,7 +27,7 @@ pub struct CoverArgs {
     pub max_spheres: usize,
     /// Split a sphere while it holds more than this many times its voxels' volume (and a split
     /// makes the cover smaller). A cube in its sphere is 2.7 times.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = DEFAULT_TIGHTNESS)]
     pub tightness: f64,
     /// Print one JSON object instead of the table.
     #[arg(long)]
@@ -51,10 +51,11 @@ struct CoverReport<'a> {
     spheres: usize,
 }
 
-/// The segments `a` selects in `map`.
-fn selected(map: &LabelMap, a: &CoverArgs) -> Result<Vec<Segment>> {
+/// The segments of `map` that `labels` or `segments` (names) select; every segment present when
+/// both are empty.
+pub fn selected(map: &LabelMap, labels: &[i64], segments: &[String]) -> Result<Vec<Segment>> {
     let present = map.segments();
-    let labels = || {
+    let label_list = || {
         present
             .iter()
             .map(|s| s.label.to_string())
@@ -64,9 +65,8 @@ fn selected(map: &LabelMap, a: &CoverArgs) -> Result<Vec<Segment>> {
     if present.is_empty() {
         bail!("the map has no labelled voxels (every voxel is 0)");
     }
-    if !a.labels.is_empty() {
-        return a
-            .labels
+    if !labels.is_empty() {
+        return labels
             .iter()
             .map(|&l| {
                 present
@@ -74,12 +74,12 @@ fn selected(map: &LabelMap, a: &CoverArgs) -> Result<Vec<Segment>> {
                     .find(|s| s.label == l)
                     .cloned()
                     .ok_or_else(|| {
-                        anyhow!("label {l} is not in the map (its labels: {})", labels())
+                        anyhow!("label {l} is not in the map (its labels: {})", label_list())
                     })
             })
             .collect();
     }
-    if !a.segments.is_empty() {
+    if !segments.is_empty() {
         if map.named.is_empty() {
             bail!("the map names no segments (only a .seg.nrrd does): select by --labels");
         }
@@ -90,8 +90,7 @@ fn selected(map: &LabelMap, a: &CoverArgs) -> Result<Vec<Segment>> {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        return a
-            .segments
+        return segments
             .iter()
             .map(|n| {
                 present
@@ -116,7 +115,7 @@ pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
         max_spheres: a.max_spheres.max(1),
         tightness: a.tightness,
     };
-    selected(&map, a)
+    selected(&map, &a.labels, &a.segments)
         .map_err(at)?
         .iter()
         .map(|s| cover_segment(&map, s, &options).map_err(at))

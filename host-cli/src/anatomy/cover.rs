@@ -13,6 +13,9 @@ use super::label_map::{LabelMap, Segment};
 use anyhow::{bail, Result};
 use serde::Serialize;
 
+/// The tightness a cover keeps when none is given: a cube in its sphere is 2.7 times its volume.
+pub const DEFAULT_TIGHTNESS: f64 = 3.0;
+
 /// A sphere of a cover (RAS, mm).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Sphere {

@@ -21,6 +21,9 @@ pub struct ScenarioFile {
     /// Obstacles.
     #[serde(default)]
     pub obstacles: Vec<ObstacleFile>,
+    /// Obstacles from label maps: each entry's segments covered by spheres (docs/anatomy.md).
+    #[serde(default)]
+    pub anatomy: Vec<AnatomyFile>,
     /// Weights (defaults 1, 1, 1000, 2).
     pub weights: Option<WeightsFile>,
     /// Planner options.
@@ -95,6 +98,24 @@ pub struct ObstacleFile {
     pub polygon_file: Option<PathBuf>,
     /// `"circumscribed"`, `"segmented"` (default) or `"bordered"`.
     pub approx: Option<String>,
+}
+
+/// `[[anatomy]]`: a label map whose segments become spheres (as `needle cover` makes them).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AnatomyFile {
+    /// The label map (`.nrrd`, `.seg.nrrd`, `.nii`, `.nii.gz`), relative to the scenario's folder.
+    pub file: PathBuf,
+    /// Cover these label values only (default: every label but 0).
+    pub labels: Option<Vec<i64>>,
+    /// Cover these segments only, by name (a `.seg.nrrd`).
+    pub segments: Option<Vec<String>>,
+    /// Grow every sphere by this much (mm), default 0.
+    pub margin_mm: Option<f64>,
+    /// The most spheres one segment may take (default: the planner's capacity).
+    pub max_spheres: Option<usize>,
+    /// The cover's tightness (default 3, as `needle cover --tightness`).
+    pub tightness: Option<f64>,
 }
 
 /// `[weights]`

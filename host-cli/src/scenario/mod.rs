@@ -4,6 +4,7 @@
 //! Everything that reads a scenario (`plan`, `send`, the analysis commands) depends on this
 //! module; it depends on none of them.
 
+pub mod anatomy;
 pub mod approx;
 pub mod build;
 mod exact;

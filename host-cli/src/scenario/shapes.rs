@@ -7,10 +7,11 @@ use super::polygon::Polygon;
 use anyhow::{bail, Context, Result};
 use planner_core::model::scenario::Obstacle;
 
-/// One `[[obstacles]]` entry as the planner sees it: its circles, and the polygon they replace.
+/// One `[[obstacles]]` or `[[anatomy]]` entry as the planner sees it: its circles, and the
+/// polygon they replace.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObstacleShape {
-    /// Index in the file's `[[obstacles]]` list.
+    /// Index in the file's `[[obstacles]]` list; `[[anatomy]]` entries count on after them.
     pub index: usize,
     /// The polygon and its covering circles, for polygon obstacles.
     pub polygon: Option<(Polygon, Approximation)>,
@@ -36,6 +37,7 @@ impl ScenarioFile {
                 .with_context(|| format!("in obstacles[{index}]"))?;
             shapes.push(shape);
         }
+        shapes.extend(self.anatomy_shapes(plane)?);
         Ok(shapes)
     }
 

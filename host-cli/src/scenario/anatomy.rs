@@ -1,0 +1,81 @@
+//! `[[anatomy]]` entries of a scenario file: each label map's segments covered by spheres
+//! (`needle cover`'s cover), added to the obstacles.
+
+use super::file::{AnatomyFile, ScenarioFile};
+use super::shapes::ObstacleShape;
+use crate::anatomy::command::selected;
+use crate::anatomy::cover::{cover_segment, CoverOptions, DEFAULT_TIGHTNESS};
+use crate::anatomy::label_map::LabelMap;
+use anyhow::{anyhow, bail, Result};
+use planner_core::model::scenario::Obstacle;
+use planner_core::MAX_OBSTACLES;
+
+impl ScenarioFile {
+    /// The spheres of every `[[anatomy]]` entry, one shape per entry; their indices follow the
+    /// `[[obstacles]]`' ones.
+    pub fn anatomy_shapes(&self, plane: bool) -> Result<Vec<ObstacleShape>> {
+        if plane && !self.anatomy.is_empty() {
+            bail!("anatomy is 3-D: leave planner.plane out");
+        }
+        self.anatomy
+            .iter()
+            .enumerate()
+            .map(|(n, a)| {
+                let circles = self
+                    .anatomy_spheres(a)
+                    .map_err(|e| anyhow!("in anatomy[{n}]: {e:#}"))?;
+                Ok(ObstacleShape {
+                    index: self.obstacles.len() + n,
+                    polygon: None,
+                    circles,
+                })
+            })
+            .collect()
+    }
+
+    fn anatomy_spheres(&self, a: &AnatomyFile) -> Result<Vec<Obstacle>> {
+        let path = match &self.base_dir {
+            Some(dir) if a.file.is_relative() => dir.join(&a.file),
+            _ => a.file.clone(),
+        };
+        let map = LabelMap::read(&path)?;
+        let options = CoverOptions {
+            margin_mm: a.margin_mm.unwrap_or(0.0),
+            max_spheres: a.max_spheres.unwrap_or(MAX_OBSTACLES).max(1),
+            tightness: a.tightness.unwrap_or(DEFAULT_TIGHTNESS),
+        };
+        let labels = a.labels.clone().unwrap_or_default();
+        let names = a.segments.clone().unwrap_or_default();
+        let at = |e: anyhow::Error| anyhow!("{}: {e:#}", path.display());
+        let mut out = Vec::new();
+        for segment in selected(&map, &labels, &names).map_err(at)? {
+            let cover = cover_segment(&map, &segment, &options).map_err(at)?;
+            for s in cover.spheres {
+                let inside = |p: [f32; 3]| {
+                    let d: f64 = (0..3)
+                        .map(|k| (f64::from(p[k]) - s.center[k]).powi(2))
+                        .sum();
+                    d.sqrt() <= s.radius
+                };
+                for (what, p) in [
+                    ("entry", self.entry.position),
+                    ("target", self.target.position),
+                ] {
+                    if inside(p) {
+                        bail!(
+                            "the {what} lies inside the cover of segment {:?} of {}: select the \
+                             structures to avoid (labels, segments), not the one that holds the {what}",
+                            segment.name,
+                            path.display()
+                        );
+                    }
+                }
+                out.push(Obstacle {
+                    center: s.center.map(|v| v as f32),
+                    radius: s.radius as f32,
+                });
+            }
+        }
+        Ok(out)
+    }
+}
