@@ -33,6 +33,24 @@ pub struct LinkArgs {
 }
 
 impl LinkArgs {
+    /// The link of a command whose device is optional (`--tcp` or `--port`, else in-process):
+    /// the client's default retries and a 120 s deadline.
+    pub fn optional(
+        port: &Option<String>,
+        baud: u32,
+        tcp: &Option<String>,
+        timeout: f64,
+    ) -> Option<LinkArgs> {
+        (tcp.is_some() || port.is_some()).then(|| LinkArgs {
+            port: port.clone(),
+            baud,
+            tcp: tcp.clone(),
+            timeout,
+            retries: ClientConfig::DEFAULT.retries,
+            deadline: 120.0,
+        })
+    }
+
     /// Where the device is.
     pub fn target(&self) -> LinkTarget {
         match (&self.tcp, &self.port) {

@@ -68,14 +68,7 @@ pub struct SimulateArgs {
 impl SimulateArgs {
     /// The device to steer on (`--tcp` or `--port`), if any.
     pub fn link(&self) -> Option<LinkArgs> {
-        (self.tcp.is_some() || self.port.is_some()).then(|| LinkArgs {
-            port: self.port.clone(),
-            baud: self.baud,
-            tcp: self.tcp.clone(),
-            timeout: self.timeout,
-            retries: needle_link::ClientConfig::DEFAULT.retries,
-            deadline: 120.0,
-        })
+        LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)
     }
 }
 
