@@ -52,6 +52,10 @@ struct PlanArgs {
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
     #[arg(long, ignore_case = true)]
     approx: Option<needle_cli::scenario::approx::Method>,
+    /// Also write files 3D Slicer opens into DIR: the path as a markups curve, the entry and
+    /// target as markups points (RAS), the obstacles as a model (docs/anatomy.md).
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -216,6 +220,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
     if let Some(out) = &args.plot {
         analysis::write_plan_plot(&args.file, args.approx, &scenario, report, out)?;
     }
+    if let Some(dir) = &args.export {
+        needle_cli::report::slicer::export(dir, &scenario, report)?;
+    }
     made.verdict()
 }
 
@@ -238,6 +245,9 @@ fn send(args: &SendArgs) -> Result<()> {
         Some(schedule),
         stats,
     )?;
+    if let Some(dir) = &args.plan.export {
+        needle_cli::report::slicer::export(dir, &scenario, &planned.report)?;
+    }
     Ok(())
 }
 

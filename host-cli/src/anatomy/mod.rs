@@ -9,6 +9,7 @@
 pub mod command;
 pub mod cover;
 pub mod label_map;
+pub mod markups;
 pub mod nifti_file;
 pub mod nrrd;
 

@@ -9,6 +9,7 @@ pub mod execution;
 pub mod json;
 pub mod local;
 pub mod schedule;
+pub mod slicer;
 pub mod sweep;
 pub mod table;
 

@@ -34,10 +34,7 @@ impl ScenarioFile {
     }
 
     fn anatomy_spheres(&self, a: &AnatomyFile) -> Result<Vec<Obstacle>> {
-        let path = match &self.base_dir {
-            Some(dir) if a.file.is_relative() => dir.join(&a.file),
-            _ => a.file.clone(),
-        };
+        let path = self.relative(&a.file);
         let map = LabelMap::read(&path)?;
         let options = CoverOptions {
             margin_mm: a.margin_mm.unwrap_or(0.0),
@@ -47,6 +44,7 @@ impl ScenarioFile {
         let labels = a.labels.clone().unwrap_or_default();
         let names = a.segments.clone().unwrap_or_default();
         let at = |e: anyhow::Error| anyhow!("{}: {e:#}", path.display());
+        let (entry, target) = (self.entry_position()?, self.target_position()?);
         let mut out = Vec::new();
         for segment in selected(&map, &labels, &names).map_err(at)? {
             let cover = cover_segment(&map, &segment, &options).map_err(at)?;
@@ -57,10 +55,7 @@ impl ScenarioFile {
                         .sum();
                     d.sqrt() <= s.radius
                 };
-                for (what, p) in [
-                    ("entry", self.entry.position),
-                    ("target", self.target.position),
-                ] {
+                for (what, p) in [("entry", entry), ("target", target)] {
                     if inside(p) {
                         bail!(
                             "the {what} lies inside the cover of segment {:?} of {}: select the \

@@ -103,12 +103,12 @@ impl ScenarioFile {
                 length: self.needle.length.unwrap_or(DEFAULT_NEEDLE_LENGTH_MM),
             },
             entry: Entry {
-                position: self.entry.position,
+                position: self.entry_position()?,
                 direction: self.entry.direction,
                 max_tilt_deg: self.entry.max_tilt_deg.unwrap_or(DEFAULT_MAX_TILT_DEG),
             },
             target: Target {
-                position: self.target.position,
+                position: self.target_position()?,
                 tolerance: self.target.tolerance.unwrap_or(DEFAULT_TOLERANCE),
             },
             obstacles,

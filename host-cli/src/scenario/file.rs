@@ -59,9 +59,14 @@ pub struct NeedleFile {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EntryFile {
-    /// Entry point (mm).
-    #[serde(deserialize_with = "super::exact::array")]
-    pub position: [f32; 3],
+    /// Entry point (mm); or `markups`.
+    #[serde(default, deserialize_with = "super::exact::optional_array")]
+    pub position: Option<[f32; 3]>,
+    /// A 3D Slicer markups file (`.mrk.json`) holding the entry point, relative to the
+    /// scenario's folder.
+    pub markups: Option<PathBuf>,
+    /// The label of the markups' control point to take (default: the first).
+    pub point: Option<String>,
     /// Nominal insertion axis.
     #[serde(deserialize_with = "super::exact::array")]
     pub direction: [f32; 3],
@@ -73,9 +78,14 @@ pub struct EntryFile {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TargetFile {
-    /// Target point (mm).
-    #[serde(deserialize_with = "super::exact::array")]
-    pub position: [f32; 3],
+    /// Target point (mm); or `markups`.
+    #[serde(default, deserialize_with = "super::exact::optional_array")]
+    pub position: Option<[f32; 3]>,
+    /// A 3D Slicer markups file (`.mrk.json`) holding the target, relative to the scenario's
+    /// folder.
+    pub markups: Option<PathBuf>,
+    /// The label of the markups' control point to take (default: the first).
+    pub point: Option<String>,
     /// Allowed end-point error (mm), default 0.1.
     pub tolerance: Option<f32>,
 }

@@ -12,6 +12,7 @@ pub mod execution;
 pub mod file;
 pub mod geometry;
 pub mod planted;
+mod points;
 pub mod polygon;
 pub mod shapes;
 pub mod steering;

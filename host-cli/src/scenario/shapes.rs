@@ -29,7 +29,7 @@ impl ScenarioFile {
             .as_ref()
             .and_then(|p| p.plane.as_deref())
             .is_some_and(|s| s.eq_ignore_ascii_case("yz"));
-        let x = self.entry.position[0];
+        let x = self.entry_position()?[0];
         let mut shapes = Vec::with_capacity(self.obstacles.len());
         for (index, o) in self.obstacles.iter().enumerate() {
             let shape = self
@@ -105,8 +105,8 @@ impl ScenarioFile {
             }
             Ok(())
         };
-        inside_msg("entry point", self.entry.position)?;
-        inside_msg("target", self.target.position)?;
+        inside_msg("entry point", self.entry_position()?)?;
+        inside_msg("target", self.target_position()?)?;
         let circles = approximation
             .circles
             .iter()
