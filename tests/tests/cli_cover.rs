@@ -315,3 +315,45 @@ fn bad_anatomy_entries_are_clear_errors() {
     assert!(err.contains("anatomy is 3-D"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `[target] label = 1` aims at the lesion's deepest point (the ball's centre), the rib of the
+/// same map covered as an obstacle; a label no map holds is an error.
+#[test]
+fn a_target_given_as_a_label_is_its_deepest_point() {
+    let dir = scratch("label");
+    let map = example("anatomy").with_file_name("anatomy.seg.nrrd");
+    let write = |label: i64| {
+        let path = dir.join(format!("label-{label}.toml"));
+        std::fs::write(
+            &path,
+            format!(
+                "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 20, -30]\n\
+                 direction = [0, 0, 1]\n[target]\nlabel = {label}\n\
+                 [[anatomy]]\nfile = {:?}\nsegments = [\"rib\"]\nmargin_mm = 1.0\n",
+                map.to_str().unwrap()
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let plan = needle_json(&["plan", write(1).to_str().unwrap(), "--json"]);
+    let points = plan["best"]["points"].as_array().unwrap();
+    let end: Vec<f64> = points[points.len() - 1]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let centre = [-4.0, 30.8, 45.0];
+    let miss = ((end[0] - centre[0]).powi(2)
+        + (end[1] - centre[1]).powi(2)
+        + (end[2] - centre[2]).powi(2))
+    .sqrt();
+    assert!(miss <= 0.1 + 1e-4, "{end:?}");
+    let err = error_of(&["plan", write(7).to_str().unwrap()]);
+    assert!(
+        err.contains("label 7 is in none of") && err.contains("anatomy.seg.nrrd"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -8,6 +8,7 @@
 
 pub mod command;
 pub mod cover;
+pub mod interior;
 pub mod label_map;
 pub mod markups;
 pub mod nifti_file;

@@ -170,3 +170,56 @@ fn an_empty_segment_and_a_singular_affine_are_errors() {
     let err = flat.validated().unwrap_err().to_string();
     assert!(err.contains("singular"), "{err}");
 }
+
+/// The deepest point of a ball is its centre, at its radius from the outside; of a box on
+/// anisotropic voxels, its middle, at half its thinnest side (to the nearest outside voxel
+/// centre); both checked against a brute-force search.
+#[test]
+fn the_deepest_point_is_the_farthest_from_the_outside() {
+    use super::interior::deepest_point;
+    let ball = map_of(
+        [21, 21, 21],
+        scaled([1.0; 3], [5.0, -2.0, 7.0]),
+        |i, j, k| {
+            let d = [i, j, k].map(|x| x as f64 - 10.0);
+            i64::from((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= 7.5)
+        },
+    );
+    let (p, depth) = deepest_point(&ball, 1).unwrap();
+    assert_eq!(p, [15.0, 8.0, 17.0]);
+    let brute = |map: &LabelMap, label: i64| {
+        let voxels = map.voxels_of(label);
+        let [ni, nj, nk] = map.dims.map(|d| d as i64);
+        let mut outside = Vec::new();
+        for k in -1..=nk {
+            for j in -1..=nj {
+                for i in -1..=ni {
+                    if map.at(i, j, k) != label {
+                        outside.push(map.world([i, j, k].map(|x| x as f64)));
+                    }
+                }
+            }
+        }
+        voxels
+            .iter()
+            .map(|v| {
+                let p = map.world(v.map(|x| x as f64));
+                outside
+                    .iter()
+                    .map(|q| {
+                        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2))
+                            .sqrt()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0f64, f64::max)
+    };
+    assert!((depth - brute(&ball, 1)).abs() < 1e-9, "{depth}");
+    let boxy = map_of([20, 14, 9], scaled([0.5, 0.8, 2.0], [0.0; 3]), |i, j, k| {
+        i64::from((2..18).contains(&i) && (2..12).contains(&j) && (1..8).contains(&k))
+    });
+    let (_, depth) = deepest_point(&boxy, 1).unwrap();
+    assert!((depth - brute(&boxy, 1)).abs() < 1e-9, "{depth}");
+    assert!((depth - 4.0).abs() < 1e-9, "{depth}");
+    assert!(deepest_point(&boxy, 3).is_err());
+}

@@ -86,6 +86,10 @@ pub struct TargetFile {
     pub markups: Option<PathBuf>,
     /// The label of the markups' control point to take (default: the first).
     pub point: Option<String>,
+    /// Or a segment of a label map: the target is its deepest point (farthest from its outside).
+    pub label: Option<i64>,
+    /// The label map holding `label` (default: the first `[[anatomy]]` file that holds it).
+    pub label_file: Option<PathBuf>,
     /// Allowed end-point error (mm), default 0.1.
     pub tolerance: Option<f32>,
 }

@@ -1,6 +1,8 @@
 //! Where a scenario's entry and target are: given in the file, or read from 3D Slicer markups.
 
 use super::file::ScenarioFile;
+use crate::anatomy::interior::deepest_point;
+use crate::anatomy::label_map::LabelMap;
 use crate::anatomy::markups::read_point;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -17,15 +19,50 @@ impl ScenarioFile {
         )
     }
 
-    /// The target (RAS mm): `target.position`, or the point of `target.markups`.
+    /// The target (RAS mm): `target.position`, the point of `target.markups`, or the deepest
+    /// point of segment `target.label`.
     pub fn target_position(&self) -> Result<[f32; 3]> {
         let t = &self.target;
+        if let Some(label) = t.label {
+            if t.position.is_some() || t.markups.is_some() {
+                bail!("give one of target.position, target.markups and target.label");
+            }
+            return self.deepest_of(label).context("in target.label");
+        }
+        if t.label_file.is_some() {
+            bail!("target.label_file names the map of target.label: give target.label too");
+        }
         self.point(
             "target",
             t.position,
             t.markups.as_deref(),
             t.point.as_deref(),
         )
+    }
+
+    /// The deepest point of segment `label`, in `target.label_file` or the first `[[anatomy]]`
+    /// map that holds it.
+    fn deepest_of(&self, label: i64) -> Result<[f32; 3]> {
+        let files: Vec<PathBuf> = match &self.target.label_file {
+            Some(f) => vec![self.relative(f)],
+            None => self
+                .anatomy
+                .iter()
+                .map(|a| self.relative(&a.file))
+                .collect(),
+        };
+        if files.is_empty() {
+            bail!("label {label}: no label map (give target.label_file or an [[anatomy]] entry)");
+        }
+        for path in &files {
+            let map = LabelMap::read(path)?;
+            if map.labels.contains(&label) {
+                let (p, _) = deepest_point(&map, label)?;
+                return Ok(p.map(|v| v as f32));
+            }
+        }
+        let names: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
+        bail!("label {label} is in none of {}", names.join(", "))
     }
 
     fn point(
