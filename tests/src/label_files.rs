@@ -139,3 +139,34 @@ pub fn write_nifti(path: &Path, m: &Labels) {
     h.extend(m.labels.iter().flat_map(|l| l.to_le_bytes()));
     std::fs::write(path, h).unwrap();
 }
+
+/// Writes a binary STL of the box `lo`–`hi` (12 triangles, outward), `header` in its 80-byte
+/// header (3D Slicer writes `SPACE=RAS` or `SPACE=LPS` there); `drop_face` leaves one side open.
+pub fn write_stl_box(path: &Path, lo: [f32; 3], hi: [f32; 3], header: &str, drop_face: bool) {
+    let c = |i: usize| [0, 1, 2].map(|k| if i >> k & 1 == 1 { hi[k] } else { lo[k] });
+    // Two triangles per side, each side's corners in order around it.
+    let sides: [[usize; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut tris = Vec::new();
+    for s in sides.iter().skip(usize::from(drop_face)) {
+        tris.push([c(s[0]), c(s[1]), c(s[2])]);
+        tris.push([c(s[0]), c(s[2]), c(s[3])]);
+    }
+    let mut bytes = vec![0u8; 80];
+    bytes[..header.len()].copy_from_slice(header.as_bytes());
+    bytes.extend((tris.len() as u32).to_le_bytes());
+    for t in &tris {
+        bytes.extend([0f32; 3].iter().flat_map(|x| x.to_le_bytes()));
+        for v in t {
+            bytes.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+        }
+        bytes.extend([0u8; 2]);
+    }
+    std::fs::write(path, bytes).unwrap();
+}

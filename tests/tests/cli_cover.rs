@@ -223,7 +223,7 @@ fn bad_files_and_selections_are_clear_errors() {
     let err = error_of(&["cover", dir.join("missing.nii.gz").to_str().unwrap()]);
     assert!(err.contains("missing.nii.gz"), "{err}");
     let err = error_of(&["cover", dir.join("scan.png").to_str().unwrap()]);
-    assert!(err.contains("not a label map this reads"), "{err}");
+    assert!(err.contains("not a label map or mesh this reads"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -353,6 +353,57 @@ fn a_target_given_as_a_label_is_its_deepest_point() {
     let err = error_of(&["plan", write(7).to_str().unwrap()]);
     assert!(
         err.contains("label 7 is in none of") && err.contains("anatomy.seg.nrrd"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A closed box mesh (STL) is covered as the solid it bounds: every corner and a grid of points
+/// inside it lie in the cover, in RAS whether the file says RAS or (by default) LPS; an open mesh
+/// is an error.
+#[test]
+fn a_closed_mesh_is_covered_as_its_solid() {
+    use needle_e2e::label_files::write_stl_box;
+    let dir = scratch("mesh");
+    let (lo, hi) = ([10.0f32, -4.0, 30.0], [16.0f32, 5.0, 41.0]);
+    let ras = dir.join("box-ras.stl");
+    let lps = dir.join("box-lps.stl");
+    write_stl_box(&ras, lo, hi, "needle-planner test SPACE=RAS", false);
+    // The same box as Slicer would save it in LPS (x and y negated).
+    write_stl_box(
+        &lps,
+        [-hi[0], -hi[1], lo[2]],
+        [-lo[0], -lo[1], hi[2]],
+        "binary STL",
+        false,
+    );
+    for file in [&ras, &lps] {
+        let v = needle_json(&["cover", file.to_str().unwrap(), "--voxel", "0.5", "--json"]);
+        let s = spheres(&v);
+        assert!(!s.is_empty());
+        let inside = |p: [f64; 3]| {
+            s.iter().any(|(_, c, r)| {
+                ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt()
+                    <= r + 1e-9
+            })
+        };
+        for a in 0..=6 {
+            for b in 0..=6 {
+                for c in 0..=6 {
+                    let f = |k: usize, n: i32| {
+                        f64::from(lo[k]) + f64::from(hi[k] - lo[k]) * f64::from(n) / 6.0
+                    };
+                    let p = [f(0, a), f(1, b), f(2, c)];
+                    assert!(inside(p), "{}: {p:?} outside the cover", file.display());
+                }
+            }
+        }
+    }
+    let open = dir.join("open.stl");
+    write_stl_box(&open, lo, hi, "SPACE=RAS", true);
+    let err = error_of(&["cover", open.to_str().unwrap()]);
+    assert!(
+        err.contains("open.stl") && err.contains("not closed"),
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);

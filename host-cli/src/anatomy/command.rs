@@ -2,6 +2,7 @@
 
 use super::cover::{cover_segment, CoverOptions, SegmentCover, DEFAULT_TIGHTNESS};
 use super::label_map::{LabelMap, Segment};
+use super::mesh::DEFAULT_VOXEL_MM;
 use anyhow::{anyhow, bail, Context, Result};
 use planner_core::MAX_OBSTACLES;
 use serde::Serialize;
@@ -11,8 +12,12 @@ use std::path::{Path, PathBuf};
 /// `needle cover`
 #[derive(clap::Args, Clone, Debug)]
 pub struct CoverArgs {
-    /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`.
+    /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`; or a
+    /// closed surface mesh (`.stl`), covered as the solid it bounds.
     pub image: PathBuf,
+    /// The voxel edge a mesh is voxelised at (mm).
+    #[arg(long, default_value_t = DEFAULT_VOXEL_MM)]
+    pub voxel: f64,
     /// Cover these label values only (comma-separated; default: every label but 0).
     #[arg(long, value_delimiter = ',', conflicts_with = "segments")]
     pub labels: Vec<i64>,
@@ -108,7 +113,7 @@ pub fn selected(map: &LabelMap, labels: &[i64], segments: &[String]) -> Result<V
 
 /// The covers `a` asks for.
 pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
-    let map = LabelMap::read(&a.image)?;
+    let map = LabelMap::read_with(&a.image, a.voxel)?;
     let at = |e: anyhow::Error| anyhow!("{}: {e}", a.image.display());
     let options = CoverOptions {
         margin_mm: a.margin,

@@ -27,16 +27,26 @@ pub struct LabelMap {
 }
 
 impl LabelMap {
-    /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`.
+    /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`; or a
+    /// closed mesh (`.stl`) as the solid it bounds, in voxels of the default size.
     pub fn read(path: &Path) -> Result<LabelMap> {
+        Self::read_with(path, super::mesh::DEFAULT_VOXEL_MM)
+    }
+
+    /// [`LabelMap::read`], a mesh voxelised at `voxel_mm`.
+    pub fn read_with(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
         let name = path.to_string_lossy().to_lowercase();
-        let map = if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+        let map = if name.ends_with(".stl") {
+            super::mesh::read(path, voxel_mm)
+                .map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?
+        } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
             super::nrrd::read(path)?
         } else if name.ends_with(".nii") || name.ends_with(".nii.gz") {
             super::nifti_file::read(path)?
         } else {
             bail!(
-                "{}: not a label map this reads (by its extension: .nrrd, .seg.nrrd, .nii, .nii.gz)",
+                "{}: not a label map or mesh this reads (by its extension: .nrrd, .seg.nrrd, .nii, \
+                 .nii.gz, .stl)",
                 path.display()
             )
         };

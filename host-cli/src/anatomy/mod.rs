@@ -11,6 +11,7 @@ pub mod cover;
 pub mod interior;
 pub mod label_map;
 pub mod markups;
+pub mod mesh;
 pub mod nifti_file;
 pub mod nrrd;
 

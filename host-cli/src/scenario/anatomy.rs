@@ -35,7 +35,8 @@ impl ScenarioFile {
 
     fn anatomy_spheres(&self, a: &AnatomyFile) -> Result<Vec<Obstacle>> {
         let path = self.relative(&a.file);
-        let map = LabelMap::read(&path)?;
+        let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
+        let map = LabelMap::read_with(&path, voxel)?;
         let options = CoverOptions {
             margin_mm: a.margin_mm.unwrap_or(0.0),
             max_spheres: a.max_spheres.unwrap_or(MAX_OBSTACLES).max(1),

@@ -130,6 +130,8 @@ pub struct AnatomyFile {
     pub max_spheres: Option<usize>,
     /// The cover's tightness (default 3, as `needle cover --tightness`).
     pub tightness: Option<f64>,
+    /// The voxel edge a mesh (`.stl`) is voxelised at (mm), default 0.5.
+    pub voxel_mm: Option<f64>,
 }
 
 /// `[weights]`

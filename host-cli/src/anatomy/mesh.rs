@@ -1,0 +1,169 @@
+//! Closed surface meshes (STL, binary or ASCII, through the `stl_io` crate) as the solid they
+//! bound, voxelised into a label map that the cover then covers.
+//!
+//! The voxelisation is conservative: a voxel is in the solid when its centre is inside (a ray
+//! along +x counts the crossings of the surface) or when the box of any triangle overlaps it.
+//! A voxel holding a point of the solid but not its centre holds a point of the surface too, so
+//! every point of the solid lies in a marked voxel, and the cover, which holds every marked
+//! voxel whole, holds the solid. Coordinates: RAS when the file says `SPACE=RAS` (3D Slicer
+//! writes that in its header), else LPS, the system Slicer assumes for a mesh that names none.
+
+use super::label_map::{LabelMap, Segment};
+use anyhow::{anyhow, bail, Context, Result};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The edge of a voxel when none is given (mm).
+pub const DEFAULT_VOXEL_MM: f64 = 0.5;
+
+/// The most voxels a mesh's grid may have.
+const MAX_VOXELS: usize = 64_000_000;
+
+/// Reads the closed mesh `path` as a label map (label 1, named after the file) of voxels
+/// `voxel_mm` across.
+pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
+    if !(voxel_mm > 0.0 && voxel_mm.is_finite()) {
+        bail!("the voxel size must be a positive number of millimetres");
+    }
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(256)]).to_string();
+    let ras = head.contains("SPACE=RAS");
+    let mesh = stl_io::read_stl(&mut std::io::Cursor::new(&bytes))
+        .map_err(|e| anyhow!("not an STL mesh this reads: {e}"))?;
+    if mesh.faces.is_empty() {
+        bail!("the mesh has no triangles");
+    }
+    let flip = if ras {
+        [1.0, 1.0, 1.0]
+    } else {
+        [-1.0, -1.0, 1.0]
+    };
+    let vertices: Vec<[f64; 3]> = mesh
+        .vertices
+        .iter()
+        .map(|v| [0, 1, 2].map(|k| flip[k] * f64::from(v.0[k])))
+        .collect();
+    if vertices.iter().flatten().any(|c| !c.is_finite()) {
+        bail!("the mesh has a vertex that is not finite");
+    }
+    let triangles: Vec<[[f64; 3]; 3]> = mesh
+        .faces
+        .iter()
+        .map(|f| f.vertices.map(|i| vertices[i]))
+        .collect();
+    closed(&mesh.faces)?;
+    voxelise(&triangles, voxel_mm, path)
+}
+
+/// Every edge bounds exactly two triangles.
+fn closed(faces: &[stl_io::IndexedTriangle]) -> Result<()> {
+    let mut edges: BTreeMap<(usize, usize), u32> = BTreeMap::new();
+    for f in faces {
+        let v = f.vertices;
+        for (a, b) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let open = edges.values().filter(|&&n| n != 2).count();
+    if open > 0 {
+        bail!(
+            "the mesh is not closed ({open} of its {} edges do not bound exactly two triangles): \
+             a cover needs the solid a closed surface bounds",
+            edges.len()
+        );
+    }
+    Ok(())
+}
+
+fn voxelise(triangles: &[[[f64; 3]; 3]], h: f64, path: &Path) -> Result<LabelMap> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in triangles.iter().flatten() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    // One voxel of room on each side; voxel centres at lo - h + i·h.
+    let origin = lo.map(|x| x - h);
+    let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 3);
+    let count = dims[0]
+        .checked_mul(dims[1])
+        .and_then(|n| n.checked_mul(dims[2]))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| {
+            anyhow!("the mesh spans more than {MAX_VOXELS} voxels of {h} mm: give a larger voxel")
+        })?;
+    let mut labels = vec![0i64; count];
+    let index = |g: [usize; 3]| g[0] + dims[0] * (g[1] + dims[1] * g[2]);
+    let cell =
+        |x: f64, k: usize| (((x - origin[k]) / h).round().max(0.0) as usize).min(dims[k] - 1);
+    // The voxels each triangle's box overlaps.
+    for t in triangles {
+        let (a, b) = (
+            [0, 1, 2].map(|k| cell(t.iter().map(|v| v[k]).fold(f64::INFINITY, f64::min), k)),
+            [0, 1, 2].map(|k| cell(t.iter().map(|v| v[k]).fold(f64::NEG_INFINITY, f64::max), k)),
+        );
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    labels[index([x, y, z])] = 1;
+                }
+            }
+        }
+    }
+    // The voxels whose centre the surface encloses, row by row along x. The ray is nudged off
+    // the grid by an irrational fraction of a voxel so it meets no edge or vertex exactly.
+    let nudge = [
+        h * 1e-6 * std::f64::consts::SQRT_2,
+        h * 1e-6 * std::f64::consts::E,
+    ];
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            let (py, pz) = (
+                origin[1] + y as f64 * h + nudge[0],
+                origin[2] + z as f64 * h + nudge[1],
+            );
+            let mut hits: Vec<f64> = triangles
+                .iter()
+                .filter_map(|t| crossing(t, py, pz))
+                .collect();
+            hits.sort_by(f64::total_cmp);
+            for pair in hits.chunks_exact(2) {
+                for x in 0..dims[0] {
+                    let px = origin[0] + x as f64 * h;
+                    if px > pair[0] && px < pair[1] {
+                        labels[index([x, y, z])] = 1;
+                    }
+                }
+            }
+        }
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| "mesh".into());
+    Ok(LabelMap {
+        dims,
+        labels,
+        ijk_to_ras: [
+            [h, 0.0, 0.0, origin[0]],
+            [0.0, h, 0.0, origin[1]],
+            [0.0, 0.0, h, origin[2]],
+        ],
+        named: vec![Segment { name, label: 1 }],
+    })
+}
+
+/// Where the line {y = py, z = pz} crosses triangle `t` (its x), if it does.
+fn crossing(t: &[[f64; 3]; 3], py: f64, pz: f64) -> Option<f64> {
+    let [a, b, c] = *t;
+    // Barycentric coordinates in the y-z projection.
+    let det = (b[1] - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (b[2] - a[2]);
+    if det == 0.0 {
+        return None;
+    }
+    let u = ((py - a[1]) * (c[2] - a[2]) - (c[1] - a[1]) * (pz - a[2])) / det;
+    let v = ((b[1] - a[1]) * (pz - a[2]) - (py - a[1]) * (b[2] - a[2])) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| a[0] + u * (b[0] - a[0]) + v * (c[0] - a[0]))
+}
