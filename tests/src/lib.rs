@@ -20,6 +20,22 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
+/// The interpreter of the venv `scripts/python-env` makes (pyigtl, nibabel, pynrrd):
+/// `$NEEDLE_PYTHON`, else `target/python-env/bin/python`. Missing, the calling test fails:
+/// skipping would pass without checking anything.
+pub fn venv_python() -> PathBuf {
+    let path = std::env::var_os("NEEDLE_PYTHON").map_or_else(
+        || workspace().join("target/python-env/bin/python"),
+        PathBuf::from,
+    );
+    assert!(
+        path.exists(),
+        "no Python of scripts/python-env at {}: run scripts/python-env",
+        path.display()
+    );
+    path
+}
+
 /// An example scenario file by name (`paper`, `space`).
 pub fn example(name: &str) -> PathBuf {
     workspace().join("examples").join(format!("{name}.toml"))

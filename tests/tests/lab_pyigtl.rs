@@ -5,27 +5,11 @@
 mod lab_support;
 
 use lab_support::{log_lines, temp_path, Lab};
-use needle_e2e::{example, workspace};
+use needle_e2e::{example, venv_python as python, workspace};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::Duration;
-
-/// The interpreter with pyigtl: `$NEEDLE_PYTHON`, else `target/python-env/bin/python`. Missing,
-/// the test fails: skipping would pass without checking anything.
-fn python() -> PathBuf {
-    let path = std::env::var_os("NEEDLE_PYTHON").map_or_else(
-        || workspace().join("target/python-env/bin/python"),
-        PathBuf::from,
-    );
-    assert!(
-        path.exists(),
-        "no Python with pyigtl at {}: run scripts/python-env",
-        path.display()
-    );
-    path
-}
 
 #[test]
 fn pyigtl_reads_the_lab_tracker_as_needle_steer_does() {

@@ -107,11 +107,16 @@ fn enclosing(map: &LabelMap, voxels: &[[i64; 3]], corners: &[[f64; 3]; 8]) -> Sp
     Sphere { center, radius }
 }
 
-/// Splits `voxels` in two at the median along the grid axis of their longest world extent;
-/// `None` when they cannot be split (one voxel, or all in one place along every axis).
 /// Grid coordinates of voxels.
 type Voxels = Vec<[i64; 3]>;
 
+/// Relative differences below this are ties: the same anatomy in a float32 affine (NIfTI's) and
+/// a float64 one (NRRD's) must give the same cover, so no decision may hang on rounding.
+const TIE: f64 = 1e-6;
+
+/// Splits `voxels` in two at the median along the grid axis of their longest world extent (the
+/// first such axis when extents tie); `None` when they cannot be split (one voxel, or all in one
+/// place along every axis).
 fn halves(map: &LabelMap, voxels: &[[i64; 3]]) -> Option<(Voxels, Voxels)> {
     let spacing = map.spacing();
     let mut axes: Vec<(f64, usize)> = (0..3)
@@ -122,7 +127,8 @@ fn halves(map: &LabelMap, voxels: &[[i64; 3]]) -> Option<(Voxels, Voxels)> {
             ((hi - lo) as f64 * spacing[k], k)
         })
         .collect();
-    axes.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let longest = axes.iter().map(|a| a.0).fold(0.0, f64::max);
+    axes.retain(|a| a.0 >= longest * (1.0 - TIE));
     let (extent, k) = axes[0];
     if extent == 0.0 {
         return None;
@@ -171,7 +177,7 @@ fn hierarchy(
         let worst = leaves
             .iter()
             .enumerate()
-            .filter(|(_, l)| !l.settled && l.looseness > o.tightness)
+            .filter(|(_, l)| !l.settled && l.looseness > o.tightness * (1.0 + TIE))
             .max_by(|a, b| {
                 let excess = |l: &Leaf| l.sphere.volume() * (1.0 - 1.0 / l.looseness);
                 excess(a.1).total_cmp(&excess(b.1))
@@ -183,7 +189,7 @@ fn hierarchy(
             continue;
         };
         let (a, b) = (leaf(map, a, &corners), leaf(map, b, &corners));
-        if a.sphere.volume() + b.sphere.volume() >= leaves[n].sphere.volume() {
+        if a.sphere.volume() + b.sphere.volume() >= leaves[n].sphere.volume() * (1.0 - TIE) {
             leaves[n].settled = true;
             continue;
         }
