@@ -13,6 +13,7 @@ command's messages. The planner and the simulator run with the GIL released.
 from __future__ import annotations
 
 import json as _json
+import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -35,6 +36,7 @@ __all__ = [
     "Simulation",
     "plan",
     "simulate",
+    "cover",
     "NeedleError",
     "ScenarioError",
     "PlanError",
@@ -233,3 +235,28 @@ def simulate(
         compare_open_loop,
     )
     return Simulation(text, per_run)
+
+
+def cover(
+    image: Union[str, "os.PathLike[str]"],
+    labels: Optional[Sequence[int]] = None,
+    segments: Optional[Sequence[str]] = None,
+    margin: float = 0.0,
+    max_spheres: int = 32,
+    tightness: float = 3.0,
+    voxel: float = 0.5,
+) -> Dict[str, Any]:
+    """Covers the segments of a label map (``.nrrd``, Slicer's ``.seg.nrrd``, ``.nii``,
+    ``.nii.gz``) or a closed mesh (``.stl``) with spheres, as ``needle cover`` does, and returns its
+    ``--json`` report: ``segments``, each with its ``spheres`` (``center``, ``radius``, RAS mm),
+    ``outside_ratio`` and ``farthest_mm``. Bad files and selections raise ``ScenarioError`` with
+    the command's message."""
+    return _native.cover(
+        str(image),
+        None if labels is None else [int(l) for l in labels],
+        None if segments is None else [str(s) for s in segments],
+        float(margin),
+        int(max_spheres),
+        float(tightness),
+        float(voxel),
+    )

@@ -2,7 +2,7 @@
 
 import os
 import pathlib
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -59,3 +59,12 @@ def simulate(
     threads: Optional[int] = None,
     compare_open_loop: bool = False,
 ) -> Tuple[str, Dict[str, Any]]: ...
+def cover(
+    image: str,
+    labels: Optional[List[int]] = None,
+    segments: Optional[List[str]] = None,
+    margin: float = 0.0,
+    max_spheres: int = 32,
+    tightness: float = 3.0,
+    voxel: float = 0.5,
+) -> Dict[str, Any]: ...

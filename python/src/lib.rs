@@ -7,6 +7,7 @@
 //! [`errors::guarded`], which turns a panic into a `NeedleError`, with the GIL released.
 
 mod convert;
+mod cover;
 mod device;
 mod errors;
 mod plan;
@@ -27,5 +28,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<device::Device>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(cover::cover, m)?)?;
     Ok(())
 }

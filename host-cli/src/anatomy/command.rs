@@ -127,6 +127,24 @@ pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
         .collect()
 }
 
+/// What `needle cover --json` prints for `covers`.
+fn report_json(a: &CoverArgs, covers: &[SegmentCover]) -> Result<serde_json::Value> {
+    let report = CoverReport {
+        file: a.image.display().to_string(),
+        frame: "RAS",
+        margin_mm: a.margin,
+        segments: covers,
+        spheres: covers.iter().map(|c| c.spheres.len()).sum(),
+    };
+    Ok(serde_json::to_value(&report)?)
+}
+
+/// The JSON report of `needle cover` for `a` (the Python package's `cover`), without writing
+/// `--out`.
+pub fn cover_json(a: &CoverArgs) -> Result<serde_json::Value> {
+    report_json(a, &covers(a)?)
+}
+
 /// Runs `needle cover`.
 pub fn run_cover(a: &CoverArgs) -> Result<()> {
     let covers = covers(a)?;
@@ -135,14 +153,7 @@ pub fn run_cover(a: &CoverArgs) -> Result<()> {
         write_obstacles(out, a, &covers, total)?;
     }
     let text = if a.json {
-        let report = CoverReport {
-            file: a.image.display().to_string(),
-            frame: "RAS",
-            margin_mm: a.margin,
-            segments: &covers,
-            spheres: total,
-        };
-        serde_json::to_string(&report)? + "\n"
+        report_json(a, &covers)?.to_string() + "\n"
     } else {
         table(a, &covers, total)
     };
