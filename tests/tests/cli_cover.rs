@@ -359,8 +359,8 @@ fn a_target_given_as_a_label_is_its_deepest_point() {
 }
 
 /// A closed box mesh (STL) is covered as the solid it bounds: every corner and a grid of points
-/// inside it lie in the cover, in RAS whether the file says RAS or (by default) LPS; an open mesh
-/// is an error.
+/// inside it lie in the cover, in RAS whether the file says RAS or (by default) LPS; the same box
+/// as an OBJ (quads, corners repeated) gives the same spheres; open meshes are errors.
 #[test]
 fn a_closed_mesh_is_covered_as_its_solid() {
     use needle_e2e::label_files::write_stl_box;
@@ -399,6 +399,57 @@ fn a_closed_mesh_is_covered_as_its_solid() {
             }
         }
     }
+    // The same box as a Wavefront OBJ of quads, each corner written twice (welded on reading).
+    let obj = dir.join("box.obj");
+    let mut text = String::from("# SPACE=RAS\n");
+    for _ in 0..2 {
+        for i in 0..8 {
+            let c = [0, 1, 2].map(|k| if i >> k & 1 == 1 { hi[k] } else { lo[k] });
+            text += &format!("v {} {} {}\n", c[0], c[1], c[2]);
+        }
+    }
+    for (n, q) in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ]
+    .iter()
+    .enumerate()
+    {
+        let shift = if n % 2 == 1 { 8 } else { 0 };
+        text += &format!(
+            "f {} {} {} {}\n",
+            q[0] + shift,
+            q[1] + shift,
+            q[2] + shift,
+            q[3] + shift
+        );
+    }
+    std::fs::write(&obj, &text).unwrap();
+    let v = needle_json(&["cover", obj.to_str().unwrap(), "--json"]);
+    let ras = spheres(&needle_json(&["cover", ras.to_str().unwrap(), "--json"]));
+    let from_obj = spheres(&v);
+    assert_eq!(from_obj.len(), ras.len());
+    for (a, b) in from_obj.iter().zip(&ras) {
+        assert!(
+            (a.2 - b.2).abs() < 1e-9 && a.1.iter().zip(&b.1).all(|(x, y)| (x - y).abs() < 1e-9)
+        );
+    }
+    let holed = dir.join("holed.obj");
+    let cut: String = text
+        .lines()
+        .filter(|l| !l.starts_with("f 1 3"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&holed, cut).unwrap();
+    let err = error_of(&["cover", holed.to_str().unwrap()]);
+    assert!(
+        err.contains("holed.obj") && err.contains("not closed"),
+        "{err}"
+    );
     let open = dir.join("open.stl");
     write_stl_box(&open, lo, hi, "SPACE=RAS", true);
     let err = error_of(&["cover", open.to_str().unwrap()]);

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Clone, Debug)]
 pub struct CoverArgs {
     /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`; or a
-    /// closed surface mesh (`.stl`), covered as the solid it bounds.
+    /// closed surface mesh (`.stl`, `.obj`), covered as the solid it bounds.
     pub image: PathBuf,
     /// The voxel edge a mesh is voxelised at (mm).
     #[arg(long, default_value_t = DEFAULT_VOXEL_MM)]

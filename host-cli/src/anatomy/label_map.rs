@@ -28,7 +28,7 @@ pub struct LabelMap {
 
 impl LabelMap {
     /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`; or a
-    /// closed mesh (`.stl`) as the solid it bounds, in voxels of the default size.
+    /// closed mesh (`.stl`, `.obj`) as the solid it bounds, in voxels of the default size.
     pub fn read(path: &Path) -> Result<LabelMap> {
         Self::read_with(path, super::mesh::DEFAULT_VOXEL_MM)
     }
@@ -36,7 +36,7 @@ impl LabelMap {
     /// [`LabelMap::read`], a mesh voxelised at `voxel_mm`.
     pub fn read_with(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
         let name = path.to_string_lossy().to_lowercase();
-        let map = if name.ends_with(".stl") {
+        let map = if name.ends_with(".stl") || name.ends_with(".obj") {
             super::mesh::read(path, voxel_mm)
                 .map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?
         } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
@@ -46,7 +46,7 @@ impl LabelMap {
         } else {
             bail!(
                 "{}: not a label map or mesh this reads (by its extension: .nrrd, .seg.nrrd, .nii, \
-                 .nii.gz, .stl)",
+                 .nii.gz, .stl, .obj)",
                 path.display()
             )
         };

@@ -1,5 +1,6 @@
-//! Closed surface meshes (STL, binary or ASCII, through the `stl_io` crate) as the solid they
-//! bound, voxelised into a label map that the cover then covers.
+//! Closed surface meshes (STL, binary or ASCII, through the `stl_io` crate; Wavefront OBJ
+//! through `tobj`) as the solid they bound, voxelised into a label map that the cover then
+//! covers.
 //!
 //! The voxelisation is conservative: a voxel is in the solid when its centre is inside (a ray
 //! along +x counts the crossings of the surface) or when the box of any triangle overlaps it.
@@ -28,9 +29,13 @@ pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(256)]).to_string();
     let ras = head.contains("SPACE=RAS");
-    let mesh = stl_io::read_stl(&mut std::io::Cursor::new(&bytes))
-        .map_err(|e| anyhow!("not an STL mesh this reads: {e}"))?;
-    if mesh.faces.is_empty() {
+    let obj = path.to_string_lossy().to_lowercase().ends_with(".obj");
+    let (points, faces) = if obj {
+        obj_mesh(path)?
+    } else {
+        stl_mesh(&bytes)?
+    };
+    if faces.is_empty() {
         bail!("the mesh has no triangles");
     }
     let flip = if ras {
@@ -38,28 +43,76 @@ pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
     } else {
         [-1.0, -1.0, 1.0]
     };
-    let vertices: Vec<[f64; 3]> = mesh
-        .vertices
+    let points: Vec<[f64; 3]> = points
         .iter()
-        .map(|v| [0, 1, 2].map(|k| flip[k] * f64::from(v.0[k])))
+        .map(|v| [0, 1, 2].map(|k| flip[k] * v[k]))
         .collect();
-    if vertices.iter().flatten().any(|c| !c.is_finite()) {
+    if points.iter().flatten().any(|c| !c.is_finite()) {
         bail!("the mesh has a vertex that is not finite");
     }
-    let triangles: Vec<[[f64; 3]; 3]> = mesh
-        .faces
+    // Vertices at the same place are one vertex (a file may repeat them).
+    let mut welded: BTreeMap<[u64; 3], usize> = BTreeMap::new();
+    let ids: Vec<usize> = points
         .iter()
-        .map(|f| f.vertices.map(|i| vertices[i]))
+        .map(|p| {
+            let n = welded.len();
+            *welded.entry(p.map(f64::to_bits)).or_insert(n)
+        })
         .collect();
-    closed(&mesh.faces)?;
+    let mut faces_welded = Vec::with_capacity(faces.len());
+    for f in &faces {
+        if f.iter().any(|&i| i >= points.len()) {
+            bail!("a triangle refers to a vertex the mesh does not have");
+        }
+        faces_welded.push(f.map(|i| ids[i]));
+    }
+    closed(&faces_welded)?;
+    let triangles: Vec<[[f64; 3]; 3]> = faces.iter().map(|f| f.map(|i| points[i])).collect();
     voxelise(&triangles, voxel_mm, path)
 }
 
+/// A mesh as read: its vertices and its triangles (indices into them).
+type Triangles = (Vec<[f64; 3]>, Vec<[usize; 3]>);
+
+/// The vertices and triangles of an STL file's bytes.
+fn stl_mesh(bytes: &[u8]) -> Result<Triangles> {
+    let mesh = stl_io::read_stl(&mut std::io::Cursor::new(bytes))
+        .map_err(|e| anyhow!("not an STL mesh this reads: {e}"))?;
+    let points = mesh.vertices.iter().map(|v| v.0.map(f64::from)).collect();
+    Ok((points, mesh.faces.iter().map(|f| f.vertices).collect()))
+}
+
+/// The vertices and triangles (polygons fanned) of every object of an OBJ file.
+fn obj_mesh(path: &Path) -> Result<Triangles> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ..Default::default()
+    };
+    let (models, _materials) =
+        tobj::load_obj(path, &options).map_err(|e| anyhow!("not an OBJ mesh this reads: {e}"))?;
+    let (mut points, mut faces) = (Vec::new(), Vec::new());
+    for m in &models {
+        let base = points.len();
+        points.extend(
+            m.mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]),
+        );
+        faces.extend(
+            m.mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [0, 1, 2].map(|k| base + t[k] as usize)),
+        );
+    }
+    Ok((points, faces))
+}
+
 /// Every edge bounds exactly two triangles.
-fn closed(faces: &[stl_io::IndexedTriangle]) -> Result<()> {
+fn closed(faces: &[[usize; 3]]) -> Result<()> {
     let mut edges: BTreeMap<(usize, usize), u32> = BTreeMap::new();
-    for f in faces {
-        let v = f.vertices;
+    for &v in faces {
         for (a, b) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {
             *edges.entry((a.min(b), a.max(b))).or_default() += 1;
         }
