@@ -179,3 +179,65 @@ fn entry_and_target_from_markups_plan_as_typed() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `needle simulate --export DIR`: the plan's files, and every simulated path as one polyline of
+/// a model (LPS), the same points the run reports in `--detail`.
+#[test]
+fn simulate_export_writes_every_path() {
+    let dir = scratch("simulate");
+    let file = example("paper");
+    let v = needle_json(&[
+        "simulate",
+        file.to_str().unwrap(),
+        "--runs",
+        "6",
+        "--closed-loop",
+        "--json",
+        "--detail",
+        "--export",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(dir.join("plan.mrk.json").exists() && dir.join("entry-target.mrk.json").exists());
+    let vtk = std::fs::read_to_string(dir.join("paths-closed-loop.vtk")).unwrap();
+    let verts: Vec<[f64; 3]> = vtk
+        .lines()
+        .skip_while(|l| !l.starts_with("POINTS"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("LINES"))
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [-v[0], -v[1], v[2]]
+        })
+        .collect();
+    let lines: Vec<Vec<usize>> = vtk
+        .lines()
+        .skip_while(|l| !l.starts_with("LINES"))
+        .skip(1)
+        .map(|l| {
+            l.split_whitespace()
+                .skip(1)
+                .map(|x| x.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    let runs = v["runs_detail"].as_array().unwrap();
+    assert_eq!(lines.len(), runs.len());
+    for (line, run) in lines.iter().zip(runs) {
+        let points = run["points"].as_array().unwrap();
+        assert_eq!(line.len(), points.len());
+        for (&k, p) in line.iter().zip(points) {
+            let p: Vec<f64> = p
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            assert!(
+                dist(verts[k], [p[0], p[1], p[2]]) < 1e-5,
+                "{:?} {p:?}",
+                verts[k]
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,4 +1,5 @@
-//! `needle plan --export DIR`: the plan as files 3D Slicer opens. The path is a markups `Curve`
+//! `needle plan|send|simulate --export DIR`: the plan (and simulated paths) as files 3D Slicer
+//! opens. The path is a markups `Curve`
 //! (points at most 1 mm apart) and the entry and target a markups point list, both in RAS; the
 //! obstacles are one model (legacy VTK PolyData, triangulated spheres) in LPS, the coordinate
 //! system Slicer assumes for a model file that does not name one.
@@ -6,6 +7,7 @@
 use super::json::path_points;
 use crate::anatomy::markups::FileOut;
 use anyhow::{Context, Result};
+use planner_core::report::FormOutcome;
 use planner_core::{PlanReport, Scenario};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -16,6 +18,15 @@ const SEGMENTS: usize = 20;
 
 /// Writes the export of `report` into `dir` (made if missing); returns the files written.
 pub fn export(dir: &Path, scenario: &Scenario, report: &PlanReport) -> Result<Vec<PathBuf>> {
+    export_best(dir, scenario, report.best())
+}
+
+/// [`export`] for the path `best` (none: the entry, target and obstacles alone).
+pub fn export_best(
+    dir: &Path,
+    scenario: &Scenario,
+    best: Option<&FormOutcome>,
+) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut written = Vec::new();
     let mut write = |name: &str, text: String| -> Result<()> {
@@ -32,7 +43,7 @@ pub fn export(dir: &Path, scenario: &Scenario, report: &PlanReport) -> Result<Ve
         "entry-target.mrk.json",
         serde_json::to_string_pretty(&FileOut::one("Fiducial", "entry and target", &points))?,
     )?;
-    if let Some(best) = report.best() {
+    if let Some(best) = best {
         let path: Vec<(String, [f32; 3])> = path_points(scenario, best)
             .into_iter()
             .enumerate()
@@ -48,6 +59,30 @@ pub fn export(dir: &Path, scenario: &Scenario, report: &PlanReport) -> Result<Ve
         write("obstacles.vtk", spheres_vtk(scenario))?;
     }
     Ok(written)
+}
+
+/// Polylines (each a path's points, RAS) as one legacy VTK PolyData model, LPS: Slicer shows
+/// them as lines.
+pub fn polylines_vtk(title: &str, lines: &[&[[f32; 3]]]) -> String {
+    let lines: Vec<&[[f32; 3]]> = lines.iter().copied().filter(|l| l.len() >= 2).collect();
+    let count: usize = lines.iter().map(|l| l.len()).sum();
+    let mut out = format!(
+        "# vtk DataFile Version 3.0\n{title} SPACE=LPS\nASCII\nDATASET POLYDATA\nPOINTS {count} float\n"
+    );
+    for p in lines.iter().flat_map(|l| l.iter()) {
+        let _ = writeln!(out, "{} {} {}", -p[0], -p[1], p[2]);
+    }
+    let _ = writeln!(out, "LINES {} {}", lines.len(), count + lines.len());
+    let mut at = 0usize;
+    for l in &lines {
+        let _ = write!(out, "{}", l.len());
+        for k in 0..l.len() {
+            let _ = write!(out, " {}", at + k);
+        }
+        let _ = writeln!(out);
+        at += l.len();
+    }
+    out
 }
 
 /// Every obstacle as a triangulated sphere, in one legacy VTK PolyData file, LPS.

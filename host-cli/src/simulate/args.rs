@@ -31,6 +31,10 @@ pub struct SimulateArgs {
     /// Also draw the plan and the executed paths (SVG; the file is opened before simulating).
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Also write files 3D Slicer opens into DIR: the plan as `needle plan --export` writes it,
+    /// and every simulated path as a model (`paths-open-loop.vtk`, `paths-closed-loop.vtk`).
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<PathBuf>,
     /// Threads, at least 1 (default: every core).
     #[arg(long, value_parser = at_least_one)]
     pub threads: Option<usize>,

@@ -20,7 +20,12 @@ use std::io::Write;
 pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
     let (setup, shapes) = set_up(a)?;
     let plot = a.plot.as_deref().map(OutputFile::open).transpose()?;
-    let drawn = if plot.is_some() { MAX_DRAWN } else { 0 };
+    // The export keeps every path; the plot the first few.
+    let drawn = match (&a.export, &plot) {
+        (Some(_), _) => a.runs,
+        (None, Some(_)) => MAX_DRAWN,
+        (None, None) => 0,
+    };
     let keep = Keep {
         detail: a.detail,
         paths: drawn,
@@ -28,6 +33,9 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
     };
     let results = execute(a, &setup, &keep)?;
     print(a, &setup, &results)?;
+    if let Some(dir) = &a.export {
+        export_runs(dir, &setup, &results)?;
+    }
     if let Some(file) = plot {
         let executed = Executed {
             open: results.open.as_deref(),
@@ -42,6 +50,30 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
             &executed,
             &title,
         ))?;
+    }
+    Ok(())
+}
+
+/// `--export DIR`: the plan as `needle plan --export` writes it, and the simulated paths.
+fn export_runs(dir: &std::path::Path, setup: &Setup, results: &Results) -> Result<()> {
+    use crate::report::slicer::{export_best, polylines_vtk};
+    export_best(dir, &setup.scenario, Some(&setup.prepared.outcome))?;
+    let write = |name: &str, lines: Vec<&[[f32; 3]]>| -> Result<()> {
+        let path = dir.join(name);
+        let text = polylines_vtk("needle-planner simulated paths", &lines);
+        std::fs::write(&path, text).map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
+    };
+    if let Some(runs) = &results.open {
+        write(
+            "paths-open-loop.vtk",
+            runs.iter().map(|r| r.points.as_slice()).collect(),
+        )?;
+    }
+    if let Some(runs) = &results.closed {
+        write(
+            "paths-closed-loop.vtk",
+            runs.iter().map(|r| r.run.points.as_slice()).collect(),
+        )?;
     }
     Ok(())
 }
