@@ -196,12 +196,34 @@ fn latency_from_pose_to_command_over_a_thousand_readings() {
 
 /// Insertion without a usable pose: with every pose flagged invalid, the controller stops with
 /// `tracking_lost` once the robot has pushed `tracking_lost_after_mm` (2 mm here) without a fix,
-/// and the robot is told stop.
+/// and the robot is told hold, then stop.
 #[test]
 fn insertion_without_a_pose_stops_after_the_set_length() {
     let file = paper();
+    let log = temp_path("no-pose.jsonl");
     let mut lab = Lab::start(&file, 2, &["--invalid-every", "1"]);
-    let v = lab.steer(&file, &["--steer", "tracking_lost_after_mm=2"]);
+    let v = lab.steer(
+        &file,
+        &[
+            "--steer",
+            "tracking_lost_after_mm=2",
+            "--log",
+            log.to_str().unwrap(),
+        ],
+    );
+    let sent: Vec<String> = log_lines(&log)
+        .iter()
+        .filter(|l| l["event"] == "command")
+        .map(|l| l["text"].as_str().unwrap_or_default().to_string())
+        .collect();
+    let last_two: Vec<&str> = sent
+        .iter()
+        .rev()
+        .take(2)
+        .rev()
+        .map(String::as_str)
+        .collect();
+    assert_eq!(last_two, ["hold", "stop"], "{sent:?}");
     assert_eq!(v["stop_reason"], "tracking_lost");
     assert_eq!(v["robot_stopped"], true);
     let readings = v["steering"]["readings"].as_u64().unwrap();

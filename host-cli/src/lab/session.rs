@@ -410,7 +410,13 @@ impl<'a> Session<'a> {
             Command::Stop(reason) => {
                 self.outcome.predicted_miss_mm =
                     Some(reply.predicted_error_mm).filter(|e| e.is_finite());
-                (vec![RobotCommand::Stop], Some(Ending::Controller(*reason)))
+                // Tracking lost: the robot holds, then stops, as when the poses stop coming.
+                let words = if *reason == StopReason::TrackingLost {
+                    vec![RobotCommand::Hold, RobotCommand::Stop]
+                } else {
+                    vec![RobotCommand::Stop]
+                };
+                (words, Some(Ending::Controller(*reason)))
             }
         };
         for w in words {
