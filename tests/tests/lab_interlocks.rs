@@ -195,8 +195,9 @@ fn latency_from_pose_to_command_over_a_thousand_readings() {
 }
 
 /// Insertion without a usable pose: with every pose flagged invalid, the controller stops with
-/// `tracking_lost` once the robot has pushed `tracking_lost_after_mm` (2 mm here) without a fix,
-/// and the robot is told hold, then stop.
+/// `tracking_lost` once the robot has pushed 2 mm without a fix (the lab's default
+/// `tracking_lost_after_mm`, told to the controller when the scenario does not set it), and the
+/// robot is told hold, then stop.
 #[test]
 fn insertion_without_a_pose_stops_after_the_set_length() {
     let file = paper();

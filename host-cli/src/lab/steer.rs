@@ -155,9 +155,23 @@ fn forward(
     Ok(())
 }
 
+/// The insertion without a usable pose after which a lab insertion stops (mm), unless the
+/// scenario's `[steering]` or `--steer` says otherwise: a robot pushing a needle blind is the
+/// lab's interlock, tighter than the simulator's controller default (which bridges tracker
+/// dropouts of up to 10 mm).
+pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
+
 /// Runs `needle steer`.
 pub fn run_steer(a: &SteerArgs) -> Result<()> {
     let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+    let key = "tracking_lost_after_mm";
+    let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
+    let told_in_file = crate::scenario::ScenarioFile::load(&a.file)?
+        .steering
+        .is_some_and(|t| t.contains_key(key));
+    if !told_here && !told_in_file {
+        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
+    }
     // The same refusal as `needle simulate` (a plan bound the device cannot plan).
     if let Some(t) = &a.tcp {
         flags.push(format!("--tcp={t}"));
