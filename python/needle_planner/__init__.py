@@ -37,6 +37,7 @@ __all__ = [
     "plan",
     "simulate",
     "cover",
+    "sweep",
     "NeedleError",
     "ScenarioError",
     "PlanError",
@@ -260,3 +261,19 @@ def cover(
         float(tightness),
         float(voxel),
     )
+
+
+def sweep(
+    scenario: Scenario,
+    weight: str,
+    start: float,
+    stop: float,
+    steps: int = 10,
+    log: bool = False,
+    threads: Optional[int] = None,
+) -> Dict[str, Any]:
+    """Re-plans ``scenario`` for ``steps`` values of one weight (``length``, ``risk``,
+    ``penalty``, ``control`` or ``a1``..``a4``) from ``start`` to ``stop`` (spaced evenly, or
+    geometrically with ``log``), as ``needle sweep --weight W --from START --to STOP --json``
+    does, and returns its report: ``weight`` and one entry per value in ``points``."""
+    return _native.sweep(scenario, str(weight), float(start), float(stop), int(steps), bool(log), threads)

@@ -68,3 +68,12 @@ def cover(
     tightness: float = 3.0,
     voxel: float = 0.5,
 ) -> Dict[str, Any]: ...
+def sweep(
+    scenario: Scenario,
+    weight: str,
+    start: float,
+    stop: float,
+    steps: int = 10,
+    log: bool = False,
+    threads: Optional[int] = None,
+) -> Dict[str, Any]: ...

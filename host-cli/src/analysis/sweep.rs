@@ -26,6 +26,11 @@ pub enum Weight {
 }
 
 impl Weight {
+    /// The weight `name` names (`length` or `a1`, ..., any case), as `--weight` reads it.
+    pub fn parse(name: &str) -> Option<Weight> {
+        <Weight as clap::ValueEnum>::from_str(name, true).ok()
+    }
+
     /// Name as in the scenario file's `[weights]`.
     pub fn name(self) -> &'static str {
         match self {

@@ -1,0 +1,48 @@
+//! `sweep()`: `needle sweep` on a scenario, returning its `--json` report (each value's plan) as
+//! Python objects.
+
+use crate::convert::python_value;
+use crate::errors::{guarded, plan_error, ScenarioError};
+use crate::scenario::Scenario;
+use needle_cli::analysis::parallel;
+use needle_cli::analysis::sweep::{run, to_json, Range, Weight};
+use pyo3::prelude::*;
+
+/// Re-plans `scenario` for each value of one weight, as `needle sweep --json` does.
+#[pyfunction]
+#[pyo3(signature = (scenario, weight, start, stop, steps=10, log=false, threads=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn sweep<'py>(
+    py: Python<'py>,
+    scenario: &Scenario,
+    weight: &str,
+    start: f64,
+    stop: f64,
+    steps: usize,
+    log: bool,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let weight = Weight::parse(weight).ok_or_else(|| {
+        ScenarioError::new_err(format!(
+            "invalid value '{weight}' for '--weight <WEIGHT>' [possible values: length, risk, \
+             penalty, control]"
+        ))
+    })?;
+    let range = Range {
+        from: start,
+        to: stop,
+        steps,
+        log,
+    };
+    let core = scenario.core.clone();
+    let threads = threads.unwrap_or_else(parallel::default_threads).max(1);
+    let value = py
+        .detach(|| {
+            guarded(|| {
+                let points = run(&core, weight, &range, threads, || {})?;
+                Ok(serde_json::to_value(to_json(weight, &points))?)
+            })
+        })
+        .map_err(|f| f.into_py(plan_error))?;
+    python_value(py, &value)
+}
