@@ -2,6 +2,7 @@
 //! Slicer's segment names) and NIfTI-1 (sform), written here byte by byte from the formats'
 //! specifications, so the readers are checked against files they did not write.
 
+use serde_json::Value;
 use std::io::Write;
 use std::path::Path;
 
@@ -169,4 +170,25 @@ pub fn write_stl_box(path: &Path, lo: [f32; 3], hi: [f32; 3], header: &str, drop
         bytes.extend([0u8; 2]);
     }
     std::fs::write(path, bytes).unwrap();
+}
+
+/// The spheres of a `needle cover --json` report, in its order: (label, centre, radius).
+pub fn cover_spheres(report: &Value) -> Vec<(i64, [f64; 3], f64)> {
+    let mut out = Vec::new();
+    for seg in report["segments"].as_array().expect("segments") {
+        for s in seg["spheres"].as_array().expect("spheres") {
+            let c: Vec<f64> = s["center"]
+                .as_array()
+                .expect("center")
+                .iter()
+                .map(|x| x.as_f64().expect("a number"))
+                .collect();
+            out.push((
+                seg["label"].as_i64().expect("a label"),
+                [c[0], c[1], c[2]],
+                s["radius"].as_f64().expect("a radius"),
+            ));
+        }
+    }
+    out
 }

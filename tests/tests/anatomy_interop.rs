@@ -3,27 +3,13 @@
 //! (`tests/python/label_maps.py`). The three files hold the same anatomy: the same spheres to
 //! 1e-4 mm, the ball one sphere on its centre, hardly larger than the ball.
 
+use needle_e2e::label_files::cover_spheres;
 use needle_e2e::{needle_json, venv_python, workspace};
 use serde_json::Value;
 use std::process::Command;
 
 fn spheres(v: &Value) -> Vec<(i64, [f64; 3], f64)> {
-    let mut out = Vec::new();
-    for seg in v["segments"].as_array().unwrap() {
-        for s in seg["spheres"].as_array().unwrap() {
-            let c: Vec<f64> = s["center"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
-            out.push((
-                seg["label"].as_i64().unwrap(),
-                [c[0], c[1], c[2]],
-                s["radius"].as_f64().unwrap(),
-            ));
-        }
-    }
+    let mut out = cover_spheres(v);
     // In a fixed order: a float32 affine (NIfTI's) and a float64 one (NRRD's) can order spheres
     // of equal looseness differently.
     let key = |s: &(i64, [f64; 3], f64)| (s.0, s.1.map(|x| (x * 1e3).round() as i64));

@@ -2,7 +2,7 @@
 //! Slicer segmentation with names, NIfTI-1): the same anatomy gives the same spheres whatever the
 //! file, the spheres join a scenario that plans, and bad files and selections are clear errors.
 
-use needle_e2e::label_files::{write_nifti, write_nrrd, Labels, NrrdStyle};
+use needle_e2e::label_files::{cover_spheres, write_nifti, write_nrrd, Labels, NrrdStyle};
 use needle_e2e::{example, needle, needle_json};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -37,26 +37,6 @@ fn anatomy(origin: [f64; 3]) -> Labels {
     })
 }
 
-fn spheres(v: &Value) -> Vec<(String, [f64; 3], f64)> {
-    let mut out = Vec::new();
-    for seg in v["segments"].as_array().unwrap() {
-        for s in seg["spheres"].as_array().unwrap() {
-            let c: Vec<f64> = s["center"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect();
-            out.push((
-                seg["label"].to_string(),
-                [c[0], c[1], c[2]],
-                s["radius"].as_f64().unwrap(),
-            ));
-        }
-    }
-    out
-}
-
 /// The same anatomy as NRRD in LPS (raw), NRRD in RAS (gzip) and NIfTI (RAS): the same spheres
 /// to 1e-4 mm, every segment covered, the ball by one sphere.
 #[test]
@@ -78,20 +58,20 @@ fn lps_ras_and_nifti_give_the_same_spheres() {
         .iter()
         .map(|p| needle_json(&["cover", p.to_str().unwrap(), "--json"]))
         .collect();
-    let first = spheres(&runs[0]);
+    let first = cover_spheres(&runs[0]);
     assert_eq!(runs[0]["frame"], "RAS");
-    let labels: Vec<&str> = first.iter().map(|s| s.0.as_str()).collect();
-    assert_eq!(labels.iter().filter(|l| **l == "1").count(), 1, "{first:?}");
-    assert!(labels.contains(&"2"));
+    let labels: Vec<i64> = first.iter().map(|s| s.0).collect();
+    assert_eq!(labels.iter().filter(|l| **l == 1).count(), 1, "{first:?}");
+    assert!(labels.contains(&2));
     // The ball's sphere sits on the ball's centre, in RAS.
-    let ball = first.iter().find(|s| s.0 == "1").unwrap();
+    let ball = first.iter().find(|s| s.0 == 1).unwrap();
     let centre = [-12.0 + 8.0, 20.0 + 10.8, 35.0 + 10.0];
     for (got, want) in ball.1.iter().zip(centre) {
         assert!((got - want).abs() < 1e-4, "{ball:?}");
     }
     assert!(ball.2 <= 6.0 + 1.25, "{ball:?}");
     for other in &runs[1..] {
-        let s = spheres(other);
+        let s = cover_spheres(other);
         assert_eq!(s.len(), first.len());
         for (a, b) in s.iter().zip(&first) {
             assert_eq!(a.0, b.0);
@@ -238,7 +218,7 @@ fn a_scenario_with_anatomy_plans_and_steers() {
     let map = example("anatomy").with_file_name("anatomy.seg.nrrd");
     let cover = needle_json(&["cover", map.to_str().unwrap(), "--margin", "1", "--json"]);
     let points = plan["best"]["points"].as_array().unwrap();
-    for (_, centre, radius) in spheres(&cover) {
+    for (_, centre, radius) in cover_spheres(&cover) {
         for p in points {
             let p: Vec<f64> = p
                 .as_array()
@@ -379,7 +359,7 @@ fn a_closed_mesh_is_covered_as_its_solid() {
     );
     for file in [&ras, &lps] {
         let v = needle_json(&["cover", file.to_str().unwrap(), "--voxel", "0.5", "--json"]);
-        let s = spheres(&v);
+        let s = cover_spheres(&v);
         assert!(!s.is_empty());
         let inside = |p: [f64; 3]| {
             s.iter().any(|(_, c, r)| {
@@ -430,8 +410,8 @@ fn a_closed_mesh_is_covered_as_its_solid() {
     }
     std::fs::write(&obj, &text).unwrap();
     let v = needle_json(&["cover", obj.to_str().unwrap(), "--json"]);
-    let ras = spheres(&needle_json(&["cover", ras.to_str().unwrap(), "--json"]));
-    let from_obj = spheres(&v);
+    let ras = cover_spheres(&needle_json(&["cover", ras.to_str().unwrap(), "--json"]));
+    let from_obj = cover_spheres(&v);
     assert_eq!(from_obj.len(), ras.len());
     for (a, b) in from_obj.iter().zip(&ras) {
         assert!(

@@ -257,27 +257,6 @@ pub fn uncovered_corners(map: &LabelMap, voxels: &[[i64; 3]], spheres: &[Sphere]
         .count()
 }
 
-/// The grid coordinates of a world point (the affine inverted).
-fn grid_of(map: &LabelMap, p: [f64; 3]) -> [f64; 3] {
-    let a = &map.ijk_to_ras;
-    let m = [0, 1, 2].map(|r| [a[r][0], a[r][1], a[r][2]]);
-    let d = [0, 1, 2].map(|r| p[r] - a[r][3]);
-    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    // Cramer's rule: column k replaced by d.
-    std::array::from_fn(|k| {
-        let mut n = m;
-        for r in 0..3 {
-            n[r][k] = d[r];
-        }
-        (n[0][0] * (n[1][1] * n[2][2] - n[1][2] * n[2][1])
-            - n[0][1] * (n[1][0] * n[2][2] - n[1][2] * n[2][0])
-            + n[0][2] * (n[1][0] * n[2][1] - n[1][1] * n[2][0]))
-            / det
-    })
-}
-
 /// The cover's volume outside the segment over the segment's volume, and the largest distance
 /// from a voxel centre inside the cover to the segment's nearest voxel centre.
 fn tightness(map: &LabelMap, label: i64, voxels: &[[i64; 3]], spheres: &[Sphere]) -> (f64, f64) {
@@ -286,7 +265,7 @@ fn tightness(map: &LabelMap, label: i64, voxels: &[[i64; 3]], spheres: &[Sphere]
         for n in 0..8 {
             let corner =
                 [0, 1, 2].map(|k| s.center[k] + if n >> k & 1 == 1 { s.radius } else { -s.radius });
-            let g = grid_of(map, corner);
+            let g = map.grid(corner);
             for k in 0..3 {
                 lo[k] = lo[k].min(g[k].floor());
                 hi[k] = hi[k].max(g[k].ceil());

@@ -71,9 +71,7 @@ impl LabelMap {
         if a.iter().flatten().any(|v| !v.is_finite()) {
             bail!("the voxel-to-world transform is not finite");
         }
-        let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        let det = det3(self.linear());
         let scale = self.spacing().iter().product::<f64>();
         if det.abs().partial_cmp(&(1e-9 * scale.max(1e-30))) != Some(std::cmp::Ordering::Greater)
             || scale == 0.0
@@ -106,11 +104,29 @@ impl LabelMap {
 
     /// The volume of one voxel (mm³).
     pub fn voxel_volume(&self) -> f64 {
+        det3(self.linear()).abs()
+    }
+
+    /// The affine's linear part (the grid's axes as columns).
+    fn linear(&self) -> [[f64; 3]; 3] {
         let a = &self.ijk_to_ras;
-        (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
-            .abs()
+        [0, 1, 2].map(|r| [a[r][0], a[r][1], a[r][2]])
+    }
+
+    /// The grid coordinates of the world point `p`: [`LabelMap::world`] inverted (Cramer's
+    /// rule; the affine is not singular, as [`LabelMap::validated`] checks).
+    pub fn grid(&self, p: [f64; 3]) -> [f64; 3] {
+        let m = self.linear();
+        let a = &self.ijk_to_ras;
+        let d = [0, 1, 2].map(|r| p[r] - a[r][3]);
+        let det = det3(m);
+        std::array::from_fn(|k| {
+            let mut n = m;
+            for (row, dr) in n.iter_mut().zip(d) {
+                row[k] = dr;
+            }
+            det3(n) / det
+        })
     }
 
     /// The segments present: the named ones with at least one voxel, else one per label other
@@ -147,5 +163,21 @@ impl LabelMap {
                 [i as i64, (rest % nj) as i64, (rest / nj) as i64]
             })
             .collect()
+    }
+}
+
+/// The determinant of a 3×3 matrix (rows).
+fn det3(m: [[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// A stored value as a label: only whole numbers are labels.
+pub(super) fn whole_label(v: f64) -> Result<i64> {
+    if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.0e15 {
+        Ok(v as i64)
+    } else {
+        bail!("the value {v} is not a whole-number label")
     }
 }

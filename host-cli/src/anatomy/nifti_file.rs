@@ -3,7 +3,7 @@
 //! sizes alone (the format's "method 1"), computed here from the header's fields (the crate's own
 //! qform affine panics on some headers).
 
-use super::label_map::LabelMap;
+use super::label_map::{whole_label, LabelMap};
 use anyhow::{anyhow, bail, Result};
 use nifti::{NiftiHeader, NiftiObject, NiftiType, ReaderOptions};
 use std::path::Path;
@@ -69,7 +69,7 @@ fn labels(volume: nifti::InMemNiftiVolume, h: &NiftiHeader) -> Result<Vec<i64>> 
         return Ok(ints);
     }
     ints.into_iter()
-        .map(|v| whole(v as f64 * slope + inter))
+        .map(|v| whole_label(v as f64 * slope + inter))
         .collect()
 }
 
@@ -83,16 +83,8 @@ fn widen<T: Into<i64>>(v: nifti::Result<Vec<T>>) -> Result<Vec<i64>> {
 fn floats(v: nifti::Result<Vec<f64>>) -> Result<Vec<i64>> {
     v.map_err(|e| anyhow!("{e}"))?
         .into_iter()
-        .map(whole)
+        .map(whole_label)
         .collect()
-}
-
-fn whole(v: f64) -> Result<i64> {
-    if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.0e15 {
-        Ok(v as i64)
-    } else {
-        bail!("the voxel value {v} is not a whole-number label")
-    }
 }
 
 /// Millimetres per unit of the header's spatial unit.

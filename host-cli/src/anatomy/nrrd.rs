@@ -6,7 +6,7 @@
 //! `space origin`, and Slicer's `SegmentN_Name` / `SegmentN_LabelValue` key-value pairs.
 //! Coordinates in LPS are turned into RAS (x and y negated).
 
-use super::label_map::{LabelMap, Segment};
+use super::label_map::{whole_label, LabelMap, Segment};
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -185,17 +185,9 @@ fn sample(c: &[u8], kind: char, big: bool) -> Result<i64> {
             let shift = 64 - 8 * w as u32;
             ((u << shift) as i64) >> shift
         }
-        (_, 4) => whole(f64::from(f32::from_bits(u as u32)))?,
-        _ => whole(f64::from_bits(u))?,
+        (_, 4) => whole_label(f64::from(f32::from_bits(u as u32)))?,
+        _ => whole_label(f64::from_bits(u))?,
     })
-}
-
-fn whole(v: f64) -> Result<i64> {
-    if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.0e15 {
-        Ok(v as i64)
-    } else {
-        bail!("the sample {v} is not a whole-number label")
-    }
 }
 
 /// The voxel-to-RAS affine from `space`, `space directions` and `space origin`.
