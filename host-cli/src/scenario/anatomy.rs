@@ -14,15 +14,20 @@ impl ScenarioFile {
     /// The spheres of every `[[anatomy]]` entry, one shape per entry; their indices follow the
     /// `[[obstacles]]`' ones.
     pub fn anatomy_shapes(&self, plane: bool) -> Result<Vec<ObstacleShape>> {
-        if plane && !self.anatomy.is_empty() {
+        if self.anatomy.is_empty() {
+            return Ok(Vec::new());
+        }
+        if plane {
             bail!("anatomy is 3-D: leave planner.plane out");
         }
+        // Once for every entry: a target given as a label reads its label map.
+        let ends = [self.entry_position()?, self.target_position()?];
         self.anatomy
             .iter()
             .enumerate()
             .map(|(n, a)| {
                 let circles = self
-                    .anatomy_spheres(a)
+                    .anatomy_spheres(a, ends)
                     .map_err(|e| anyhow!("in anatomy[{n}]: {e:#}"))?;
                 Ok(ObstacleShape {
                     index: self.obstacles.len() + n,
@@ -33,7 +38,8 @@ impl ScenarioFile {
             .collect()
     }
 
-    fn anatomy_spheres(&self, a: &AnatomyFile) -> Result<Vec<Obstacle>> {
+    /// The spheres of entry `a`; `ends` (entry, target) must lie outside them.
+    fn anatomy_spheres(&self, a: &AnatomyFile, ends: [[f32; 3]; 2]) -> Result<Vec<Obstacle>> {
         let path = self.relative(&a.file);
         let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
         let map = LabelMap::read_with(&path, voxel)?;
@@ -45,7 +51,7 @@ impl ScenarioFile {
         let labels = a.labels.clone().unwrap_or_default();
         let names = a.segments.clone().unwrap_or_default();
         let at = |e: anyhow::Error| anyhow!("{}: {e:#}", path.display());
-        let (entry, target) = (self.entry_position()?, self.target_position()?);
+        let [entry, target] = ends;
         let mut out = Vec::new();
         for segment in selected(&map, &labels, &names).map_err(at)? {
             let cover = cover_segment(&map, &segment, &options).map_err(at)?;
