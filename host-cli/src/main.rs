@@ -1,6 +1,6 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
@@ -228,6 +228,16 @@ fn plan(args: &PlanArgs) -> Result<()> {
 
 fn send(args: &SendArgs) -> Result<()> {
     let scenario = load(&args.plan)?;
+    // A device plans without the bound: its plan would silently not keep it.
+    if load_execution(&args.plan.file)?
+        .max_collision_probability
+        .is_some()
+    {
+        bail!(
+            "{}: plan this scenario here (needle plan), or on the device without the bound",
+            needle_cli::simulate::request::HOST_ONLY_BOUND
+        );
+    }
     let (result, device) = device::send::plan_on_device(&scenario, &args.link)?;
     let planned = result.context("planning failed")?;
     let stats = Stats {

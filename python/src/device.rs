@@ -82,6 +82,12 @@ impl Device {
         max_degree: Option<i64>,
     ) -> PyResult<Planned<'py>> {
         let words = forms.map(form_words).transpose()?;
+        if scenario.execution.max_collision_probability.is_some() {
+            return Err(crate::errors::ScenarioError::new_err(format!(
+                "{}: plan this scenario here (needle plan), or on the device without the bound",
+                needle_cli::simulate::request::HOST_ONLY_BOUND
+            )));
+        }
         let mut core = scenario.core.clone();
         restrict(&mut core, degree(max_degree)?, words.as_deref())
             .map_err(|e| crate::errors::scenario_error(&e))?;

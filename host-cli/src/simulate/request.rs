@@ -42,6 +42,11 @@ pub struct Results {
     pub closed: Option<Vec<ClosedRun>>,
 }
 
+/// Why a device cannot take a scenario with a collision bound (the spread does not fit its
+/// flash): the start of the message of every command that would hand it one.
+pub const HOST_ONLY_BOUND: &str =
+    "planner.max_collision_probability is planned on the host only: the device plans without it";
+
 /// `result` with the message naming the scenario file, when it came from one.
 fn in_scenario<T>(result: Result<T>, path: Option<&Path>) -> Result<T> {
     match path {
@@ -91,8 +96,7 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
     // not be the host's, and it could not steer the insertion the host simulates.
     if r.closed_loop && r.on_device && bound.is_some() {
         bail!(
-            "planner.max_collision_probability is planned on the host only: the device plans \
-             without it, so it cannot steer this plan (steer in-process, or on the device \
+            "{HOST_ONLY_BOUND}, so it cannot steer this plan (steer in-process, or on the device \
              without the bound; docs/execution.md)"
         );
     }
