@@ -33,6 +33,11 @@ const KEYS: &[Key] = &[
         zero_allowed: false,
     },
     Key {
+        name: "target_walk_mm",
+        field: |c| &mut c.noise.target_walk_mm,
+        zero_allowed: false,
+    },
+    Key {
         name: "entry_position_mm",
         field: |c| &mut c.noise.entry_position_mm,
         zero_allowed: false,

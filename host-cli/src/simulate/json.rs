@@ -119,7 +119,7 @@ pub struct ClosedSummaryJson {
     #[serde(flatten)]
     pub figures: SummaryJson,
     /// `replans`, `replan_failures`, `stops` (every reason listed), `outliers`, `no_fix`,
-    /// `stale`, `repeated`.
+    /// `target_outliers`, `target_jumps`, `stale`, `repeated`.
     #[serde(flatten)]
     pub steering: SteeringSummary,
 }

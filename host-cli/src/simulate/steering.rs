@@ -18,6 +18,10 @@ pub struct SteeringSummary {
     pub outliers: u64,
     /// Readings without a fix.
     pub no_fix: u64,
+    /// Imaged targets rejected as outliers.
+    pub target_outliers: u64,
+    /// Times the imaged target moved and the controller followed it.
+    pub target_jumps: u64,
     /// Readings older than the last (ignored).
     pub stale: u64,
     /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
@@ -41,6 +45,8 @@ pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
         s.replan_failures += u64::from(r.stats.replan_failures);
         s.outliers += u64::from(r.stats.outliers);
         s.no_fix += u64::from(r.stats.no_fix);
+        s.target_outliers += u64::from(r.stats.target_outliers);
+        s.target_jumps += u64::from(r.stats.target_jumps);
         s.stale += u64::from(r.stats.stale);
         s.repeated += u64::from(r.stats.repeated);
         if let Some(reason) = r.stop_reason {

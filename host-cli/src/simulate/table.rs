@@ -186,6 +186,11 @@ pub fn closed_table(
         "tracker: {} outliers rejected, {} readings without a fix, {} stale, {} repeated",
         steering.outliers, steering.no_fix, steering.stale, steering.repeated
     );
+    let _ = writeln!(
+        out,
+        "target: {} imaged targets rejected as outliers, {} moves followed",
+        steering.target_outliers, steering.target_jumps
+    );
     perturbation_line(&mut out, p);
     out
 }

@@ -9,6 +9,7 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
+use super::target::{TargetFilter, TargetFix};
 use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{rotate, Frame, V3};
@@ -48,6 +49,9 @@ pub struct NoiseModel {
     pub insertion_error_mm: f32,
     /// Prior spread of the target, per axis (mm).
     pub target_mm: f32,
+    /// Random walk of the target per square-root millimetre of insertion (mm): the tissue
+    /// moves as the needle pushes it, so the target estimate never freezes.
+    pub target_walk_mm: f32,
 }
 
 impl NoiseModel {
@@ -63,6 +67,7 @@ impl NoiseModel {
         line_walk_deg: 0.15,
         insertion_error_mm: 0.3,
         target_mm: 0.5,
+        target_walk_mm: 0.01,
     };
 
     /// Every figure finite and positive.
@@ -78,6 +83,7 @@ impl NoiseModel {
             self.line_walk_deg,
             self.insertion_error_mm,
             self.target_mm,
+            self.target_walk_mm,
         ]
         .iter()
         .all(|v| v.is_finite() && *v > 0.0)
@@ -140,7 +146,7 @@ pub struct Estimate {
     /// Estimated target.
     pub target: V3,
     cov: Cov,
-    target_var: f32,
+    target_filter: TargetFilter,
     noise: NoiseModel,
     /// The position fixes' squared innovations against what the model expects (per axis,
     /// averaged over the last tens of fixes): about 1 in a world as the model says, more in a
@@ -165,7 +171,7 @@ impl Estimate {
             factor: 1.0,
             target,
             cov,
-            target_var: noise.target_mm * noise.target_mm,
+            target_filter: TargetFilter::new(noise.target_mm, noise.target_walk_mm),
             noise: *noise,
             consistency: 1.0,
         }
@@ -252,6 +258,7 @@ impl Estimate {
             self.cov[(4, 4)] += walk * walk * length;
         }
         self.tip = next;
+        self.target_filter.advanced(length);
     }
 
     /// Fuses a measured tip position; `false` (and no change) for an outlier.
@@ -336,18 +343,11 @@ impl Estimate {
         Some(d2)
     }
 
-    /// Fuses a measured target position; `false` for an outlier.
-    pub fn fuse_target(&mut self, z: V3) -> bool {
+    /// Fuses a measured target position: fused, an outlier, or (after agreeing outliers) the
+    /// target moved and the estimate followed it.
+    pub fn fuse_target(&mut self, z: V3) -> TargetFix {
         let r = self.noise.position_mm * self.noise.position_mm;
-        let y = z - self.target;
-        let s = self.target_var + r;
-        if !(y.dot(&y) / s <= GATE) {
-            return false;
-        }
-        let k = self.target_var / s;
-        self.target += y * k;
-        self.target_var *= 1.0 - k;
-        true
+        self.target_filter.fuse(&mut self.target, z, r)
     }
 
     /// Standard deviation of the position estimate (mm, the largest axis).
@@ -372,7 +372,7 @@ impl Estimate {
 
     /// Standard deviation of the target estimate, per axis (mm).
     pub fn target_sd(&self) -> f32 {
-        crate::fmath::sqrt(self.target_var)
+        crate::fmath::sqrt(self.target_filter.var)
     }
 }
 

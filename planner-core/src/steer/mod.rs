@@ -33,6 +33,7 @@ mod attempt;
 pub mod estimate;
 pub mod replan;
 mod state;
+pub mod target;
 mod turns;
 mod warm;
 
@@ -189,6 +190,11 @@ pub struct SteerStats {
     pub outliers: u32,
     /// Readings older than the last one (ignored).
     pub stale: u32,
+    /// Imaged targets rejected as outliers (outside the gate of the target's estimate).
+    pub target_outliers: u32,
+    /// Times the imaged target moved: fixes that agreed with one another and not with the
+    /// estimate, which then followed them (each one a move the run reports).
+    pub target_jumps: u32,
     /// Readings with the last one's sequence number, answered again without applying them: a
     /// tracker's duplicate, or the link sending a reading again after its answer was lost or
     /// late (so the count depends on the transport, not only on the insertion).

@@ -2,6 +2,7 @@
 
 use super::estimate::Estimate;
 use super::replan::{predict, replan, segments_of, Prediction, ReplanInput};
+use super::target::TargetFix;
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
     REPLAN_DEFER_PER_MM, STEER_MARGIN_SDS,
@@ -306,7 +307,11 @@ impl Steering {
     /// Fuses the reading's fix and target.
     fn fuse(&mut self, m: &TipMeasurement) -> Reading {
         if let Some(t) = m.target.filter(finite3) {
-            let _ = self.estimate.fuse_target(v3(t));
+            match self.estimate.fuse_target(v3(t)) {
+                TargetFix::Fused => {}
+                TargetFix::Outlier => self.stats.target_outliers += 1,
+                TargetFix::Jumped => self.stats.target_jumps += 1,
+            }
         }
         let Some(pose) = m.pose else {
             self.stats.no_fix += 1;

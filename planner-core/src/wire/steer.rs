@@ -34,10 +34,10 @@ impl MaxSize for SteerReply {
         + u32::MAX_SIZE;
 }
 impl MaxSize for SteerStats {
-    const MAX_SIZE: usize = 7 * u32::MAX_SIZE;
+    const MAX_SIZE: usize = 9 * u32::MAX_SIZE;
 }
 impl MaxSize for NoiseModel {
-    const MAX_SIZE: usize = 10 * f32::MAX_SIZE;
+    const MAX_SIZE: usize = 11 * f32::MAX_SIZE;
 }
 impl MaxSize for SteerConfig {
     const MAX_SIZE: usize = NoiseModel::MAX_SIZE + 4 * f32::MAX_SIZE + u32::MAX_SIZE;
@@ -103,6 +103,8 @@ mod tests {
             replan_failures: u32::MAX,
             no_fix: u32::MAX,
             outliers: u32::MAX,
+            target_outliers: u32::MAX,
+            target_jumps: u32::MAX,
             stale: u32::MAX,
             repeated: u32::MAX,
         };
