@@ -90,7 +90,7 @@ pub enum LinkError {
         /// The device's.
         device: u8,
     },
-    /// The plan came back damaged every time, or did not decode.
+    /// The plan (or a long steering answer) came back damaged every time, or did not decode.
     CorruptResult,
 }
 
@@ -177,9 +177,9 @@ impl fmt::Display for LinkError {
                 f,
                 "the device speaks protocol version {device}, this needle speaks {PROTOCOL_VERSION}"
             ),
-            LinkError::CorruptResult => {
-                f.write_str("the plan arrived damaged on every attempt (CRC mismatch)")
-            }
+            LinkError::CorruptResult => f.write_str(
+                "the answer fetched in parts arrived damaged on every attempt (CRC mismatch)",
+            ),
         }
     }
 }

@@ -1,6 +1,8 @@
 //! Steering on the device: start it on the plan just fetched, then one reading per exchange.
 //! A reading is retried like any request; the device answers a repeated sequence number with
 //! the same reply without applying the reading twice, so a retry after a lost answer is safe.
+//! An answer longer than the current chunk (the schedule, a replaced continuation) is announced
+//! and fetched in parts, so a noisy line that damages long frames still carries it.
 
 use crate::client::Client;
 use crate::error::LinkError;
@@ -9,18 +11,59 @@ use planner_core::execute::schedule::Steps;
 use planner_core::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
 use planner_core::wire::{Fault, ReplyBody, RequestBody};
 
+/// A steering answer: here, or announced for fetching.
+enum Answer<R> {
+    Now(R),
+    Pending { len: u16, crc: u32 },
+}
+
 impl<T: Transport> Client<T> {
     /// The request id of the plan last fetched, which steering runs under.
     fn steered_plan(&self) -> Result<u16, LinkError> {
         self.last_plan.ok_or(LinkError::Device(Fault::NoPlan))
     }
 
+    /// Sends `make(chunk)` until the device answers with what `pick` takes, whole or announced
+    /// and then fetched in parts.
+    fn steer_exchange<R>(
+        &mut self,
+        what: &'static str,
+        id: u16,
+        make: impl FnMut(usize) -> RequestBody,
+        pick: impl Fn(&ReplyBody) -> Option<R>,
+    ) -> Result<R, LinkError> {
+        let answer = self.exchange_with(what, None, id, make, &mut |b| match b {
+            ReplyBody::SteerPending { len, crc } => Some(Answer::Pending {
+                len: *len,
+                crc: *crc,
+            }),
+            other => pick(other).map(Answer::Now),
+        })?;
+        match answer {
+            Answer::Now(r) => Ok(r),
+            Answer::Pending { len, crc } => {
+                let bytes = self.fetch_parts(what, id, len, crc, |offset, max_len| {
+                    RequestBody::SteerFetch { offset, max_len }
+                })?;
+                postcard::from_bytes::<ReplyBody>(&bytes)
+                    .ok()
+                    .as_ref()
+                    .and_then(pick)
+                    .ok_or(LinkError::CorruptResult)
+            }
+        }
+    }
+
     /// Starts steering the plan last fetched; returns the steps to execute first.
     pub fn steer_start(&mut self, config: &SteerConfig) -> Result<Steps, LinkError> {
         self.begin();
         let id = self.steered_plan()?;
-        let body = RequestBody::SteerStart { config: *config };
-        self.exchange("steer start", id, &body, |b| match b {
+        let config = *config;
+        let make = |chunk: usize| RequestBody::SteerStart {
+            config,
+            max_len: chunk as u16,
+        };
+        self.steer_exchange("steer start", id, make, |b| match b {
             ReplyBody::SteerStarted { steps } => Some(steps.clone()),
             _ => None,
         })
@@ -30,16 +73,15 @@ impl<T: Transport> Client<T> {
     pub fn steer(&mut self, m: &TipMeasurement) -> Result<SteerReply, LinkError> {
         self.begin();
         let id = self.steered_plan()?;
-        let seq = m.seq;
-        self.exchange(
-            "steer reading",
-            id,
-            &RequestBody::SteerReading(*m),
-            |b| match b {
-                ReplyBody::Steer(r) if r.seq == seq => Some(r.clone()),
-                _ => None,
-            },
-        )
+        let (reading, seq) = (*m, m.seq);
+        let make = |chunk: usize| RequestBody::SteerReading {
+            reading,
+            max_len: chunk as u16,
+        };
+        self.steer_exchange("steer reading", id, make, |b| match b {
+            ReplyBody::Steer(r) if r.seq == seq => Some(r.clone()),
+            _ => None,
+        })
     }
 
     /// The device controller's counters, and its stop once it has stopped.

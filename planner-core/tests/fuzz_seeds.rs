@@ -104,10 +104,25 @@ fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         7,
         RequestBody::SteerStart {
             config: SteerConfig::DEFAULT,
+            max_len: 16,
+        },
+    ));
+    steer.extend(current(
+        7,
+        RequestBody::SteerFetch {
+            offset: 0,
+            max_len: 16,
         },
     ));
     for m in [fix, blind, blind, far] {
-        steer.extend(current(7, RequestBody::SteerReading(m)));
+        let max_len = if m == far { 24 } else { 1000 };
+        steer.extend(current(
+            7,
+            RequestBody::SteerReading {
+                reading: m,
+                max_len,
+            },
+        ));
     }
     steer.extend(current(7, RequestBody::SteerStatus));
     let mut status = current(3, RequestBody::Status);
@@ -128,7 +143,13 @@ fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         ("steer_rl", steer),
         (
             "steer_without_plan",
-            current(8, RequestBody::SteerReading(fix)),
+            current(
+                8,
+                RequestBody::SteerReading {
+                    reading: fix,
+                    max_len: 1000,
+                },
+            ),
         ),
     ]
 }

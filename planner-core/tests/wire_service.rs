@@ -269,3 +269,80 @@ fn the_device_answers_an_unreachable_target_with_every_form_and_no_best() {
         postcard::to_stdvec(&planner_core::plan_scheduled(&s).unwrap()).unwrap()
     );
 }
+
+/// Sends one request and returns the device's one answer to it.
+fn ask(dev: &mut DeviceService, id: u16, body: RequestBody) -> ReplyBody {
+    dev.receive(&frame(id, body));
+    let mut replies = run(dev);
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    replies.remove(0).body
+}
+
+#[test]
+fn a_long_steering_answer_is_announced_and_fetched_in_parts() {
+    use planner_core::steer::SteerConfig;
+    let mut dev = Box::new(DeviceService::new());
+    for f in upload_frames(4, &small_scenario()) {
+        dev.receive(&f);
+        run(&mut dev);
+    }
+    let config = SteerConfig::DEFAULT;
+    let whole = ask(
+        &mut dev,
+        4,
+        RequestBody::SteerStart {
+            config,
+            max_len: 1000,
+        },
+    );
+    assert!(matches!(whole, ReplyBody::SteerStarted { .. }), "{whole:?}");
+    // The same start (a repeat restarts from the entry) allowed 8 bytes: announced instead.
+    let ReplyBody::SteerPending { len, crc } =
+        ask(&mut dev, 4, RequestBody::SteerStart { config, max_len: 8 })
+    else {
+        panic!("a long answer is announced");
+    };
+    assert!(usize::from(len) > 8);
+    let mut bytes = Vec::new();
+    while bytes.len() < usize::from(len) {
+        let offset = bytes.len() as u16;
+        match ask(&mut dev, 4, RequestBody::SteerFetch { offset, max_len: 8 }) {
+            ReplyBody::Part {
+                offset: o,
+                total,
+                data,
+            } => {
+                assert_eq!((o, total), (offset, len));
+                assert!(!data.is_empty() && data.len() <= 8);
+                bytes.extend_from_slice(&data);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    assert_eq!(crc32(&bytes), crc);
+    assert_eq!(postcard::from_bytes::<ReplyBody>(&bytes).unwrap(), whole);
+    let past = ask(
+        &mut dev,
+        4,
+        RequestBody::SteerFetch {
+            offset: len + 1,
+            max_len: 8,
+        },
+    );
+    assert_eq!(
+        past,
+        ReplyBody::Fault(Fault::BadOffset {
+            offset: len + 1,
+            len
+        })
+    );
+    let other = ask(
+        &mut dev,
+        5,
+        RequestBody::SteerFetch {
+            offset: 0,
+            max_len: 8,
+        },
+    );
+    assert_eq!(other, ReplyBody::Fault(Fault::NotSteering));
+}

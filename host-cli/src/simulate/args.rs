@@ -64,6 +64,10 @@ pub struct SimulateArgs {
     /// Seconds of silence allowed per exchange with the device.
     #[arg(long, default_value_t = 5.0)]
     pub timeout: f64,
+    /// Times one request to the device is sent again before giving up (a noisy line needs
+    /// more: a reading's request is about 80 bytes).
+    #[arg(long, default_value_t = needle_link::ClientConfig::DEFAULT.retries)]
+    pub retries: u32,
     /// With --closed-loop: also run the same worlds open loop and print both side by side.
     #[arg(long, requires = "closed_loop")]
     pub compare_open_loop: bool,
@@ -72,7 +76,9 @@ pub struct SimulateArgs {
 impl SimulateArgs {
     /// The device to steer on (`--tcp` or `--port`), if any.
     pub fn link(&self) -> Option<LinkArgs> {
-        LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)
+        let mut link = LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
+        link.retries = self.retries;
+        Some(link)
     }
 }
 

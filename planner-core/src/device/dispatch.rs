@@ -90,8 +90,15 @@ impl Core {
                 }
                 self.send(id, ReplyBody::Cancelled { was_active }, tx);
             }
-            RequestBody::SteerStart { config } => self.steer_start(id, &config, tx),
-            RequestBody::SteerReading(m) => self.steer_reading(id, &m, tx),
+            RequestBody::SteerStart { config, max_len } => {
+                self.steer_start(id, &config, max_len, tx)
+            }
+            RequestBody::SteerReading { reading, max_len } => {
+                self.steer_reading(id, &reading, max_len, tx)
+            }
+            RequestBody::SteerFetch { offset, max_len } => {
+                self.steer_fetch(id, offset, max_len, tx)
+            }
             RequestBody::SteerStatus => self.steer_status(id, tx),
         }
     }

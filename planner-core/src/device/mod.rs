@@ -19,7 +19,7 @@ mod upload;
 
 use crate::wire::{
     encode_frame, Fault, FrameDecoder, Header, Reply, ReplyBody, ENCODE_SCRATCH, MAX_FRAME,
-    MAX_PLAN_REQUEST, MAX_PLAN_RESULT,
+    MAX_PLAN_REQUEST, MAX_PLAN_RESULT, MAX_STEER_ANSWER,
 };
 use job::Job;
 use receive::Inbox;
@@ -80,6 +80,9 @@ struct Core {
     stats: DeviceStats,
     /// The insertion being steered, under the id of the plan it executes.
     steering: steer::Steered,
+    /// The last steering answer, encoded, for `SteerFetch`, and its length.
+    steer_answer: [u8; MAX_STEER_ANSWER],
+    steer_answer_len: u16,
 }
 
 /// The device's request handler.
@@ -146,6 +149,8 @@ impl DeviceService {
                     steer_readings: 0,
                 },
                 steering: steer::Steered::Off,
+                steer_answer: [0; MAX_STEER_ANSWER],
+                steer_answer_len: 0,
             },
         }
     }

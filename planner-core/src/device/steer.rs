@@ -4,8 +4,9 @@
 
 use super::job::Job;
 use super::Core;
-use crate::steer::{SteerConfig, SteerError, Steering, TipMeasurement};
-use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
+use crate::steer::{Reading, SteerConfig, SteerError, Steering, TipMeasurement};
+use crate::wire::crc::crc32;
+use crate::wire::{Chunk, Fault, PlanRequest, PlanResult, ReplyBody, MAX_CHUNK};
 
 /// The insertion being steered, if any.
 // An enum with an explicit tag rather than an `Option`: the option's `None` hid in a niche of the
@@ -23,12 +24,18 @@ pub(super) enum Steered {
 
 impl Core {
     /// Starts steering plan `id` with `config`.
-    pub(super) fn steer_start(&mut self, id: u16, config: &SteerConfig, tx: &mut dyn FnMut(&[u8])) {
+    pub(super) fn steer_start(
+        &mut self,
+        id: u16,
+        config: &SteerConfig,
+        max_len: u16,
+        tx: &mut dyn FnMut(&[u8]),
+    ) {
         match self.steering_for(id, config) {
             Ok(steering) => {
                 let steps = steering.steps().iter().copied().collect();
                 self.steering = Steered::On { plan: id, steering };
-                self.send(id, ReplyBody::SteerStarted { steps }, tx);
+                self.answer(id, ReplyBody::SteerStarted { steps }, max_len, tx);
             }
             Err(fault) => self.fault(id, fault, tx),
         }
@@ -71,12 +78,26 @@ impl Core {
     }
 
     /// Answers one reading of the insertion steered under plan `id`.
-    pub(super) fn steer_reading(&mut self, id: u16, m: &TipMeasurement, tx: &mut dyn FnMut(&[u8])) {
+    pub(super) fn steer_reading(
+        &mut self,
+        id: u16,
+        m: &TipMeasurement,
+        max_len: u16,
+        tx: &mut dyn FnMut(&[u8]),
+    ) {
         match &mut self.steering {
             Steered::On { plan, steering } if *plan == id => {
                 let reply = steering.update(m);
                 self.stats.steer_readings = self.stats.steer_readings.wrapping_add(1);
-                self.send(id, ReplyBody::Steer(reply), tx);
+                let stored = usize::from(self.steer_answer_len);
+                if reply.reading == Reading::Repeated && stored > usize::from(max_len) {
+                    // The host may be fetching the first answer's parts: announce the same
+                    // bytes again rather than a re-encoding that says "repeated".
+                    let crc = crc32(&self.steer_answer[..stored]);
+                    let len = self.steer_answer_len;
+                    return self.send(id, ReplyBody::SteerPending { len, crc }, tx);
+                }
+                self.answer(id, ReplyBody::Steer(reply), max_len, tx);
             }
             _ => self.fault(id, Fault::NotSteering, tx),
         }
@@ -94,5 +115,52 @@ impl Core {
             }
             _ => self.fault(id, Fault::NotSteering, tx),
         }
+    }
+
+    /// Sends a steering answer whole when it is at most `max_len` bytes, else announces it for
+    /// `SteerFetch` (a noisy line damages long frames; short parts get through).
+    fn answer(&mut self, id: u16, body: ReplyBody, max_len: u16, tx: &mut dyn FnMut(&[u8])) {
+        // Cannot fail: the buffer is sized from the largest steering answer, checked by tests.
+        let Ok(bytes) = postcard::to_slice(&body, &mut self.steer_answer) else {
+            return self.send(id, body, tx);
+        };
+        let len = bytes.len() as u16;
+        let crc = crc32(bytes);
+        self.steer_answer_len = len;
+        if len <= max_len {
+            self.send(id, body, tx);
+        } else {
+            self.send(id, ReplyBody::SteerPending { len, crc }, tx);
+        }
+    }
+
+    /// Part of the last steering answer of the insertion steered under plan `id`.
+    pub(super) fn steer_fetch(
+        &mut self,
+        id: u16,
+        offset: u16,
+        max_len: u16,
+        tx: &mut dyn FnMut(&[u8]),
+    ) {
+        let len = self.steer_answer_len;
+        if !matches!(&self.steering, Steered::On { plan, .. } if *plan == id) {
+            return self.fault(id, Fault::NotSteering, tx);
+        }
+        if offset > len {
+            return self.fault(id, Fault::BadOffset { offset, len }, tx);
+        }
+        let start = usize::from(offset);
+        let n = usize::from(max_len)
+            .min(MAX_CHUNK)
+            .min(usize::from(len) - start);
+        let mut data = Chunk::new();
+        // Cannot fail: n <= MAX_CHUNK.
+        let _ = data.extend_from_slice(&self.steer_answer[start..start + n]);
+        let part = ReplyBody::Part {
+            offset,
+            total: len,
+            data,
+        };
+        self.send(id, part, tx);
     }
 }

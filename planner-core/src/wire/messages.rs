@@ -94,13 +94,30 @@ pub enum RequestBody {
     Cancel,
     /// Start steering the finished plan `id` (its best form's schedule) with these settings:
     /// answered by [`ReplyBody::SteerStarted`]. A repeat restarts steering from the entry.
+    /// An answer longer than `max_len` bytes comes as [`ReplyBody::SteerPending`].
     SteerStart {
         /// The controller's settings.
         config: SteerConfig,
+        /// Longest encoded answer wanted in one frame (bytes): a noisy line damages long frames.
+        max_len: u16,
     },
-    /// A tracker reading with the robot's progress: answered by [`ReplyBody::Steer`]. A reading
-    /// whose sequence number was the last one's is answered again and not applied twice.
-    SteerReading(TipMeasurement),
+    /// A tracker reading with the robot's progress: answered by [`ReplyBody::Steer`], or by
+    /// [`ReplyBody::SteerPending`] when that is longer than `max_len` bytes. A reading whose
+    /// sequence number was the last one's is answered again and not applied twice.
+    SteerReading {
+        /// The reading.
+        reading: TipMeasurement,
+        /// Longest encoded answer wanted in one frame (bytes).
+        max_len: u16,
+    },
+    /// Send part of the steering answer last announced by [`ReplyBody::SteerPending`]:
+    /// answered by [`ReplyBody::Part`].
+    SteerFetch {
+        /// First byte wanted.
+        offset: u16,
+        /// Most bytes wanted (the device caps it at [`MAX_CHUNK`]).
+        max_len: u16,
+    },
     /// The controller's counters and stop: answered by [`ReplyBody::SteerStatus`].
     SteerStatus,
 }
@@ -170,6 +187,15 @@ pub enum ReplyBody {
     },
     /// The controller's answer to a reading.
     Steer(SteerReply),
+    /// The answer to `SteerStart` or `SteerReading` (an encoded [`ReplyBody::SteerStarted`] or
+    /// [`ReplyBody::Steer`]) is `len` bytes, more than the request allowed: fetch it with
+    /// `SteerFetch`; `crc` is the CRC-32 of the whole.
+    SteerPending {
+        /// Length of the encoded answer.
+        len: u16,
+        /// CRC-32 of the encoded answer.
+        crc: u32,
+    },
     /// The controller's counters, and why it stopped once it has.
     SteerStatus {
         /// Counters over the insertion.
@@ -360,7 +386,7 @@ impl MaxSize for RequestBody {
             2 * u16::MAX_SIZE + u32::MAX_SIZE + Chunk::MAX_SIZE,
             max(
                 2 * u16::MAX_SIZE,
-                max(SteerConfig::MAX_SIZE, TipMeasurement::MAX_SIZE),
+                max(SteerConfig::MAX_SIZE, TipMeasurement::MAX_SIZE) + u16::MAX_SIZE,
             ),
         ),
     );

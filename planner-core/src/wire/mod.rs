@@ -30,11 +30,19 @@ pub const MAX_PLAN_REQUEST: usize = <PlanRequest as MaxSize>::MAX_SIZE;
 /// Largest encoded [`PlanResult`]: the device's result buffer.
 pub const MAX_PLAN_RESULT: usize = <PlanResult as MaxSize>::MAX_SIZE;
 
+/// Largest encoded steering answer ([`ReplyBody::SteerStarted`] or [`ReplyBody::Steer`]): the
+/// device's buffer for an answer fetched in parts.
+pub const MAX_STEER_ANSWER: usize = 1 + max_size::max(
+    <crate::execute::schedule::Steps as MaxSize>::MAX_SIZE,
+    <crate::steer::SteerReply as MaxSize>::MAX_SIZE,
+);
+
 // Every frame fits one COBS block (one byte of stuffing overhead); offsets and lengths are u16;
 // a hello fits any reply frame.
 const _: () = assert!(MAX_PAYLOAD + frame::CRC_LEN < 254);
 const _: () = assert!(MAX_PLAN_RESULT < u16::MAX as usize);
 const _: () = assert!(MAX_PLAN_REQUEST < u16::MAX as usize);
+const _: () = assert!(MAX_STEER_ANSWER < u16::MAX as usize);
 const _: () = assert!(DeviceInfo::MAX_SIZE <= <ReplyBody as MaxSize>::MAX_SIZE);
 
 #[cfg(test)]
