@@ -73,6 +73,16 @@ const KEYS: &[Key] = &[
         zero_allowed: false,
     },
     Key {
+        name: "curvature_walk",
+        field: |c| &mut c.noise.curvature_walk,
+        zero_allowed: true,
+    },
+    Key {
+        name: "registration_mm",
+        field: |c| &mut c.noise.registration_mm,
+        zero_allowed: true,
+    },
+    Key {
         name: "replan_error_mm",
         field: |c| &mut c.replan_error_mm,
         zero_allowed: false,

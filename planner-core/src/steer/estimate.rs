@@ -52,6 +52,13 @@ pub struct NoiseModel {
     /// Random walk of the target per square-root millimetre of insertion (mm): the tissue
     /// moves as the needle pushes it, so the target estimate never freezes.
     pub target_walk_mm: f32,
+    /// Random walk of the curvature factor per square-root millimetre of insertion (relative;
+    /// 0 or more): tissue layers change the curvature within an arc, not only between arcs.
+    pub curvature_walk: f32,
+    /// The tracker's error against the imaging frame that no fix reveals, per axis (mm; 0 or
+    /// more): the registration and the field's distortion. Kept clear of the obstacles on top
+    /// of the estimate's own spread.
+    pub registration_mm: f32,
 }
 
 impl NoiseModel {
@@ -68,6 +75,8 @@ impl NoiseModel {
         insertion_error_mm: 0.3,
         target_mm: 0.5,
         target_walk_mm: 0.01,
+        curvature_walk: 0.0,
+        registration_mm: 0.0,
     };
 
     /// Every figure finite and positive.
@@ -87,6 +96,9 @@ impl NoiseModel {
         ]
         .iter()
         .all(|v| v.is_finite() && *v > 0.0)
+            && [self.curvature_walk, self.registration_mm]
+                .iter()
+                .all(|v| v.is_finite() && *v >= 0.0)
     }
 }
 
@@ -252,6 +264,8 @@ impl Estimate {
                 self.cov[(a, b)] += q_len * along[a] * along[b];
             }
         }
+        let walk = self.noise.curvature_walk;
+        self.cov[(6, 6)] += walk * walk * length;
         if kind == SegmentKind::Line {
             let walk = self.noise.line_walk_deg.to_radians();
             self.cov[(3, 3)] += walk * walk * length;
@@ -360,9 +374,16 @@ impl Estimate {
     /// estimate's, widened where the fixes' innovations say the world is noisier than the model
     /// (never narrowed). Widened by their variance ratio, not its square root: a filter tuned
     /// for a quieter world also estimates worse than its own covariance says (measured in a
-    /// world with every perturbation doubled, docs/execution.md).
+    /// world with every perturbation doubled, docs/execution.md). The tracker's hidden error
+    /// (`registration_mm`) adds in quadrature: no fix shows it, so nothing narrows it.
     pub fn margin_sd(&self) -> f32 {
-        self.position_sd() * self.consistency.max(1.0)
+        let own = self.position_sd() * self.consistency.max(1.0);
+        let hidden = self.noise.registration_mm;
+        if hidden > 0.0 {
+            crate::fmath::sqrt(own * own + hidden * hidden)
+        } else {
+            own
+        }
     }
 
     /// Covariance of the position estimate (mm²).
