@@ -39,7 +39,7 @@ impl World {
         let noise = [0; 3].map(|_| normal(g, pos_sd));
         let angles = [0; 3].map(|_| normal(g, head_sd).to_radians());
         let target = [0; 3].map(|_| normal(g, pos_sd));
-        let seen = self.fx.tip_seen(self.commanded, &self.tip);
+        let seen = self.fx.tip_seen(&self.tip);
         let mut f = seen;
         if angles != [0.0; 3] {
             f = turned(&f, f.e1(), angles[0]);
@@ -48,7 +48,7 @@ impl World {
         }
         f.p = seen.p + v3(noise);
         let f = self.fx.distorted(f);
-        let imaged = self.fx.target_seen(self.commanded, self.true_target);
+        let imaged = self.fx.target_seen(self.true_target);
         let arr = |v: V3| [v.x, v.y, v.z];
         Measurement {
             depth_mm: self.commanded,

@@ -191,7 +191,8 @@ impl World {
     /// of latency and imaging recorded). Nothing without effects.
     pub(crate) fn moved(&mut self) {
         if self.fx.any() {
-            self.true_target = self.fx.moved(self.commanded, &self.tip, self.true_target);
+            let (c, base) = (self.commanded, self.torsion.base_deg);
+            self.true_target = self.fx.moved(c, base, &self.tip, self.true_target);
         }
     }
 

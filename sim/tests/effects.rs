@@ -180,6 +180,31 @@ fn a_late_pose_is_the_tip_speed_times_latency_earlier() {
     }
 }
 
+/// Latency across a rotation: the world's clock turns the base at the driver's 360 deg/s, so
+/// 100 ms after a 90 degree turn (which took 250 ms) the pose shows the bevel 60 % of the way.
+#[test]
+fn a_late_pose_after_a_rotation_shows_part_of_it() {
+    let (s, mut sched) = one_step(Op::Insert { length_mm: 10.0 });
+    for op in [
+        Op::Rotate { angle_deg: 90.0 },
+        Op::Insert { length_mm: 10.0 },
+    ] {
+        sched
+            .steps
+            .push(Step {
+                op,
+                duration_s: 1.0,
+            })
+            .unwrap();
+    }
+    let e = effects(&[("tracker_latency_ms", 100.0)]);
+    let (_, seen) = quiet(&s, &sched, &e, 1);
+    let before = seen.iter().rposition(|m| m.depth_mm == 10.0).unwrap() - 1;
+    let (b0, b1) = (p3(seen[before].bevel), p3(seen[before + 1].bevel));
+    let turned = b0.dot(&b1).clamp(-1.0, 1.0).acos().to_degrees();
+    assert!((turned - 54.0).abs() < 0.5, "{turned} degrees");
+}
+
 /// A registration error moves every tracked point rigidly: distances between measured points
 /// are the true distances, though each point is off.
 #[test]

@@ -23,9 +23,13 @@ pub use state::EffectsDrawn;
 
 use serde::Serialize;
 
-/// The insertion speed the world assumes when neither the key nor the schedule says one
+/// The insertion speed the world assumes when neither the key nor the driver says one
 /// (mm/s): the driver's default.
 pub const DEFAULT_INSERTION_SPEED_MM_S: f32 = 2.5;
+
+/// The rotation speed the world's clock assumes when the driver says none (deg/s): the
+/// driver's default.
+pub const DEFAULT_ROTATION_SPEED_DEG_S: f32 = 360.0;
 
 /// Effects of the world beyond the [`Perturbation`](crate::Perturbation), all off by default
 /// ([`WorldEffects::default`] is today's world). Spreads are standard deviations.
@@ -99,15 +103,16 @@ pub struct WorldEffects {
     /// 2014, IEEE TBME 61(10), "PLUS: open-source toolkit for ultrasound-guided intervention
     /// systems"). Clinical: 50.
     pub target_imaging_delay_ms: f32,
-    /// Age of a tracker pose when it arrives (ms): the pose is the tip as it was
-    /// latency × insertion speed mm of insertion earlier.
+    /// Age of a tracker pose when it arrives (ms): the pose is the tip as it was this long
+    /// ago, during a push latency × insertion speed mm of insertion earlier (and after a
+    /// rotation, part of the way through it when the rotation took less than this).
     ///
     /// Default 0. PLUS/OpenIGTLink stream tracker poses tens of milliseconds late (Lasso et al.
     /// 2014; Tokuda et al. 2009, Int J Med Robot 5(4), "OpenIGTLink"). Clinical: 30.
     pub tracker_latency_ms: f32,
-    /// Insertion speed that turns the latencies into insertion (mm/s; 0: the schedule's own,
-    /// its inserted length over its insertion time, else 2.5 mm/s). The world has no clock but
-    /// the insertion: rotations take no time in it.
+    /// Insertion speed of the world's clock, which turns the latencies and imaging's rate into
+    /// insertion (mm/s; 0: the scenario's driver's `insert_speed`, 2.5 mm/s by default).
+    /// Rotations take their time at the driver's `rotate_speed`.
     pub insertion_speed_mm_s: f32,
 }
 

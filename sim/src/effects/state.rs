@@ -5,7 +5,7 @@ use super::bias::{BiasField, Registration};
 use super::delay::{Imaging, Latency};
 use super::layers::Layers;
 use super::push::TargetPush;
-use super::{WorldEffects, DEFAULT_INSERTION_SPEED_MM_S};
+use super::{WorldEffects, DEFAULT_INSERTION_SPEED_MM_S, DEFAULT_ROTATION_SPEED_DEG_S};
 use crate::random::seeded;
 use planner_core::execute::schedule::{Op, Schedule};
 use planner_core::model::kinematics::{Frame, V3};
@@ -46,18 +46,30 @@ pub(crate) struct Active {
     pub imaging: Option<Imaging>,
     latency_mm: Option<f32>,
     rest_target: V3,
+    clock: Clock,
 }
 
-/// Inserted length over insertion time of the schedule's plain pushes, if it has any.
-fn schedule_speed(schedule: &Schedule) -> Option<f32> {
-    let (mut mm, mut s) = (0.0f32, 0.0f32);
-    for step in schedule.steps.iter() {
-        if let Op::Insert { length_mm } = step.op {
-            mm += length_mm;
-            s += step.duration_s;
-        }
+/// The world's clock: the robot's time, insertion at the insertion speed and rotations at the
+/// driver's rotation speed (the base's turns; a spin's whole turns are in its push's time).
+#[derive(Clone, Copy, Debug)]
+struct Clock {
+    insert_speed: f32,
+    rotate_speed: f32,
+    commanded: f32,
+    base_deg: f32,
+    t: f32,
+}
+
+impl Clock {
+    /// The time when `commanded` mm are inserted and the base is at `base_deg` (s).
+    fn at(&mut self, commanded: f32, base_deg: f32) -> f32 {
+        let pushed = (commanded - self.commanded).max(0.0) / self.insert_speed;
+        let turned = (base_deg - self.base_deg).abs() / self.rotate_speed;
+        self.t += pushed + turned;
+        self.commanded = commanded;
+        self.base_deg = base_deg;
+        self.t
     }
-    (mm > 0.0 && s > 0.0).then(|| mm / s)
 }
 
 /// The planned insertion's length (mm).
@@ -77,6 +89,13 @@ fn planned_length(schedule: &Schedule) -> f32 {
 impl Active {
     /// No effect: today's world.
     pub fn off(rest_target: V3) -> Active {
+        let clock = Clock {
+            insert_speed: DEFAULT_INSERTION_SPEED_MM_S,
+            rotate_speed: DEFAULT_ROTATION_SPEED_DEG_S,
+            commanded: 0.0,
+            base_deg: 0.0,
+            t: 0.0,
+        };
         Active {
             roll_seen: true,
             bias: None,
@@ -87,6 +106,7 @@ impl Active {
             imaging: None,
             latency_mm: None,
             rest_target,
+            clock,
         }
     }
 
@@ -123,20 +143,27 @@ impl Active {
             let g = &mut seeded(seed ^ PUSH_STREAM);
             a.push = Some(TargetPush::draw(g, e.target_push_mm));
         }
+        let driver = &scenario.driver;
         let speed = if e.insertion_speed_mm_s > 0.0 {
             e.insertion_speed_mm_s
         } else {
-            schedule_speed(schedule).unwrap_or(DEFAULT_INSERTION_SPEED_MM_S)
+            Some(driver.insert_speed)
+                .filter(|s| s.is_finite() && *s > 0.0)
+                .unwrap_or(DEFAULT_INSERTION_SPEED_MM_S)
         };
+        a.clock.insert_speed = speed;
+        if driver.rotate_speed.is_finite() && driver.rotate_speed > 0.0 {
+            a.clock.rotate_speed = driver.rotate_speed;
+        }
         if e.tracker_latency_ms > 0.0 {
-            let lag = e.tracker_latency_ms / 1000.0 * speed;
-            a.latency_mm = Some(lag);
+            let lag = e.tracker_latency_ms / 1000.0;
+            a.latency_mm = Some(lag * speed);
             a.latency = Some(Latency::new(lag, *tip));
         }
         if e.target_imaging_hz > 0.0 || e.target_imaging_delay_ms > 0.0 {
             let delay = e.target_imaging_delay_ms / 1000.0;
             let hz = e.target_imaging_hz;
-            a.imaging = Some(Imaging::new(hz, delay, speed, rest_target));
+            a.imaging = Some(Imaging::new(hz, delay, rest_target));
         }
         a
     }
@@ -163,26 +190,28 @@ impl Active {
             || self.imaging.is_some()
     }
 
-    /// The tip moved or turned to `tip` with `commanded` mm inserted: the target is pushed,
-    /// the histories recorded. Returns the true target.
-    pub fn moved(&mut self, commanded: f32, tip: &Frame, target: V3) -> V3 {
+    /// The tip moved or turned to `tip` with `commanded` mm inserted and the base at
+    /// `base_deg`: the clock runs on, the target is pushed, the histories recorded. Returns the
+    /// true target.
+    pub fn moved(&mut self, commanded: f32, base_deg: f32, tip: &Frame, target: V3) -> V3 {
+        let t = self.clock.at(commanded, base_deg);
         let target = match self.push.as_mut() {
             Some(p) => self.rest_target + p.displacement(tip, self.rest_target),
             None => target,
         };
         if let Some(l) = self.latency.as_mut() {
-            l.record(commanded, *tip);
+            l.record(t, *tip);
         }
         if let Some(i) = self.imaging.as_mut() {
-            i.record(commanded, target);
+            i.record(t, target);
         }
         target
     }
 
-    /// The tip the tracker reports on with `commanded` mm inserted (before its noise).
-    pub fn tip_seen(&self, commanded: f32, tip: &Frame) -> Frame {
+    /// The tip the tracker reports on now (before its noise).
+    pub fn tip_seen(&self, tip: &Frame) -> Frame {
         match &self.latency {
-            Some(l) => l.seen(commanded, tip),
+            Some(l) => l.seen(self.clock.t, tip),
             None => *tip,
         }
     }
@@ -199,10 +228,10 @@ impl Active {
         }
     }
 
-    /// The target a reading carries with `commanded` mm inserted (`None` between images).
-    pub fn target_seen(&mut self, commanded: f32, target: V3) -> Option<V3> {
+    /// The target a reading carries now (`None` between images).
+    pub fn target_seen(&mut self, target: V3) -> Option<V3> {
         match self.imaging.as_mut() {
-            Some(i) => i.seen(commanded),
+            Some(i) => i.seen(self.clock.t),
             None => Some(target),
         }
     }
