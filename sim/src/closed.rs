@@ -4,8 +4,8 @@
 //! outliers, repeated and stale sequence numbers) are drawn from their own stream, so turning
 //! them on does not change the tissue or the tracker's noise.
 
-use crate::measure::Measurement;
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::reading::Measurement;
 use crate::run::{finish, Planned, Run};
 use crate::world::World;
 use crate::world::WorldError;

@@ -3,7 +3,7 @@
 //! stall at a boundary while the robot keeps inserting, the jump when the membrane gives).
 
 use crate::effects::layers::Move;
-use crate::measure::Measurement;
+use crate::reading::Measurement;
 use crate::world::{Executed, World};
 use crate::MAX_PIECE_MM;
 use planner_core::SegmentKind;

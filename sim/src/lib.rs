@@ -48,6 +48,7 @@ mod executed;
 mod layered;
 mod measure;
 pub mod random;
+mod reading;
 mod run;
 mod world;
 
@@ -57,9 +58,9 @@ pub use closed::{
 };
 pub use drawn::{Drawn, StepDraw};
 pub use effects::{EffectsError, WorldEffects, WORLD_KEYS};
-pub use measure::Measurement;
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
+pub use reading::Measurement;
 pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};
 pub use world::{Executed, World, WorldError, MIN_FACTOR};

@@ -19,10 +19,10 @@
 //! - the entry point and direction are off by their draws, and the true target is displaced.
 //!
 //! The tracker measures the tip after every piece of insertion (pieces at most
-//! `measure_every_mm` and 1 mm long) and after every rotation ([`crate::measure`]).
+//! `measure_every_mm` and 1 mm long) and after every rotation (`measure.rs`).
 //!
 //! The [`WorldEffects`] (layers, a pushed target, the tracker's bias, registration, latency and
-//! 5-DOF, imaging's rate and delay) act through hooks: a layered push ([`crate::layered`]),
+//! 5-DOF, imaging's rate and delay) act through hooks: a layered push (`layered.rs`),
 //! [`World::moved`] after the tip moves, and the measurement. With every effect off none of
 //! them draws or changes a bit.
 
@@ -30,8 +30,8 @@ use crate::drawn::{Drawn, StepDraw};
 use crate::effects::layers::Move;
 use crate::effects::{Active, EffectsError, WorldEffects};
 use crate::executed::executed_part;
-use crate::measure::Measurement;
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::reading::Measurement;
 use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::perturbation::TorsionPlay;
