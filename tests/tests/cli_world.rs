@@ -105,3 +105,40 @@ fn the_table_names_the_world_when_it_is_not_the_default() {
     assert!(run("clinical").contains("world: tracker_dof=5 tracker_bias_mm=0.3"));
     assert!(!run("default").contains("world:"));
 }
+
+/// A scenario's `[execution]` names its world as `--world` does: the same runs, bit for bit.
+#[test]
+fn a_scenario_names_its_world_as_the_flag_does() {
+    let dir = std::env::temp_dir().join(format!("needle-world-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("paper-clinical.toml");
+    let text = std::fs::read_to_string(paper()).unwrap();
+    std::fs::write(
+        &file,
+        format!("{text}\n[execution]\nworld = \"clinical\"\n"),
+    )
+    .unwrap();
+    let run = |path: &str, extra: &[&str]| {
+        let out = needle()
+            .args(["simulate", path, "--runs", "4", "--closed-loop", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v["world"].clone(), v["summary"].clone())
+    };
+    let from_file = run(file.to_str().unwrap(), &[]);
+    assert_eq!(from_file, run(&paper(), &["--world", "clinical"]));
+    assert_eq!(from_file.0["tracker_dof"], 5);
+    let replaced = run(file.to_str().unwrap(), &["--world", "default"]);
+    assert_eq!(
+        replaced.0["tracker_dof"], 6,
+        "--world replaces the file's world"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -86,9 +86,10 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
     // silent); `--perturb` changes the world, not what the planner was told.
     let execution = in_scenario(execution_of(file), path)?;
     let mut perturbation = execution.model;
+    // `--world` replaces the file's world (`[execution]`'s effects and their faults).
     let (mut effects, mut faults) = match &r.world {
         Some(name) => WorldEffects::preset(name).context("--world")?,
-        None => (WorldEffects::default(), TrackerFaults::default()),
+        None => (execution.world, execution.faults),
     };
     for kv in &r.perturb {
         change_world(&mut perturbation, &mut effects, kv).context("--perturb")?;
