@@ -90,6 +90,7 @@ pub fn simulate<'py>(
         seed,
         form,
         perturb: assignments("perturb", perturb)?,
+        world: None,
         faults: assignments("faults", faults)?,
         steer: assignments("steer", steer)?,
         closed_loop,

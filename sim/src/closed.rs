@@ -5,9 +5,11 @@
 //! them on does not change the tissue or the tracker's noise.
 
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::reading::Measurement;
 use crate::run::{finish, Planned, Run};
-use crate::world::{Measurement, World};
-use crate::PerturbError;
+use crate::world::World;
+use crate::world::WorldError;
+use crate::{EffectsError, PerturbError, Perturbation, WorldEffects};
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::steer::{
     Command, Pose, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
@@ -124,6 +126,8 @@ pub struct ClosedRun {
 pub enum ClosedLoopError<E> {
     /// The perturbation is invalid.
     Perturbation(PerturbError),
+    /// A world effect is invalid.
+    Effects(EffectsError),
     /// The controller could not start.
     Start(SteerError),
     /// The controller did not answer.
@@ -134,6 +138,7 @@ impl<E: std::fmt::Display> std::fmt::Display for ClosedLoopError<E> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ClosedLoopError::Perturbation(e) => write!(f, "{e}"),
+            ClosedLoopError::Effects(e) => write!(f, "{e}"),
             ClosedLoopError::Start(e) => write!(f, "steering cannot start: {e}"),
             ClosedLoopError::Controller(e) => write!(f, "the controller did not answer: {e}"),
         }
@@ -161,7 +166,7 @@ impl Tracker {
         let mut pose = Some(Pose {
             position: m.position,
             heading: m.heading,
-            bevel: Some(m.bevel),
+            bevel: m.roll_seen.then_some(m.bevel),
         });
         let pushed = (m.depth_mm - self.depth).max(0.0);
         self.depth = m.depth_mm;
@@ -185,7 +190,7 @@ impl Tracker {
             depth_mm: m.depth_mm,
             base_deg: m.base_deg,
             pose,
-            target: pose.map(|_| m.target),
+            target: pose.and(m.target_seen.then_some(m.target)),
         };
         let mut out = vec![(reading, false)];
         if f.repeat_rate > 0.0 && self.g.unit() < f64::from(f.repeat_rate) {
@@ -210,19 +215,52 @@ pub fn in_process(
     Steering::start(scenario, schedule, config)
 }
 
+/// The world a run is made in: the perturbation, the world's effects and the tracker's faults.
+#[derive(Clone, Copy, Debug)]
+pub struct Conditions<'a> {
+    /// The perturbation of the planner's own model.
+    pub perturbation: &'a Perturbation,
+    /// The effects beyond it (all off: today's world).
+    pub effects: &'a WorldEffects,
+    /// The tracker's faults.
+    pub faults: &'a TrackerFaults,
+}
+
 /// Runs one closed-loop insertion in the world of `seed`, steered by `controller` (started on
 /// `schedule`).
 pub fn closed_loop<C: Controller>(
     scenario: &Scenario,
     planned: &Planned,
     schedule: &Schedule,
-    p: &crate::Perturbation,
+    p: &Perturbation,
     faults: &TrackerFaults,
     controller: &mut C,
     seed: u64,
 ) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
-    let mut world =
-        World::new(scenario, &schedule.posture, p, seed).map_err(ClosedLoopError::Perturbation)?;
+    let world = Conditions {
+        perturbation: p,
+        effects: &WorldEffects::default(),
+        faults,
+    };
+    closed_loop_in(scenario, planned, schedule, &world, controller, seed)
+}
+
+/// [`closed_loop`] in a world with effects.
+pub fn closed_loop_in<C: Controller>(
+    scenario: &Scenario,
+    planned: &Planned,
+    schedule: &Schedule,
+    conditions: &Conditions<'_>,
+    controller: &mut C,
+    seed: u64,
+) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
+    let (p, faults) = (conditions.perturbation, conditions.faults);
+    let mut world = World::with_effects(scenario, schedule, p, conditions.effects, seed).map_err(
+        |e| match e {
+            WorldError::Perturbation(e) => ClosedLoopError::Perturbation(e),
+            WorldError::Effects(e) => ClosedLoopError::Effects(e),
+        },
+    )?;
     let mut tracker = Tracker {
         faults: *faults,
         g: seeded(seed ^ FAULT_STREAM),

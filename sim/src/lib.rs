@@ -42,14 +42,25 @@
 #![forbid(unsafe_code)]
 
 mod closed;
+mod drawn;
+pub mod effects;
 mod executed;
+mod layered;
+mod measure;
 pub mod random;
+mod reading;
 mod run;
 mod world;
 
-pub use closed::{closed_loop, in_process, ClosedLoopError, ClosedRun, Controller, TrackerFaults};
+pub use closed::{
+    closed_loop, closed_loop_in, in_process, ClosedLoopError, ClosedRun, Conditions, Controller,
+    TrackerFaults,
+};
+pub use drawn::{Drawn, StepDraw};
+pub use effects::{EffectsError, WorldEffects, WORLD_KEYS};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
-pub use run::{finish, open_loop, Planned, Rotations, Run};
-pub use world::{Drawn, Executed, Measurement, StepDraw, World, MIN_FACTOR};
+pub use reading::Measurement;
+pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};
+pub use world::{Executed, World, WorldError, MIN_FACTOR};

@@ -1,8 +1,9 @@
 //! One open-loop run: every step of the schedule executed in a perturbed [`World`], and how far
 //! the true path lands from the target and strays from the plan.
 
-use crate::world::{Drawn, World};
-use crate::{PerturbError, Perturbation};
+use crate::drawn::Drawn;
+use crate::world::{World, WorldError};
+use crate::{PerturbError, Perturbation, WorldEffects};
 use planner_core::check::rebuild;
 use planner_core::execute::schedule::{Op, Schedule, Step};
 use planner_core::model::clearance::closest;
@@ -134,6 +135,23 @@ pub fn open_loop(
     seed: u64,
 ) -> Result<Run, PerturbError> {
     let mut world = World::new(scenario, &schedule.posture, p, seed)?;
+    for step in &schedule.steps {
+        world.execute(step, |_| ControlFlow::Continue(()));
+    }
+    Ok(finish(&world, planned, seed))
+}
+
+/// [`open_loop`] in a world with `effects` (the tracker's effects change nothing open loop;
+/// the layers and the pushed target do).
+pub fn open_loop_in(
+    scenario: &Scenario,
+    planned: &Planned,
+    schedule: &Schedule,
+    p: &Perturbation,
+    effects: &WorldEffects,
+    seed: u64,
+) -> Result<Run, WorldError> {
+    let mut world = World::with_effects(scenario, schedule, p, effects, seed)?;
     for step in &schedule.steps {
         world.execute(step, |_| ControlFlow::Continue(()));
     }

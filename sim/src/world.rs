@@ -19,10 +19,19 @@
 //! - the entry point and direction are off by their draws, and the true target is displaced.
 //!
 //! The tracker measures the tip after every piece of insertion (pieces at most
-//! `measure_every_mm` and 1 mm long) and after every rotation.
+//! `measure_every_mm` and 1 mm long) and after every rotation (`measure.rs`).
+//!
+//! The [`WorldEffects`] (layers, a pushed target, the tracker's bias, registration, latency and
+//! 5-DOF, imaging's rate and delay) act through hooks: a layered push (`layered.rs`),
+//! [`World::moved`] after the tip moves, and the measurement. With every effect off none of
+//! them draws or changes a bit.
 
+use crate::drawn::{Drawn, StepDraw};
+use crate::effects::layers::Move;
+use crate::effects::{Active, EffectsError, WorldEffects};
 use crate::executed::executed_part;
 use crate::random::{seeded, Draw, SplitMix64};
+use crate::reading::Measurement;
 use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::perturbation::TorsionPlay;
@@ -31,59 +40,14 @@ use planner_core::model::clearance::closest;
 use planner_core::model::kinematics::{rotate, Frame, V3};
 use planner_core::model::scenario::Workspace;
 use planner_core::{Scenario, SegmentKind};
-use serde::Serialize;
+use std::fmt;
 use std::ops::ControlFlow;
 
 /// The smallest curvature factor a draw may give (a wild spread cannot flip the bevel).
 pub const MIN_FACTOR: f32 = 0.2;
 
 /// Offsets the tracker stream from the physics stream of the same seed.
-const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
-
-/// What the tracker reports: the tip and the target as imaging sees them, with noise.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Measurement {
-    /// Commanded insertion so far (mm): what the robot knows without the tracker.
-    pub depth_mm: f32,
-    /// Commanded base rotation so far (degrees, accumulated): the robot's rotation stage.
-    pub base_deg: f32,
-    /// Measured tip position (mm).
-    pub position: [f32; 3],
-    /// Measured unit heading.
-    pub heading: [f32; 3],
-    /// Measured unit bevel direction (arcs curve towards it).
-    pub bevel: [f32; 3],
-    /// The target as imaging sees it: its displaced position, with the tracker's noise.
-    pub target: [f32; 3],
-}
-
-/// What one step drew and did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct StepDraw {
-    /// Curvature factor of the segment (arcs; 0 for other steps).
-    pub segment_factor: f32,
-    /// True advance minus commanded advance (mm).
-    pub length_error_mm: f32,
-    /// Line drift across the heading, along e1 and e2 (mm per mm; lines only).
-    pub drift: [f32; 2],
-    /// How far the tip turned (degrees): a rotation's lagged angle, a spin's net turn.
-    pub tip_rotation_deg: f32,
-}
-
-/// The values drawn for one run.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Drawn {
-    /// The run's curvature factor on 1/r.
-    pub curvature_factor: f32,
-    /// Entry point error (mm).
-    pub entry_offset_mm: [f32; 3],
-    /// Entry direction error about e1 and e2 (degrees).
-    pub entry_tilt_deg: [f32; 2],
-    /// Target displacement (mm).
-    pub target_shift_mm: [f32; 3],
-    /// Per executed step.
-    pub steps: Vec<StepDraw>,
-}
+pub(crate) const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
 
 /// How a step ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,7 +59,7 @@ pub struct Executed {
 }
 
 #[derive(Clone, Copy, PartialEq)]
-enum Last {
+pub(crate) enum Last {
     Nothing,
     Rotate,
     Insert,
@@ -105,34 +69,36 @@ enum Last {
 
 /// One simulated insertion in progress.
 pub struct World {
-    scenario: Scenario,
-    p: Perturbation,
-    physics: SplitMix64,
-    tracker: SplitMix64,
-    tip: Frame,
-    segment_factor: f32,
-    line_drift: [f32; 2],
-    last: Last,
-    torsion: TorsionPlay,
-    depth: f32,
-    commanded: f32,
-    true_target: V3,
-    points: Vec<[f32; 3]>,
-    min_clearance: f32,
-    drawn: Drawn,
-    executed: Vec<Step>,
+    pub(crate) scenario: Scenario,
+    pub(crate) p: Perturbation,
+    pub(crate) physics: SplitMix64,
+    pub(crate) tracker: SplitMix64,
+    pub(crate) tip: Frame,
+    pub(crate) segment_factor: f32,
+    pub(crate) line_drift: [f32; 2],
+    pub(crate) last: Last,
+    pub(crate) torsion: TorsionPlay,
+    pub(crate) depth: f32,
+    pub(crate) commanded: f32,
+    pub(crate) true_target: V3,
+    pub(crate) points: Vec<[f32; 3]>,
+    pub(crate) min_clearance: f32,
+    pub(crate) drawn: Drawn,
+    pub(crate) executed: Vec<Step>,
+    pub(crate) fx: Active,
+    pub(crate) moves: Vec<Move>,
 }
 
-fn normal(g: &mut SplitMix64, sd: f32) -> f32 {
+pub(crate) fn normal(g: &mut SplitMix64, sd: f32) -> f32 {
     g.normal(f64::from(sd)) as f32
 }
 
-fn v3(a: [f32; 3]) -> V3 {
+pub(crate) fn v3(a: [f32; 3]) -> V3 {
     V3::new(a[0], a[1], a[2])
 }
 
 /// The frame turned rigidly by `angle` (radians) about the unit `axis`.
-fn turned(f: &Frame, axis: V3, angle: f32) -> Frame {
+pub(crate) fn turned(f: &Frame, axis: V3, angle: f32) -> Frame {
     let mut out = *f;
     for i in 0..3 {
         out.r
@@ -191,11 +157,49 @@ impl World {
                 entry_tilt_deg,
                 target_shift_mm,
                 steps: Vec::new(),
+                effects: None,
             },
             executed: Vec::new(),
+            fx: Active::off(v3(scenario.target.position) + v3(target_shift_mm)),
+            moves: Vec::new(),
         };
         world.record(tip.p);
         Ok(world)
+    }
+
+    /// The world of a run executing `schedule` with the `effects` on top of `p` (each effect
+    /// draws from its own stream: with every effect off this is [`World::new`], bit for bit).
+    pub fn with_effects(
+        scenario: &Scenario,
+        schedule: &Schedule,
+        p: &Perturbation,
+        effects: &WorldEffects,
+        seed: u64,
+    ) -> Result<World, WorldError> {
+        effects.validate().map_err(WorldError::Effects)?;
+        let mut world =
+            World::new(scenario, &schedule.posture, p, seed).map_err(WorldError::Perturbation)?;
+        if !effects.is_off() {
+            let rest = world.true_target;
+            world.fx = Active::new(effects, scenario, schedule, &world.tip, rest, seed);
+            world.drawn.effects = Some(world.fx.drawn());
+        }
+        Ok(world)
+    }
+
+    /// The tip moved or turned: the effects follow it (the target is pushed, the histories
+    /// of latency and imaging recorded). Nothing without effects.
+    pub(crate) fn moved(&mut self) {
+        if self.fx.any() {
+            let (c, base) = (self.commanded, self.torsion.base_deg);
+            self.true_target = self.fx.moved(c, base, &self.tip, self.true_target);
+        }
+    }
+
+    /// Insertion the tip has truly made along its path (mm); the commanded insertion is the
+    /// measurements' `depth_mm`.
+    pub fn tip_depth(&self) -> f32 {
+        self.depth
     }
 
     /// The true tip frame.
@@ -235,30 +239,6 @@ impl World {
         &self.p
     }
 
-    /// A tracker measurement of the tip and the target now (draws the tracker's noise).
-    pub fn measure(&mut self) -> Measurement {
-        let g = &mut self.tracker;
-        let (pos_sd, head_sd) = (self.p.tracker_position_mm, self.p.tracker_heading_deg);
-        let noise = [0; 3].map(|_| normal(g, pos_sd));
-        let angles = [0; 3].map(|_| normal(g, head_sd).to_radians());
-        let target = [0; 3].map(|_| normal(g, pos_sd));
-        let mut f = self.tip;
-        if angles != [0.0; 3] {
-            f = turned(&f, f.e1(), angles[0]);
-            f = turned(&f, f.e2(), angles[1]);
-            f = f.rolled(angles[2]);
-        }
-        let arr = |v: V3| [v.x, v.y, v.z];
-        Measurement {
-            depth_mm: self.commanded,
-            base_deg: self.torsion.base_deg,
-            position: arr(self.tip.p + v3(noise)),
-            heading: arr(f.e3()),
-            bevel: arr(f.e2()),
-            target: arr(self.true_target + v3(target)),
-        }
-    }
-
     /// Executes one driver step; `on_measure` sees every measurement taken during it and may
     /// break the step off (the tip stays where the measurement saw it).
     pub fn execute(
@@ -271,6 +251,7 @@ impl World {
             Op::Rotate { angle_deg } => {
                 draw.tip_rotation_deg = self.rotate_base(angle_deg);
                 self.last = Last::Rotate;
+                self.moved();
                 let m = self.measure();
                 let _ = on_measure(&m);
                 Executed {
@@ -336,6 +317,10 @@ impl World {
                 self.duty_cycled(length_mm, duty, &mut draw, &mut on_measure)
             }
         };
+        self.moved();
+        if let (Some(d), Some(l)) = (self.drawn.effects.as_mut(), &self.fx.layers) {
+            d.layers = Some(l.clone());
+        }
         self.drawn.steps.push(draw);
         self.executed.push(executed_part(step, done.inserted_mm));
         done
@@ -413,6 +398,9 @@ impl World {
         let error = normal(&mut self.physics, sd);
         let true_len = (length + error).max(0.0);
         draw.length_error_mm = true_len - length;
+        if self.fx.layers.is_some() {
+            return self.push_layered(kind, length, true_len, radius, on_measure);
+        }
         let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
         let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
         let start = self.tip;
@@ -432,6 +420,7 @@ impl World {
             self.commanded += length * share - commanded;
             commanded = length * share;
             t_prev = t;
+            self.moved();
             let m = self.measure();
             if on_measure(&m).is_break() && k < pieces {
                 return Executed {
@@ -446,7 +435,7 @@ impl World {
         }
     }
 
-    fn record(&mut self, p: V3) {
+    pub(crate) fn record(&mut self, p: V3) {
         self.points.push([p.x, p.y, p.z]);
         if self.scenario.options.workspace == Workspace::PlaneYz {
             // Circles of the plane are cylinders across it: clearance in the y-z projection.
@@ -459,7 +448,13 @@ impl World {
     }
 
     /// Exact clearance of one piece (3-D scenarios; the plane's are measured at the points).
-    fn clearance_along(&mut self, start: &Frame, kind: SegmentKind, len: f32, radius: f32) {
+    pub(crate) fn clearance_along(
+        &mut self,
+        start: &Frame,
+        kind: SegmentKind,
+        len: f32,
+        radius: f32,
+    ) {
         if self.scenario.options.workspace != Workspace::Space {
             return;
         }
@@ -469,3 +464,23 @@ impl World {
         }
     }
 }
+
+/// Why a world cannot be made.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WorldError {
+    /// The perturbation is invalid.
+    Perturbation(PerturbError),
+    /// A world effect is invalid.
+    Effects(EffectsError),
+}
+
+impl fmt::Display for WorldError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WorldError::Perturbation(e) => write!(f, "{e}"),
+            WorldError::Effects(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for WorldError {}

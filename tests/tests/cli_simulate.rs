@@ -18,7 +18,10 @@ fn keys(v: &Value) -> Vec<String> {
 #[test]
 fn json_has_exactly_the_contracted_keys() {
     let v = needle_json(&["simulate", &paper(), "--runs", "8", "--json"]);
-    assert_eq!(keys(&v), ["closed_loop", "perturbation", "runs", "summary"]);
+    assert_eq!(
+        keys(&v),
+        ["closed_loop", "perturbation", "runs", "summary", "world"]
+    );
     assert_eq!(v["runs"], 8);
     assert_eq!(v["closed_loop"], false);
     let p = &v["perturbation"];

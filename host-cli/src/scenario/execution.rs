@@ -1,10 +1,13 @@
 //! The scenario's `[execution]` table and `planner.max_collision_probability`: the world the
 //! plan will be executed in (the perturbation model `needle simulate` runs, same keys, same
 //! defaults and floors: one definition, `planner_core::execute::perturbation`) and the bound on
-//! the predicted probability of collision the plan must keep.
+//! the predicted probability of collision the plan must keep. The table also takes the
+//! simulated world's effects (`world = "clinical"` and the keys of `needle_sim::WorldEffects`),
+//! which only the simulator sees: the planner is never told them.
 
 use super::file::ScenarioFile;
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
+use needle_sim::{TrackerFaults, WorldEffects};
 use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::risk;
 use planner_core::steer::SteerConfig;
@@ -50,6 +53,11 @@ pub struct Execution {
     /// What the closed-loop controller is told (`[steering]`; its defaults where silent): the
     /// steering's estimator noise model also predicts the closed loop's spread.
     pub steering: SteerConfig,
+    /// The simulated world's effects (`execution.world` and the effects' keys; all off where
+    /// silent). The simulator's only: the planner never sees them.
+    pub world: WorldEffects,
+    /// The tracker faults of `execution.world` (the clinical world's dropouts).
+    pub faults: TrackerFaults,
 }
 
 impl Default for Execution {
@@ -60,6 +68,8 @@ impl Default for Execution {
             max_collision_probability: None,
             given: false,
             steering: SteerConfig::DEFAULT,
+            world: WorldEffects::default(),
+            faults: TrackerFaults::default(),
         }
     }
 }
@@ -83,7 +93,18 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
     };
     if let Some(table) = &file.execution {
         out.given = true;
+        // The named world first, wherever it stands: its keys are changed by the others.
+        if let Some(name) = table.get("world") {
+            let name = name.as_str().with_context(|| {
+                format!("execution.world is `{name}`: allowed are \"default\" and \"clinical\"")
+            })?;
+            (out.world, out.faults) =
+                WorldEffects::preset(name).map_err(|e| anyhow!("execution.world: {e}"))?;
+        }
         for (key, value) in table {
+            if key == "world" {
+                continue;
+            }
             if key == "mode" {
                 out.mode = match value.as_str() {
                     Some("open_loop") => ExecutionMode::OpenLoop,
@@ -96,9 +117,15 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
                 .as_float()
                 .or_else(|| value.as_integer().map(|i| i as f64))
                 .with_context(|| format!("execution.{key} is `{value}`, not a number"))?;
+            if WorldEffects::knows(key) {
+                out.world
+                    .set(key, number as f32)
+                    .map_err(|e| anyhow!("execution.{e}"))?;
+                continue;
+            }
             out.model
                 .set(key, number as f32)
-                .map_err(|e| anyhow::anyhow!("execution.{e}"))?;
+                .map_err(|e| anyhow!("execution.{e}"))?;
         }
     }
     if let Some(bound) = file
@@ -169,6 +196,36 @@ mod tests {
                 "[planner]\nmax_collision_probability = 1.5\n",
                 "max_collision_probability = 1.5",
             ),
+        ] {
+            let e = format!("{:#}", parse(extra).unwrap_err());
+            assert!(e.contains(says), "{extra}: {e}");
+        }
+    }
+
+    /// The world's effects: a named world, its keys changed by the others; the planner's model
+    /// untouched; bad names and values named.
+    #[test]
+    fn the_table_sets_the_worlds_effects_apart_from_the_model() {
+        let e = parse("[execution]\nlayers = 3\nworld = \"clinical\"\ntracker_dof = 6\n").unwrap();
+        assert_eq!(e.model, Perturbation::default());
+        assert_eq!(e.world.layers, 3);
+        assert_eq!(e.world.tracker_dof, 6);
+        assert_eq!(e.world.tracker_latency_ms, 30.0, "the rest is clinical");
+        assert_eq!(e.faults, WorldEffects::clinical_faults());
+        assert_eq!(
+            parse("[execution]\nlayers = 2\n").unwrap().faults,
+            TrackerFaults::default()
+        );
+        for (extra, says) in [
+            (
+                "[execution]\nlayers = 9\n",
+                "execution.layers = 9 is outside [0, 8]",
+            ),
+            (
+                "[execution]\nworld = \"lab\"\n",
+                "execution.world: unknown world `lab`",
+            ),
+            ("[execution]\nworld = 3\n", "execution.world is `3`"),
         ] {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");

@@ -18,9 +18,15 @@ pub struct SimulateArgs {
     /// Plan and simulate only this form (e.g. RL) instead of the best.
     #[arg(long)]
     pub form: Option<String>,
-    /// Change one perturbation, KEY=VALUE (repeatable; see docs/execution.md).
+    /// Change one perturbation or world effect, KEY=VALUE (repeatable; over `--world`; see
+    /// docs/execution.md).
     #[arg(long = "perturb", value_name = "KEY=VALUE")]
     pub perturb: Vec<String>,
+    /// The world the runs are made in: `default` (the perturbation alone) or `clinical` (a
+    /// 5-DOF sensor, field bias, registration error, punctured layers, a pushed target, late
+    /// imaging and tracker, dropouts; docs/execution.md, "The clinical world").
+    #[arg(long, value_name = "NAME")]
+    pub world: Option<String>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,

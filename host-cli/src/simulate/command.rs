@@ -105,6 +105,7 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
         seed: a.seed,
         form: a.form.clone(),
         perturb: a.perturb.clone(),
+        world: a.world.clone(),
         faults: a.fault.clone(),
         steer: a.steer.clone(),
         closed_loop: a.closed_loop,
@@ -157,7 +158,7 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
         return Ok(());
     }
     let p = &setup.perturbation;
-    let text = match (&r.closed, &r.open) {
+    let mut text = match (&r.closed, &r.open) {
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
             let summary = summarise(closed.iter().map(|c| &c.run));
@@ -167,6 +168,7 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
         (None, Some(runs)) => to_table(&header, p, &summarise(runs)),
         (None, None) => return Err(anyhow!("no run was made")),
     };
+    text.push_str(&super::table::world_line(&setup.effects));
     write!(std::io::stdout(), "{text}")?;
     Ok(())
 }

@@ -3,7 +3,7 @@
 use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
-use needle_sim::{ClosedRun, Perturbation, Run};
+use needle_sim::{ClosedRun, Perturbation, Run, WorldEffects};
 use planner_core::steer::SteerConfig;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -17,6 +17,8 @@ pub struct SimulateJson<'a> {
     pub closed_loop: bool,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
+    /// The world's effects beyond it (every key; all off in the default world).
+    pub world: WorldEffects,
     /// Figures over the runs.
     pub summary: SummaryJson,
     /// Per run, with `--detail`.
@@ -98,7 +100,7 @@ fn error(s: &Spread) -> ErrorJson {
 
 /// The JSON of a simulation.
 pub fn to_json<'a>(
-    p: &Perturbation,
+    (p, w): (&Perturbation, &WorldEffects),
     runs: &'a [Run],
     summary: &Summary,
     detail: bool,
@@ -107,6 +109,7 @@ pub fn to_json<'a>(
         runs: runs.len(),
         closed_loop: false,
         perturbation: *p,
+        world: *w,
         summary: summary_json(summary),
         runs_detail: detail.then(|| runs.iter().map(RunJson::of).collect()),
     }
@@ -133,6 +136,8 @@ pub struct ClosedJson<'a> {
     pub closed_loop: bool,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
+    /// The world's effects beyond it.
+    pub world: WorldEffects,
     /// What the controller was told (the `[steering]` keys, from the file, `--steer` and the
     /// defaults): beside `perturbation`, what the world was.
     pub controller: BTreeMap<&'static str, f32>,
@@ -179,7 +184,7 @@ fn summary_json(summary: &Summary) -> SummaryJson {
 
 /// The JSON of a closed-loop simulation.
 pub fn closed_json<'a>(
-    p: &Perturbation,
+    (p, w): (&Perturbation, &WorldEffects),
     controller: &SteerConfig,
     runs: &'a [ClosedRun],
     summary: &Summary,
@@ -191,6 +196,7 @@ pub fn closed_json<'a>(
         runs: runs.len(),
         closed_loop: true,
         perturbation: *p,
+        world: *w,
         controller: crate::scenario::steering::steering_keys(controller),
         summary: ClosedSummaryJson {
             figures: summary_json(summary),

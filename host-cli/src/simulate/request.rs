@@ -10,7 +10,7 @@ use super::{summarise, PlanBound};
 use crate::scenario::execution::execution_of;
 use crate::scenario::{restrict, ObstacleShape, ScenarioFile};
 use anyhow::{anyhow, bail, Context, Result};
-use needle_sim::{ClosedRun, Run, TrackerFaults};
+use needle_sim::{ClosedRun, Run, TrackerFaults, WorldEffects, WORLD_KEYS};
 use std::path::Path;
 
 /// What a simulation is asked beside the scenario (the flags of `needle simulate`).
@@ -22,8 +22,10 @@ pub struct Request {
     pub seed: u64,
     /// Plan and simulate only this form instead of the best.
     pub form: Option<String>,
-    /// Changes to the world's perturbation, `KEY=VALUE`.
+    /// Changes to the world's perturbation or effects, `KEY=VALUE`.
     pub perturb: Vec<String>,
+    /// The named world (`default`, `clinical`) the changes apply over.
+    pub world: Option<String>,
     /// Tracker faults, `KEY=VALUE` (closed loop).
     pub faults: Vec<String>,
     /// What the controller is told over the file's `[steering]`, `KEY=VALUE` (closed loop).
@@ -63,6 +65,8 @@ pub struct Asked {
     pub shapes: Vec<ObstacleShape>,
     /// The world's perturbation.
     pub perturbation: needle_sim::Perturbation,
+    /// The world's effects beyond it.
+    pub effects: WorldEffects,
     /// The tracker's faults.
     pub faults: TrackerFaults,
     /// What the controller is told.
@@ -82,8 +86,13 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
     // silent); `--perturb` changes the world, not what the planner was told.
     let execution = in_scenario(execution_of(file), path)?;
     let mut perturbation = execution.model;
+    // `--world` replaces the file's world (`[execution]`'s effects and their faults).
+    let (mut effects, mut faults) = match &r.world {
+        Some(name) => WorldEffects::preset(name).context("--world")?,
+        None => (execution.world, execution.faults),
+    };
     for kv in &r.perturb {
-        perturbation.apply(kv).context("--perturb")?;
+        change_world(&mut perturbation, &mut effects, kv).context("--perturb")?;
     }
     let bound = execution
         .max_collision_probability
@@ -100,7 +109,6 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
              without the bound; docs/execution.md)"
         );
     }
-    let mut faults = TrackerFaults::default();
     for kv in &r.faults {
         faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
     }
@@ -121,6 +129,7 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
         scenario,
         shapes,
         perturbation,
+        effects,
         faults,
         config,
         bound,
@@ -137,8 +146,28 @@ impl Asked {
         let (p, faults) = (self.perturbation, self.faults);
         let mut setup = Setup::bounded(self.scenario, p, faults, self.runs, self.seed, bound)?;
         setup.config = self.config;
+        setup.effects = self.effects;
         Ok((setup, self.shapes))
     }
+}
+
+/// Applies one `KEY=VALUE` of `--perturb`: a world effect's key to the effects, any other to
+/// the perturbation (an unknown key is refused naming both lists).
+fn change_world(
+    perturbation: &mut needle_sim::Perturbation,
+    effects: &mut WorldEffects,
+    kv: &str,
+) -> Result<()> {
+    let key = kv.split_once('=').map(|(k, _)| k.trim());
+    if key.is_some_and(WorldEffects::knows) {
+        return Ok(effects.apply(kv)?);
+    }
+    perturbation.apply(kv).map_err(|e| match e {
+        needle_sim::PerturbError::UnknownKey(_) => {
+            anyhow!("{e}; or a world effect: {}", WORLD_KEYS.join(", "))
+        }
+        e => anyhow!(e),
+    })
 }
 
 /// [`asked`], then [`Asked::set_up`].
@@ -153,6 +182,7 @@ pub fn set_up(
 /// The `needle simulate --json` object of the runs made (`detail`: every run's record).
 pub fn results_json(setup: &Setup, results: &Results, detail: bool) -> Result<String> {
     let p = &setup.perturbation;
+    let w = &setup.effects;
     Ok(match (&results.closed, &results.open) {
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
@@ -160,7 +190,7 @@ pub fn results_json(setup: &Setup, results: &Results, detail: bool) -> Result<St
             let steering = summarise_steering(closed);
             let config = &setup.config;
             let j = closed_json(
-                p,
+                (p, w),
                 config,
                 closed,
                 &summary,
@@ -172,7 +202,7 @@ pub fn results_json(setup: &Setup, results: &Results, detail: bool) -> Result<St
         }
         (None, Some(runs)) => {
             let summary = summarise(runs);
-            serde_json::to_string(&to_json(p, runs, &summary, detail))?
+            serde_json::to_string(&to_json((p, w), runs, &summary, detail))?
         }
         (None, None) => return Err(anyhow!("no run was made")),
     })

@@ -8,8 +8,8 @@ use super::{prepare_keeping_reserve, run_seed, PlanBound, Prepared};
 use crate::analysis::parallel;
 use anyhow::{anyhow, Result};
 use needle_sim::{
-    closed_loop, in_process, open_loop, ClosedLoopError, ClosedRun, Controller, Perturbation,
-    Planned, Run, TrackerFaults,
+    closed_loop_in, in_process, open_loop_in, ClosedLoopError, ClosedRun, Conditions, Controller,
+    Perturbation, Planned, Run, TrackerFaults, WorldEffects,
 };
 use planner_core::steer::SteerConfig;
 use planner_core::Scenario;
@@ -27,6 +27,8 @@ pub struct Setup {
     pub planned: Planned,
     /// What every world draws from.
     pub perturbation: Perturbation,
+    /// The effects beyond the perturbation (all off: today's world).
+    pub effects: WorldEffects,
     /// The tracker's faults (closed loop).
     pub faults: TrackerFaults,
     /// The controller's settings (closed loop).
@@ -132,6 +134,7 @@ impl Setup {
             prepared,
             planned,
             perturbation,
+            effects: WorldEffects::default(),
             faults,
             config: SteerConfig::DEFAULT,
             runs,
@@ -174,12 +177,16 @@ impl Setup {
         controller: &mut C,
         seed: u64,
     ) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
-        closed_loop(
+        let world = Conditions {
+            perturbation: &self.perturbation,
+            effects: &self.effects,
+            faults: &self.faults,
+        };
+        closed_loop_in(
             &self.scenario,
             &self.planned,
             &self.prepared.schedule,
-            &self.perturbation,
-            &self.faults,
+            &world,
             controller,
             seed,
         )
@@ -211,7 +218,8 @@ impl Setup {
         self.in_parallel(keep, threads, done, |i, seed| {
             let schedule = &self.prepared.schedule;
             let p = &self.perturbation;
-            let mut run = open_loop(&self.scenario, &self.planned, schedule, p, seed)?;
+            let (s, planned, e) = (&self.scenario, &self.planned, &self.effects);
+            let mut run = open_loop_in(s, planned, schedule, p, e, seed)?;
             keep.trim(i, false, &mut run);
             Ok(run)
         })

@@ -2,7 +2,7 @@
 
 use super::steering::SteeringSummary;
 use super::{Spread, Summary};
-use needle_sim::{Perturbation, KEYS};
+use needle_sim::{Perturbation, WorldEffects, KEYS, WORLD_KEYS};
 use std::fmt::Write;
 
 /// What the table's header names.
@@ -48,6 +48,19 @@ fn perturbation_line(out: &mut String, p: &Perturbation) {
         .map(|k| format!("{k}={}", p.get(k).unwrap_or(f32::NAN)))
         .collect();
     let _ = writeln!(out, "perturbation: {}", values.join(" "));
+}
+
+/// The world's effects, `KEY=VALUE` for every key, when any is on (the default world prints
+/// no such line).
+pub fn world_line(w: &WorldEffects) -> String {
+    if w.is_off() {
+        return String::new();
+    }
+    let values: Vec<String> = WORLD_KEYS
+        .iter()
+        .map(|k| format!("{k}={}", w.get(k).unwrap_or(f32::NAN)))
+        .collect();
+    format!("world: {}\n", values.join(" "))
 }
 
 /// The table of a simulation.

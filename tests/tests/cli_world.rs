@@ -1,0 +1,144 @@
+//! `needle simulate --world`: the clinical world's keys in the JSON, repeated bit for bit for a
+//! seed, changed key by key with `--perturb`, and bad names and values refused naming the key.
+
+use needle_e2e::{example, needle, needle_json};
+use needle_sim::WORLD_KEYS;
+
+fn paper() -> String {
+    example("paper").to_str().unwrap().to_string()
+}
+
+#[test]
+fn the_clinical_world_repeats_bit_for_bit_and_prints_its_keys() {
+    let args = [
+        "simulate",
+        &paper(),
+        "--runs",
+        "6",
+        "--closed-loop",
+        "--compare-open-loop",
+        "--world",
+        "clinical",
+        "--perturb",
+        "layers=2",
+        "--json",
+        "--detail",
+    ];
+    let run = |threads: &str| {
+        let out = needle()
+            .args(args)
+            .args(["--threads", threads])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+    };
+    let once = run("1");
+    assert_eq!(once, run("2"), "the same seed, the same bits");
+    let v: serde_json::Value = serde_json::from_slice(&once).unwrap();
+    let w = &v["world"];
+    assert_eq!(w.as_object().unwrap().len(), WORLD_KEYS.len());
+    assert_eq!(w["tracker_dof"], 5);
+    assert_eq!(w["layers"], 2, "--perturb over the preset");
+    assert_eq!(w["tracker_latency_ms"], 30.0);
+    let drawn = &v["runs_detail"][0]["drawn"]["effects"];
+    assert_eq!(
+        drawn["layers"]["boundaries_mm"].as_array().unwrap().len(),
+        2
+    );
+    assert!(v["perturbation"].is_object() && v["controller"].is_object());
+    // The default world draws no effect and says so.
+    let plain = needle_json(&["simulate", &paper(), "--runs", "2", "--json", "--detail"]);
+    assert!(plain["runs_detail"][0]["drawn"].get("effects").is_none());
+    assert_eq!(plain["world"]["tracker_dof"], 6);
+}
+
+#[test]
+fn bad_worlds_and_effects_are_clear_errors() {
+    for (args, says) in [
+        (vec!["--world", "lab"], "unknown world `lab`"),
+        (
+            vec!["--perturb", "layers=9"],
+            "layers = 9 is outside [0, 8]",
+        ),
+        (vec!["--perturb", "tracker_dof=4"], "tracker_dof = 4"),
+        (vec!["--perturb", "layers=1.5"], "a whole number"),
+        (
+            vec!["--perturb", "tracker_latency_ms=-3"],
+            "tracker_latency_ms",
+        ),
+        (
+            vec!["--perturb", "puncture_mm=x"],
+            "puncture_mm: `x` is not a number",
+        ),
+        (
+            vec!["--perturb", "latency=3"],
+            "or a world effect: tracker_dof",
+        ),
+    ] {
+        let out = needle()
+            .args(["simulate", &paper()])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn the_table_names_the_world_when_it_is_not_the_default() {
+    let run = |world: &str| {
+        let out = needle()
+            .args(["simulate", &paper(), "--runs", "3", "--world", world])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8(out.stdout).unwrap()
+    };
+    assert!(run("clinical").contains("world: tracker_dof=5 tracker_bias_mm=0.3"));
+    assert!(!run("default").contains("world:"));
+}
+
+/// A scenario's `[execution]` names its world as `--world` does: the same runs, bit for bit.
+#[test]
+fn a_scenario_names_its_world_as_the_flag_does() {
+    let dir = std::env::temp_dir().join(format!("needle-world-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("paper-clinical.toml");
+    let text = std::fs::read_to_string(paper()).unwrap();
+    std::fs::write(
+        &file,
+        format!("{text}\n[execution]\nworld = \"clinical\"\n"),
+    )
+    .unwrap();
+    let run = |path: &str, extra: &[&str]| {
+        let out = needle()
+            .args(["simulate", path, "--runs", "4", "--closed-loop", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v["world"].clone(), v["summary"].clone())
+    };
+    let from_file = run(file.to_str().unwrap(), &[]);
+    assert_eq!(from_file, run(&paper(), &["--world", "clinical"]));
+    assert_eq!(from_file.0["tracker_dof"], 5);
+    let replaced = run(file.to_str().unwrap(), &["--world", "default"]);
+    assert_eq!(
+        replaced.0["tracker_dof"], 6,
+        "--world replaces the file's world"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
