@@ -73,6 +73,11 @@ const KEYS: &[Key] = &[
         zero_allowed: false,
     },
     Key {
+        name: "target_speed_walk",
+        field: |c| &mut c.noise.target_speed_walk,
+        zero_allowed: true,
+    },
+    Key {
         name: "curvature_walk",
         field: |c| &mut c.noise.curvature_walk,
         zero_allowed: true,

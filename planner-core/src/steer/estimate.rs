@@ -9,11 +9,13 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
-use super::target::{TargetFilter, TargetFix};
+use super::target::{TargetFilter, TargetFix, PUSH_ZONE_MM};
 use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{rotate, Frame, V3};
 use nalgebra::{Matrix3, SMatrix, SVector};
+
+pub use super::noise::NoiseModel;
 
 /// Size of the error state.
 pub const STATES: usize = 7;
@@ -22,91 +24,6 @@ type ErrorState = SVector<f32, STATES>;
 
 /// Smallest and largest curvature factor the estimate may take.
 pub const FACTOR_RANGE: (f32, f32) = (0.2, 5.0);
-
-/// The estimator's noise model: what the controller assumes about tissue and tracker. These are
-/// the controller's own constants (from the same literature as the simulator's defaults, see
-/// docs/execution.md), never read from the simulated world.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct NoiseModel {
-    /// Tracker position noise, per axis (mm).
-    pub position_mm: f32,
-    /// Tracker orientation noise, per axis (degrees).
-    pub orientation_deg: f32,
-    /// Prior spread of the entry point, per axis (mm).
-    pub entry_position_mm: f32,
-    /// Prior spread of the entry direction (degrees).
-    pub entry_direction_deg: f32,
-    /// Prior spread of the curvature factor (relative).
-    pub curvature_spread: f32,
-    /// Added spread of the curvature factor at each new arc (relative).
-    pub segment_curvature_spread: f32,
-    /// Play of the tip's roll behind the base, per mm of depth (degrees per mm).
-    pub torsion_lag_deg_per_mm: f32,
-    /// Heading random walk while spinning a line (degrees per square-root mm).
-    pub line_walk_deg: f32,
-    /// Advance error over 100 mm (mm).
-    pub insertion_error_mm: f32,
-    /// Prior spread of the target, per axis (mm).
-    pub target_mm: f32,
-    /// Random walk of the target per square-root millimetre of insertion (mm): the tissue
-    /// moves as the needle pushes it, so the target estimate never freezes.
-    pub target_walk_mm: f32,
-    /// Random walk of the curvature factor per square-root millimetre of insertion (relative;
-    /// 0 or more): tissue layers change the curvature within an arc, not only between arcs.
-    pub curvature_walk: f32,
-    /// The tracker's error against the imaging frame that no fix reveals, per axis (mm; 0 or
-    /// more): the registration and the field's distortion. Kept clear of the obstacles on top
-    /// of the estimate's own spread.
-    pub registration_mm: f32,
-}
-
-impl NoiseModel {
-    /// The defaults: the literature figures docs/execution.md cites for each.
-    pub const DEFAULT: NoiseModel = NoiseModel {
-        position_mm: 0.5,
-        orientation_deg: 0.5,
-        entry_position_mm: 0.2,
-        entry_direction_deg: 0.5,
-        curvature_spread: 0.03,
-        segment_curvature_spread: 0.01,
-        torsion_lag_deg_per_mm: 0.2,
-        line_walk_deg: 0.15,
-        insertion_error_mm: 0.3,
-        target_mm: 0.5,
-        target_walk_mm: 0.01,
-        curvature_walk: 0.0,
-        registration_mm: 0.0,
-    };
-
-    /// Every figure finite and positive.
-    pub fn is_valid(&self) -> bool {
-        [
-            self.position_mm,
-            self.orientation_deg,
-            self.entry_position_mm,
-            self.entry_direction_deg,
-            self.curvature_spread,
-            self.segment_curvature_spread,
-            self.torsion_lag_deg_per_mm,
-            self.line_walk_deg,
-            self.insertion_error_mm,
-            self.target_mm,
-            self.target_walk_mm,
-        ]
-        .iter()
-        .all(|v| v.is_finite() && *v > 0.0)
-            && [self.curvature_walk, self.registration_mm]
-                .iter()
-                .all(|v| v.is_finite() && *v >= 0.0)
-    }
-}
-
-impl Default for NoiseModel {
-    fn default() -> Self {
-        NoiseModel::DEFAULT
-    }
-}
 
 /// Innovations beyond this many standard deviations (squared, summed over the axes) are
 /// outliers: about 5 sigma for three axes.
@@ -183,7 +100,11 @@ impl Estimate {
             factor: 1.0,
             target,
             cov,
-            target_filter: TargetFilter::new(noise.target_mm, noise.target_walk_mm),
+            target_filter: TargetFilter::new(
+                noise.target_mm,
+                noise.target_walk_mm,
+                noise.target_speed_walk,
+            ),
             noise: *noise,
             consistency: 1.0,
         }
@@ -272,7 +193,8 @@ impl Estimate {
             self.cov[(4, 4)] += walk * walk * length;
         }
         self.tip = next;
-        self.target_filter.advanced(length);
+        let near = (self.target - self.tip.p).norm() < PUSH_ZONE_MM;
+        self.target_filter.advanced(&mut self.target, length, near);
     }
 
     /// Fuses a measured tip position; `false` (and no change) for an outlier.
@@ -393,7 +315,7 @@ impl Estimate {
 
     /// Standard deviation of the target estimate, per axis (mm).
     pub fn target_sd(&self) -> f32 {
-        crate::fmath::sqrt(self.target_filter.var)
+        crate::fmath::sqrt(self.target_filter.var())
     }
 }
 

@@ -31,6 +31,7 @@ mod aimed;
 pub mod apriori;
 mod attempt;
 pub mod estimate;
+mod noise;
 pub mod replan;
 mod state;
 pub mod target;

@@ -37,7 +37,7 @@ impl MaxSize for SteerStats {
     const MAX_SIZE: usize = 9 * u32::MAX_SIZE;
 }
 impl MaxSize for NoiseModel {
-    const MAX_SIZE: usize = 13 * f32::MAX_SIZE;
+    const MAX_SIZE: usize = 14 * f32::MAX_SIZE;
 }
 impl MaxSize for SteerConfig {
     const MAX_SIZE: usize = NoiseModel::MAX_SIZE + 4 * f32::MAX_SIZE + u32::MAX_SIZE;
