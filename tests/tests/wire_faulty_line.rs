@@ -7,22 +7,13 @@
 
 mod wire_support;
 
-use hil_sim::{InProcess, LineConfig};
+use hil_sim::InProcess;
 use needle_link::{Client, ClientConfig, LinkError};
 use planner_core::{plan_scheduled, Scenario};
 use std::time::Duration;
-use wire_support::Sim;
+use wire_support::{noisy, Sim};
 
 const REQUESTS: usize = 500;
-
-fn noisy(seed: u64) -> LineConfig {
-    LineConfig {
-        flip_rate: 0.01,
-        drop_rate: 0.01,
-        seed,
-        ..LineConfig::default()
-    }
-}
 
 #[test]
 fn five_hundred_plans_over_a_noisy_line() {

@@ -6,14 +6,14 @@
 
 mod wire_support;
 
-use hil_sim::{InProcess, LineConfig};
+use hil_sim::InProcess;
 use needle_link::{Client, ClientConfig, LinkError, Transport};
 use needle_sim::{closed_loop, in_process, Controller, Perturbation, Planned, TrackerFaults};
 use planner_core::execute::schedule::schedule;
 use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
 use planner_core::{plan, Scenario};
 use std::time::Duration;
-use wire_support::Sim;
+use wire_support::{noisy, Sim};
 
 /// The device behind the link as the closed loop's controller.
 struct OnDevice<'a, T: Transport>(&'a mut Client<T>);
@@ -25,15 +25,6 @@ impl<T: Transport> Controller for OnDevice<'_, T> {
     }
     fn stats(&mut self) -> Result<SteerStats, LinkError> {
         self.0.steer_status().map(|(stats, _)| stats)
-    }
-}
-
-fn noisy(seed: u64) -> LineConfig {
-    LineConfig {
-        flip_rate: 0.01,
-        drop_rate: 0.01,
-        seed,
-        ..LineConfig::default()
     }
 }
 

@@ -5,7 +5,7 @@ use super::upload::Upload;
 use super::Core;
 use crate::model::form::Form;
 use crate::session::PlanSession;
-use crate::wire::{Chunk, Fault, PlanRequest, PlanResult, ReplyBody, MAX_CHUNK};
+use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
 /// The request in progress or last finished.
 // The session is large, but the service lives in a static with no heap to box it in.
@@ -181,24 +181,8 @@ impl Core {
             Job::Finished { id: a, len, .. } if a == id => len,
             _ => return self.status(id, tx),
         };
-        if offset > len {
-            return self.fault(id, Fault::BadOffset { offset, len }, tx);
-        }
-        let start = usize::from(offset);
-        let n = usize::from(max_len)
-            .min(MAX_CHUNK)
-            .min(usize::from(len) - start);
-        let mut data = Chunk::new();
-        // Cannot fail: n <= MAX_CHUNK.
-        let _ = data.extend_from_slice(&self.result[start..start + n]);
-        self.send(
-            id,
-            ReplyBody::Part {
-                offset,
-                total: len,
-                data,
-            },
-            tx,
-        );
+        let whole = self.result.get(..usize::from(len)).unwrap_or(&[]);
+        let part = super::part_of(whole, offset, max_len);
+        self.send(id, part, tx);
     }
 }

@@ -18,8 +18,8 @@ mod steer;
 mod upload;
 
 use crate::wire::{
-    encode_frame, Fault, FrameDecoder, Header, Reply, ReplyBody, ENCODE_SCRATCH, MAX_FRAME,
-    MAX_PLAN_REQUEST, MAX_PLAN_RESULT, MAX_STEER_ANSWER,
+    encode_frame, Chunk, Fault, FrameDecoder, Header, Reply, ReplyBody, ENCODE_SCRATCH, MAX_CHUNK,
+    MAX_FRAME, MAX_PLAN_REQUEST, MAX_PLAN_RESULT, MAX_STEER_ANSWER,
 };
 use job::Job;
 use receive::Inbox;
@@ -209,6 +209,25 @@ impl Core {
 
     fn fault(&mut self, id: u16, fault: Fault, tx: &mut dyn FnMut(&[u8])) {
         self.send(id, ReplyBody::Fault(fault), tx);
+    }
+}
+
+/// The part of `bytes` (the whole encoded answer) from `offset`, at most `max_len` and
+/// [`MAX_CHUNK`] bytes, or why not.
+fn part_of(bytes: &[u8], offset: u16, max_len: u16) -> ReplyBody {
+    let len = bytes.len() as u16;
+    if offset > len {
+        return ReplyBody::Fault(Fault::BadOffset { offset, len });
+    }
+    let start = usize::from(offset);
+    let n = usize::from(max_len).min(MAX_CHUNK).min(bytes.len() - start);
+    let mut data = Chunk::new();
+    // Cannot fail: n <= MAX_CHUNK.
+    let _ = data.extend_from_slice(&bytes[start..start + n]);
+    ReplyBody::Part {
+        offset,
+        total: len,
+        data,
     }
 }
 

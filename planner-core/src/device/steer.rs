@@ -6,7 +6,7 @@ use super::job::Job;
 use super::Core;
 use crate::steer::{Reading, SteerConfig, SteerError, Steering, TipMeasurement};
 use crate::wire::crc::crc32;
-use crate::wire::{Chunk, Fault, PlanRequest, PlanResult, ReplyBody, MAX_CHUNK};
+use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
 /// The insertion being steered, if any.
 // An enum with an explicit tag rather than an `Option`: the option's `None` hid in a niche of the
@@ -142,25 +142,12 @@ impl Core {
         max_len: u16,
         tx: &mut dyn FnMut(&[u8]),
     ) {
-        let len = self.steer_answer_len;
         if !matches!(&self.steering, Steered::On { plan, .. } if *plan == id) {
             return self.fault(id, Fault::NotSteering, tx);
         }
-        if offset > len {
-            return self.fault(id, Fault::BadOffset { offset, len }, tx);
-        }
-        let start = usize::from(offset);
-        let n = usize::from(max_len)
-            .min(MAX_CHUNK)
-            .min(usize::from(len) - start);
-        let mut data = Chunk::new();
-        // Cannot fail: n <= MAX_CHUNK.
-        let _ = data.extend_from_slice(&self.steer_answer[start..start + n]);
-        let part = ReplyBody::Part {
-            offset,
-            total: len,
-            data,
-        };
+        let len = usize::from(self.steer_answer_len);
+        let whole = self.steer_answer.get(..len).unwrap_or(&[]);
+        let part = super::part_of(whole, offset, max_len);
         self.send(id, part, tx);
     }
 }

@@ -123,3 +123,13 @@ pub fn without_timing(table: &str) -> String {
         .collect::<Vec<_>>()
         .join("\n")
 }
+
+/// A line that flips 1 % and drops 1 % of the bytes, the fault pattern of `seed`.
+pub fn noisy(seed: u64) -> hil_sim::LineConfig {
+    hil_sim::LineConfig {
+        flip_rate: 0.01,
+        drop_rate: 0.01,
+        seed,
+        ..hil_sim::LineConfig::default()
+    }
+}
