@@ -57,7 +57,7 @@ pub use closed::{
     TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
-pub use effects::{EffectsError, WorldEffects, WORLD_KEYS};
+pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WORLD_KEYS};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
