@@ -6,7 +6,10 @@
 //! needle and records the true tip path; [`open_loop`] runs a whole schedule; [`closed_loop`]
 //! lets a [`Controller`] (the in-process steering of `planner-core`, or anything that answers
 //! tracker readings) replace the steps as the tracker reports the tip; the [`Perturbation`] holds
-//! the model's parameters with their literature-motivated defaults (docs/execution.md).
+//! the model's parameters with their literature-motivated defaults (docs/execution.md), and the
+//! [`WorldEffects`] what the planner's model leaves out (a 5-DOF sensor, field bias and
+//! registration error, layered tissue, a pushed target, late imaging and tracking: all off by
+//! default, [`World::with_effects`], [`open_loop_in`], [`closed_loop_in`]).
 //!
 //! What it is not: not a device and not a transport. The simulated *device* (the firmware's
 //! request handler on a pty, TCP or in-process) is `hil-sim`; the link to a device is
@@ -57,7 +60,7 @@ pub use closed::{
     TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
-pub use effects::{EffectsError, WorldEffects, WORLD_KEYS};
+pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WORLD_KEYS};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };

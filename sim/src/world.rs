@@ -47,7 +47,7 @@ use std::ops::ControlFlow;
 pub const MIN_FACTOR: f32 = 0.2;
 
 /// Offsets the tracker stream from the physics stream of the same seed.
-pub(crate) const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
+const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;
 
 /// How a step ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +59,7 @@ pub struct Executed {
 }
 
 #[derive(Clone, Copy, PartialEq)]
-pub(crate) enum Last {
+enum Last {
     Nothing,
     Rotate,
     Insert,
@@ -69,22 +69,22 @@ pub(crate) enum Last {
 
 /// One simulated insertion in progress.
 pub struct World {
-    pub(crate) scenario: Scenario,
+    scenario: Scenario,
     pub(crate) p: Perturbation,
-    pub(crate) physics: SplitMix64,
+    physics: SplitMix64,
     pub(crate) tracker: SplitMix64,
     pub(crate) tip: Frame,
-    pub(crate) segment_factor: f32,
-    pub(crate) line_drift: [f32; 2],
-    pub(crate) last: Last,
+    segment_factor: f32,
+    line_drift: [f32; 2],
+    last: Last,
     pub(crate) torsion: TorsionPlay,
     pub(crate) depth: f32,
     pub(crate) commanded: f32,
     pub(crate) true_target: V3,
-    pub(crate) points: Vec<[f32; 3]>,
-    pub(crate) min_clearance: f32,
-    pub(crate) drawn: Drawn,
-    pub(crate) executed: Vec<Step>,
+    points: Vec<[f32; 3]>,
+    min_clearance: f32,
+    drawn: Drawn,
+    executed: Vec<Step>,
     pub(crate) fx: Active,
     pub(crate) moves: Vec<Move>,
 }
@@ -318,8 +318,9 @@ impl World {
             }
         };
         self.moved();
-        if let (Some(d), Some(l)) = (self.drawn.effects.as_mut(), &self.fx.layers) {
-            d.layers = Some(l.clone());
+        if let Some(d) = self.drawn.effects.as_mut() {
+            // The layers' and the push's state as the step left it.
+            *d = self.fx.drawn();
         }
         self.drawn.steps.push(draw);
         self.executed.push(executed_part(step, done.inserted_mm));

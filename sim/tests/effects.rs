@@ -112,6 +112,20 @@ fn a_layer_bends_the_arc_by_its_factor_from_its_boundary() {
     assert!(more && less, "both kinds of layer were drawn");
 }
 
+/// Boundaries given are where the layers start, whatever the seed; their factors are drawn.
+#[test]
+fn given_boundaries_are_kept() {
+    let (s, sched) = one_step(Op::Insert { length_mm: 40.0 });
+    let mut e = effects(&[("layer_curvature_spread", 0.3)]);
+    e.apply("layer_depths_mm=8,21.5").unwrap();
+    for seed in 0..3 {
+        let (w, _) = quiet(&s, &sched, &e, seed);
+        let layers = w.drawn().effects.as_ref().unwrap().layers.clone().unwrap();
+        assert_eq!(layers.boundaries_mm, [8.0, 21.5]);
+        assert_eq!(layers.factors.len(), 2);
+    }
+}
+
 /// A puncture: the tip stops at the boundary while the robot inserts the drawn stall, the
 /// measured depth lagging the commanded one by up to the stall; then it jumps, and measured and
 /// commanded agree again. On a straight (spun) line the depth is the distance along it.

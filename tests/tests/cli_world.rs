@@ -20,7 +20,7 @@ fn the_clinical_world_repeats_bit_for_bit_and_prints_its_keys() {
         "--world",
         "clinical",
         "--perturb",
-        "layers=2",
+        "layer_depths_mm=20,45",
         "--json",
         "--detail",
     ];
@@ -41,15 +41,13 @@ fn the_clinical_world_repeats_bit_for_bit_and_prints_its_keys() {
     assert_eq!(once, run("2"), "the same seed, the same bits");
     let v: serde_json::Value = serde_json::from_slice(&once).unwrap();
     let w = &v["world"];
-    assert_eq!(w.as_object().unwrap().len(), WORLD_KEYS.len());
+    assert_eq!(w.as_object().unwrap().len(), WORLD_KEYS.len() + 1);
     assert_eq!(w["tracker_dof"], 5);
     assert_eq!(w["layers"], 2, "--perturb over the preset");
+    assert_eq!(w["layer_depths_mm"], serde_json::json!([20.0, 45.0]));
     assert_eq!(w["tracker_latency_ms"], 30.0);
     let drawn = &v["runs_detail"][0]["drawn"]["effects"];
-    assert_eq!(
-        drawn["layers"]["boundaries_mm"].as_array().unwrap().len(),
-        2
-    );
+    assert_eq!(drawn["layers"]["boundaries_mm"], w["layer_depths_mm"]);
     assert!(v["perturbation"].is_object() && v["controller"].is_object());
     // The default world draws no effect and says so.
     let plain = needle_json(&["simulate", &paper(), "--runs", "2", "--json", "--detail"]);
@@ -78,6 +76,10 @@ fn bad_worlds_and_effects_are_clear_errors() {
         (
             vec!["--perturb", "latency=3"],
             "or a world effect: tracker_dof",
+        ),
+        (
+            vec!["--perturb", "layer_depths_mm=30,10"],
+            "layer_depths_mm: the depths must ascend",
         ),
     ] {
         let out = needle()

@@ -7,7 +7,7 @@
 
 use super::file::ScenarioFile;
 use anyhow::{anyhow, bail, Context, Result};
-use needle_sim::{TrackerFaults, WorldEffects};
+use needle_sim::{LayerDepths, TrackerFaults, WorldEffects, LAYER_DEPTHS_KEY};
 use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::risk;
 use planner_core::steer::SteerConfig;
@@ -102,7 +102,7 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
                 WorldEffects::preset(name).map_err(|e| anyhow!("execution.world: {e}"))?;
         }
         for (key, value) in table {
-            if key == "world" {
+            if key == "world" || key == LAYER_DEPTHS_KEY {
                 continue;
             }
             if key == "mode" {
@@ -127,6 +127,10 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
                 .set(key, number as f32)
                 .map_err(|e| anyhow!("execution.{e}"))?;
         }
+        // Last: given boundaries set `layers` to their count, whatever it said.
+        if let Some(value) = table.get(LAYER_DEPTHS_KEY) {
+            out.world.set_depths(depths_of(value)?);
+        }
     }
     if let Some(bound) = file
         .planner
@@ -140,6 +144,22 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
         out.max_collision_probability = Some(bound);
     }
     Ok(out)
+}
+
+/// `execution.layer_depths_mm = [12, 30, 55]`.
+fn depths_of(value: &toml::Value) -> Result<LayerDepths> {
+    let not_a_list = || anyhow!("execution.{LAYER_DEPTHS_KEY} is `{value}`, not a list of numbers");
+    let depths: Option<Vec<f32>> = value
+        .as_array()
+        .ok_or_else(not_a_list)?
+        .iter()
+        .map(|v| {
+            v.as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .map(|d| d as f32)
+        })
+        .collect();
+    LayerDepths::new(&depths.ok_or_else(not_a_list)?).map_err(|e| anyhow!("execution.{e}"))
 }
 
 /// The execution of the scenario file at `path`.
@@ -216,6 +236,9 @@ mod tests {
             parse("[execution]\nlayers = 2\n").unwrap().faults,
             TrackerFaults::default()
         );
+        let given = parse("[execution]\nlayers = 1\nlayer_depths_mm = [5, 40.5]\n").unwrap();
+        assert_eq!(given.world.layers, 2);
+        assert_eq!(given.world.layer_depths_mm.unwrap().as_slice(), [5.0, 40.5]);
         for (extra, says) in [
             (
                 "[execution]\nlayers = 9\n",
@@ -226,6 +249,14 @@ mod tests {
                 "execution.world: unknown world `lab`",
             ),
             ("[execution]\nworld = 3\n", "execution.world is `3`"),
+            (
+                "[execution]\nlayer_depths_mm = 3\n",
+                "not a list of numbers",
+            ),
+            (
+                "[execution]\nlayer_depths_mm = [9, 2]\n",
+                "execution.layer_depths_mm: the depths must ascend",
+            ),
         ] {
             let e = format!("{:#}", parse(extra).unwrap_err());
             assert!(e.contains(says), "{extra}: {e}");

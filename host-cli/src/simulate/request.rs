@@ -164,7 +164,11 @@ fn change_world(
     }
     perturbation.apply(kv).map_err(|e| match e {
         needle_sim::PerturbError::UnknownKey(_) => {
-            anyhow!("{e}; or a world effect: {}", WORLD_KEYS.join(", "))
+            let keys = WORLD_KEYS.join(", ");
+            anyhow!(
+                "{e}; or a world effect: {keys}, {}",
+                needle_sim::LAYER_DEPTHS_KEY
+            )
         }
         e => anyhow!(e),
     })

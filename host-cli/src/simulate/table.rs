@@ -2,7 +2,7 @@
 
 use super::steering::SteeringSummary;
 use super::{Spread, Summary};
-use needle_sim::{Perturbation, WorldEffects, KEYS, WORLD_KEYS};
+use needle_sim::{Perturbation, WorldEffects, KEYS, LAYER_DEPTHS_KEY, WORLD_KEYS};
 use std::fmt::Write;
 
 /// What the table's header names.
@@ -60,7 +60,11 @@ pub fn world_line(w: &WorldEffects) -> String {
         .iter()
         .map(|k| format!("{k}={}", w.get(k).unwrap_or(f32::NAN)))
         .collect();
-    format!("world: {}\n", values.join(" "))
+    let given = w
+        .layer_depths_mm
+        .map(|d| format!(" {LAYER_DEPTHS_KEY}={d}"))
+        .unwrap_or_default();
+    format!("world: {}{given}\n", values.join(" "))
 }
 
 /// The table of a simulation.

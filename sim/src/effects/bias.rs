@@ -20,7 +20,7 @@ struct Mode {
     amplitude: f32,
 }
 
-/// A smooth error field over the workspace, per axis a constant offset plus [`MODES`]
+/// A smooth error field over the workspace, per axis a constant offset plus three
 /// sinusoidal modes of drawn direction, wavelength, phase and amplitude. The offset's variance
 /// is half of sd², the modes' the other half (a sine of amplitude A has variance A²/2), so over
 /// runs and points each axis has RMS `sd`; its slope is at most about 2π/100 mm × the

@@ -1,6 +1,6 @@
 //! What arrives late: a tracker pose that is the tip as it was some time ago ([`Latency`]), and
 //! imaging that sees the target at its own rate and delay ([`Imaging`]). The world's clock
-//! (kept by [`Active`](super::Active)) runs with the robot: insertion at the insertion speed,
+//! (kept by the run's effects, `state.rs`) runs with the robot: insertion at the insertion speed,
 //! rotations at the driver's rotation speed; during a push a latency is speed × latency mm of
 //! insertion.
 

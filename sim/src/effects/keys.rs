@@ -1,6 +1,7 @@
 //! The world effects' keys as `KEY=VALUE` (the flags of `needle simulate`): each key's range,
 //! and typed errors that start with the key.
 
+use super::depths::{LayerDepths, LAYER_DEPTHS_KEY};
 use super::WorldEffects;
 use std::fmt;
 
@@ -38,7 +39,8 @@ const SPECS: [Spec; 11] = [
     spec("insertion_speed_mm_s", 0.0, 100.0, false),
 ];
 
-/// The keys, in the order of the fields and of the JSON.
+/// The keys of numbers, in the order of the fields and of the JSON (beside them
+/// [`LAYER_DEPTHS_KEY`], a list).
 pub const WORLD_KEYS: [&str; 11] = [
     "tracker_dof",
     "tracker_bias_mm",
@@ -60,6 +62,15 @@ pub enum EffectsError {
     UnknownKey(String),
     /// Not a known world (`default`, `clinical`).
     UnknownPreset(String),
+    /// Bad given layer boundaries (the message starts with the key).
+    Depths(String),
+    /// Given layer boundaries whose count is not `layers`.
+    DepthsCount {
+        /// `layers`.
+        layers: u8,
+        /// Boundaries given.
+        given: u8,
+    },
     /// Not of the form `KEY=VALUE`.
     Syntax(String),
     /// The value is not a number.
@@ -89,12 +100,17 @@ impl fmt::Display for EffectsError {
         match self {
             EffectsError::UnknownKey(k) => write!(
                 f,
-                "unknown world effect `{k}` (known: {})",
+                "unknown world effect `{k}` (known: {}, {LAYER_DEPTHS_KEY})",
                 WORLD_KEYS.join(", ")
             ),
             EffectsError::UnknownPreset(w) => {
                 write!(f, "unknown world `{w}` (known: default, clinical)")
             }
+            EffectsError::Depths(e) => f.write_str(e),
+            EffectsError::DepthsCount { layers, given } => write!(
+                f,
+                "layers = {layers} but {LAYER_DEPTHS_KEY} gives {given} boundaries"
+            ),
             EffectsError::Syntax(s) => write!(f, "`{s}` is not KEY=VALUE"),
             EffectsError::NotANumber { key, value } => {
                 write!(f, "{key}: `{value}` is not a number")
@@ -140,7 +156,13 @@ fn check(s: &Spec, value: f32) -> Result<(), EffectsError> {
 impl WorldEffects {
     /// Whether `key` is a world effect's key.
     pub fn knows(key: &str) -> bool {
-        WORLD_KEYS.contains(&key.trim())
+        WORLD_KEYS.contains(&key.trim()) || key.trim() == LAYER_DEPTHS_KEY
+    }
+
+    /// Gives the layer boundaries (and so their count).
+    pub fn set_depths(&mut self, depths: LayerDepths) {
+        self.layers = depths.count();
+        self.layer_depths_mm = Some(depths);
     }
 
     /// The value of `key`.
@@ -169,7 +191,10 @@ impl WorldEffects {
             0 => self.tracker_dof = value as u8,
             1 => self.tracker_bias_mm = value,
             2 => self.registration_error_mm = value,
-            3 => self.layers = value as u8,
+            3 => {
+                self.layers = value as u8;
+                self.layer_depths_mm = None;
+            }
             4 => self.layer_curvature_spread = value,
             5 => self.puncture_mm = value,
             6 => self.target_push_mm = value,
@@ -187,6 +212,11 @@ impl WorldEffects {
             .split_once('=')
             .ok_or_else(|| EffectsError::Syntax(assignment.into()))?;
         let (key, value) = (key.trim(), value.trim());
+        if key == LAYER_DEPTHS_KEY {
+            let depths = LayerDepths::parse(value).map_err(EffectsError::Depths)?;
+            self.set_depths(depths);
+            return Ok(());
+        }
         let i = index(key)?;
         let v: f32 = value.parse().map_err(|_| EffectsError::NotANumber {
             key: SPECS[i].key,
@@ -199,6 +229,15 @@ impl WorldEffects {
     pub fn validate(&self) -> Result<(), EffectsError> {
         for s in &SPECS {
             check(s, self.get(s.key)?)?;
+        }
+        if let Some(d) = &self.layer_depths_mm {
+            LayerDepths::new(d.as_slice()).map_err(EffectsError::Depths)?;
+            if d.count() != self.layers {
+                return Err(EffectsError::DepthsCount {
+                    layers: self.layers,
+                    given: d.count(),
+                });
+            }
         }
         Ok(())
     }
@@ -254,6 +293,22 @@ mod tests {
         assert!(w.is_off(), "a refused value changes nothing");
         w.apply(" layers = 3 ").unwrap();
         assert_eq!(w.layers, 3);
+        w.apply("layer_depths_mm=10,20").unwrap();
+        assert_eq!(w.layers, 2, "given boundaries set the count");
+        w.validate().unwrap();
+        w.layers = 4;
+        assert!(w
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("layers = 4"));
+        w.apply("layers=1").unwrap();
+        assert_eq!(
+            w.layer_depths_mm, None,
+            "a count draws the boundaries again"
+        );
+        let e = w.apply("layer_depths_mm=9,1").unwrap_err();
+        assert!(e.to_string().starts_with("layer_depths_mm"), "{e}");
         assert!(WorldEffects::preset("lab").is_err());
         assert_eq!(
             WorldEffects::preset("clinical").unwrap().0,

@@ -41,20 +41,24 @@ pub struct Layers {
 }
 
 impl Layers {
-    /// `count` boundaries uniform over (0, `length_mm`) of depth, each layer's factor
-    /// 1 + N(0, `spread`) (at least [`MIN_FACTOR`]), each stall exponential of mean
-    /// `puncture_mm`.
+    /// `count` boundaries uniform over (0, `length_mm`) of depth (or at `given`), each
+    /// layer's factor 1 + N(0, `spread`) (at least [`MIN_FACTOR`]), each stall exponential of
+    /// mean `puncture_mm`.
     pub fn draw(
         g: &mut SplitMix64,
         count: u8,
+        given: Option<&[f32]>,
         length_mm: f32,
-        spread: f32,
-        puncture_mm: f32,
+        (spread, puncture_mm): (f32, f32),
     ) -> Layers {
-        let mut boundaries_mm: Vec<f32> = (0..count)
-            .map(|_| g.range(0.0, f64::from(length_mm.max(0.0))) as f32)
-            .collect();
+        let mut boundaries_mm: Vec<f32> = match given {
+            Some(depths) => depths.to_vec(),
+            None => (0..count)
+                .map(|_| g.range(0.0, f64::from(length_mm.max(0.0))) as f32)
+                .collect(),
+        };
         boundaries_mm.sort_by(f32::total_cmp);
+        let count = boundaries_mm.len();
         let factors = (0..count)
             .map(|_| (1.0 + g.normal(f64::from(spread)) as f32).max(MIN_FACTOR))
             .collect();
@@ -183,7 +187,7 @@ mod tests {
     #[test]
     fn draws_are_sorted_floored_and_of_the_count() {
         let mut g = crate::random::seeded(4);
-        let l = Layers::draw(&mut g, 5, 80.0, 2.0, 1.0);
+        let l = Layers::draw(&mut g, 5, None, 80.0, (2.0, 1.0));
         assert_eq!(l.boundaries_mm.len(), 5);
         assert!(l.boundaries_mm.windows(2).all(|w| w[0] <= w[1]));
         assert!(l.boundaries_mm.iter().all(|b| (0.0..80.0).contains(b)));

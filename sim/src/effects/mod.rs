@@ -12,11 +12,13 @@
 
 pub mod bias;
 pub mod delay;
+pub mod depths;
 pub mod keys;
 pub mod layers;
 pub mod push;
 mod state;
 
+pub use depths::{LayerDepths, LAYER_DEPTHS_KEY};
 pub use keys::{EffectsError, WORLD_KEYS};
 pub(crate) use state::Active;
 pub use state::EffectsDrawn;
@@ -63,12 +65,18 @@ pub struct WorldEffects {
     /// in rigid-body point-based registration"). Clinical: 0.5.
     pub registration_error_mm: f32,
     /// Tissue boundaries crossed along the insertion (0 to 8), drawn per run uniformly over the
-    /// planned insertion's length. Each starts a layer with its own curvature factor and is
-    /// punctured (`puncture_mm`).
+    /// planned insertion's length (or at `layer_depths_mm`). Each starts a layer with its own
+    /// curvature factor and is punctured (`puncture_mm`).
     ///
     /// Default 0. Skin, fat, muscle and an organ's capsule (Abolhassani et al. 2007, Med Eng Phys
     /// 29(4), "Needle insertion into soft tissue: a survey"). Clinical: 3.
     pub layers: u8,
+    /// The boundaries given instead of drawn (mm along the tip's path, ascending; `None`:
+    /// drawn). Giving them sets `layers` to their count; setting `layers` draws them again.
+    ///
+    /// Default `None`: a scenario that knows its anatomy (skin at 5 mm, a capsule at 60 mm)
+    /// says so.
+    pub layer_depths_mm: Option<LayerDepths>,
     /// Relative spread of each layer's curvature factor (1 + N(0, this), at least
     /// [`MIN_FACTOR`](crate::MIN_FACTOR)), multiplying the arcs' curvature while the tip is in
     /// the layer (the tissue before the first boundary keeps factor 1).
@@ -123,6 +131,7 @@ impl Default for WorldEffects {
             tracker_bias_mm: 0.0,
             registration_error_mm: 0.0,
             layers: 0,
+            layer_depths_mm: None,
             layer_curvature_spread: 0.0,
             puncture_mm: 0.0,
             target_push_mm: 0.0,
@@ -145,6 +154,7 @@ impl WorldEffects {
             tracker_bias_mm: 0.3,
             registration_error_mm: 0.5,
             layers: 3,
+            layer_depths_mm: None,
             layer_curvature_spread: 0.2,
             puncture_mm: 1.0,
             target_push_mm: 2.0,

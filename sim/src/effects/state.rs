@@ -136,8 +136,9 @@ impl Active {
         if e.layers > 0 {
             let g = &mut seeded(seed ^ LAYER_STREAM);
             let length = planned_length(schedule);
-            let spread = e.layer_curvature_spread;
-            a.layers = Some(Layers::draw(g, e.layers, length, spread, e.puncture_mm));
+            let given = e.layer_depths_mm.as_ref().map(|d| d.as_slice());
+            let spreads = (e.layer_curvature_spread, e.puncture_mm);
+            a.layers = Some(Layers::draw(g, e.layers, given, length, spreads));
         }
         if e.target_push_mm > 0.0 {
             let g = &mut seeded(seed ^ PUSH_STREAM);
