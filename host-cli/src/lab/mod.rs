@@ -7,6 +7,7 @@ pub mod robot;
 pub mod session;
 pub mod slicer;
 pub mod steer;
+pub mod viewers;
 pub mod wire;
 
 pub use steer::{run_steer, SteerArgs};

@@ -1,18 +1,19 @@
 //! What 3D Slicer (OpenIGTLinkIF, as a server) is shown while steering: the plan and each new
 //! continuation as `POLYDATA` paths (models), the controller's estimated tip as a `TRANSFORM`,
 //! the state and any stop reason as `STATUS` and `STRING`. Slicer is a spectator: a send that
-//! fails drops the connection and steering goes on.
+//! fails drops the connection and steering goes on. Slicer may be the server (`--slicer`) or
+//! connect to this program (`--serve-slicer`, [`Viewers`]).
 
-use super::wire::{send, send_text, tip_transform};
-use anyhow::{anyhow, Context, Result};
+use super::viewers::Viewers;
+use super::wire::{igtl_error, send, tip_transform};
+use anyhow::Result;
 use needle_igtl::messages::point::MAX_POINTS;
 use needle_igtl::messages::polydata::MAX_POLY_POINTS;
-use needle_igtl::{Message, PointElement, PointList, PolyData, Status, StatusCode};
+use needle_igtl::{Message, PointElement, PointList, PolyData, Status, StatusCode, StringMessage};
 use planner_core::execute::nominal::{execute_from, sample};
 use planner_core::execute::schedule::{Schedule, Step};
 use planner_core::model::kinematics::Frame;
 use planner_core::Scenario;
-use std::net::{TcpStream, ToSocketAddrs};
 use std::time::Duration;
 
 /// Device name of the planned path.
@@ -26,10 +27,12 @@ pub const ESTIMATE_DEVICE: &str = "NeedleTipEstimate";
 /// Device name of the state (`STATUS` and `STRING`).
 pub const STATE_DEVICE: &str = "NeedleSteering";
 
-/// The connection to Slicer, if any.
+/// What Slicer is shown, and where.
 #[derive(Default)]
 pub struct Slicer {
-    conn: Option<TcpStream>,
+    viewers: Viewers,
+    /// Frames sent now belong to the scene a late viewer is sent first.
+    scene: bool,
     /// Why the connection was dropped, if it was.
     pub failure: Option<String>,
 }
@@ -43,30 +46,42 @@ fn spacing(steps: &[Step]) -> f32 {
 impl Slicer {
     /// Connects to Slicer at `address` (none: nothing is shown).
     pub fn connect(address: Option<&str>) -> Result<Slicer> {
-        let Some(address) = address else {
-            return Ok(Slicer::default());
+        let viewers = match address {
+            Some(address) => Viewers::connect(address)?,
+            None => Viewers::None,
         };
-        let addr = address
-            .to_socket_addrs()
-            .with_context(|| format!("Slicer address {address}"))?
-            .next()
-            .ok_or_else(|| anyhow!("Slicer address {address} resolves to nothing"))?;
-        let conn = TcpStream::connect_timeout(&addr, Duration::from_secs(5))
-            .with_context(|| format!("cannot reach Slicer at {address}"))?;
-        conn.set_nodelay(true)?;
-        Ok(Slicer {
-            conn: Some(conn),
+        Ok(Slicer::showing(viewers))
+    }
+
+    /// Serves Slicer on `port`, waiting up to `wait` for the first viewer.
+    pub fn serve(port: u16, wait: Duration) -> Result<Slicer> {
+        Ok(Slicer::showing(Viewers::serve(port, wait)?))
+    }
+
+    fn showing(viewers: Viewers) -> Slicer {
+        Slicer {
+            viewers,
+            scene: false,
             failure: None,
-        })
+        }
     }
 
     fn send(&mut self, device: &str, message: &Message) {
-        let Some(conn) = self.conn.as_mut() else {
+        if !self.viewers.active() {
             return;
-        };
-        if let Err(e) = send(conn, device, message) {
+        }
+        let mut frame = Vec::new();
+        let sent = send(&mut frame, device, message)
+            .and_then(|()| self.viewers.deliver(&frame, self.scene));
+        if let Err(e) = sent {
             self.failure = Some(e.to_string());
-            self.conn = None;
+        }
+    }
+
+    fn send_text(&mut self, device: &str, text: &str) {
+        match StringMessage::ascii(text) {
+            Ok(m) => self.send(device, &Message::String(m)),
+            Err(e) => self.failure = Some(igtl_error(e).to_string()),
         }
     }
 
@@ -80,15 +95,17 @@ impl Slicer {
 
     /// The plan's path from the entry.
     pub fn plan(&mut self, scenario: &Scenario, schedule: &Schedule) {
-        if self.conn.is_none() {
+        if !self.viewers.active() {
             return;
         }
         let mut points = Vec::new();
         sample(scenario, schedule, spacing(&schedule.steps), |p| {
             points.push([p.x, p.y, p.z]);
         });
+        self.scene = true;
         self.path(PLAN_DEVICE, &points);
         self.obstacles(scenario);
+        self.scene = false;
     }
 
     /// The obstacles as fiducials of their diameter, [`MAX_POINTS`] a message: `NeedleObstacles`,
@@ -117,7 +134,7 @@ impl Slicer {
     /// The estimated tip, and the new continuation from it when the controller replaced the
     /// steps (drawn on the nominal needle of arc radius `radius`).
     pub fn reading(&mut self, tip: &Frame, replaced: Option<&[Step]>, radius: f32) {
-        if self.conn.is_none() {
+        if !self.viewers.active() {
             return;
         }
         let v = |v: planner_core::model::kinematics::V3| [v.x, v.y, v.z];
@@ -145,7 +162,7 @@ impl Slicer {
     /// The state: `steering`, `reached` or `stopped: REASON`; a `STATUS` OK while steering or
     /// on reaching the target, otherwise one that names the reason.
     pub fn state(&mut self, stop_reason: Option<&str>, over: bool) {
-        if self.conn.is_none() {
+        if !self.viewers.active() {
             return;
         }
         let (text, code) = match (over, stop_reason) {
@@ -155,12 +172,15 @@ impl Slicer {
         };
         let mut status = Status::new(code);
         let _ = status.message.push_str(&text);
+        // A viewer joining mid-insertion learns the state from the scene too.
+        self.scene = true;
         self.send(STATE_DEVICE, &Message::Status(status));
-        if let Some(conn) = self.conn.as_mut() {
-            if let Err(e) = send_text(conn, STATE_DEVICE, &text) {
-                self.failure = Some(e.to_string());
-                self.conn = None;
-            }
-        }
+        self.send_text(STATE_DEVICE, &text);
+        self.scene = false;
+    }
+
+    /// Viewers connected now.
+    pub fn viewers(&self) -> usize {
+        self.viewers.count()
     }
 }

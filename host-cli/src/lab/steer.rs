@@ -42,8 +42,21 @@ pub struct SteerArgs {
     #[arg(long)]
     pub robot: String,
     /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "serve_slicer")]
     pub slicer: Option<String>,
+    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of every interface
+    /// (Slicer's OpenIGTLinkIF connector of type Client connects to it, as to PLUS; 0 picks a
+    /// free port, printed on stderr). Viewers may join and leave during the insertion.
+    #[arg(long, value_name = "PORT")]
+    pub serve_slicer: Option<u16>,
+    /// With --serve-slicer: wait up to this many seconds for the first viewer before steering.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        requires = "serve_slicer",
+        default_value_t = 0.0
+    )]
+    pub wait_for_slicer: f64,
     /// Write the insertion log here (JSON lines: the plan, each reading, each command, the stop).
     #[arg(long)]
     pub log: Option<PathBuf>,
@@ -212,7 +225,14 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         "plan",
         json!({ "file": a.file, "form": form, "posture": schedule.posture, "steps": steps }),
     );
-    let mut slicer = Slicer::connect(a.slicer.as_deref())?;
+    let mut slicer = match a.serve_slicer {
+        Some(port) => {
+            let wait = Duration::try_from_secs_f64(a.wait_for_slicer)
+                .map_err(|_| anyhow::anyhow!("--wait-for-slicer must be 0 or more seconds"))?;
+            Slicer::serve(port, wait)?
+        }
+        None => Slicer::connect(a.slicer.as_deref())?,
+    };
     slicer.plan(&setup.scenario, schedule);
     let tracker = connect("tracker", &a.tracker)?;
     let robot = connect("robot", &a.robot)?;
