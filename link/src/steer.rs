@@ -24,16 +24,22 @@ impl<T: Transport> Client<T> {
     }
 
     /// Sends `make(chunk)` until the device answers with what `pick` takes, whole or announced
-    /// and then fetched in parts.
+    /// (for `reading`: a sequence number, or `None` for the start) and then fetched in parts.
     fn steer_exchange<R>(
         &mut self,
         what: &'static str,
-        id: u16,
+        (id, reading): (u16, Option<u32>),
         make: impl FnMut(usize) -> RequestBody,
         pick: impl Fn(&ReplyBody) -> Option<R>,
     ) -> Result<R, LinkError> {
         let answer = self.exchange_with(what, None, id, make, &mut |b| match b {
-            ReplyBody::SteerPending { len, crc } => Some(Answer::Pending {
+            // A late copy of an earlier announcement (the start's, a resent reading's) is
+            // another answer's: only this one's is taken.
+            ReplyBody::SteerPending {
+                reading: r,
+                len,
+                crc,
+            } if *r == reading => Some(Answer::Pending {
                 len: *len,
                 crc: *crc,
             }),
@@ -63,7 +69,7 @@ impl<T: Transport> Client<T> {
             config,
             max_len: chunk as u16,
         };
-        self.steer_exchange("steer start", id, make, |b| match b {
+        self.steer_exchange("steer start", (id, None), make, |b| match b {
             ReplyBody::SteerStarted { steps } => Some(steps.clone()),
             _ => None,
         })
@@ -78,7 +84,7 @@ impl<T: Transport> Client<T> {
             reading,
             max_len: chunk as u16,
         };
-        self.steer_exchange("steer reading", id, make, |b| match b {
+        self.steer_exchange("steer reading", (id, Some(seq)), make, |b| match b {
             ReplyBody::Steer(r) if r.seq == seq => Some(r.clone()),
             _ => None,
         })

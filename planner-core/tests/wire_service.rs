@@ -297,8 +297,11 @@ fn a_long_steering_answer_is_announced_and_fetched_in_parts() {
     );
     assert!(matches!(whole, ReplyBody::SteerStarted { .. }), "{whole:?}");
     // The same start (a repeat restarts from the entry) allowed 8 bytes: announced instead.
-    let ReplyBody::SteerPending { len, crc } =
-        ask(&mut dev, 4, RequestBody::SteerStart { config, max_len: 8 })
+    let ReplyBody::SteerPending {
+        reading: None,
+        len,
+        crc,
+    } = ask(&mut dev, 4, RequestBody::SteerStart { config, max_len: 8 })
     else {
         panic!("a long answer is announced");
     };

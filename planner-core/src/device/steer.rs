@@ -35,7 +35,7 @@ impl Core {
             Ok(steering) => {
                 let steps = steering.steps().iter().copied().collect();
                 self.steering = Steered::On { plan: id, steering };
-                self.answer(id, ReplyBody::SteerStarted { steps }, max_len, tx);
+                self.answer(id, ReplyBody::SteerStarted { steps }, None, max_len, tx);
             }
             Err(fault) => self.fault(id, fault, tx),
         }
@@ -95,9 +95,12 @@ impl Core {
                     // bytes again rather than a re-encoding that says "repeated".
                     let crc = crc32(&self.steer_answer[..stored]);
                     let len = self.steer_answer_len;
-                    return self.send(id, ReplyBody::SteerPending { len, crc }, tx);
+                    let reading = Some(m.seq);
+                    let pending = ReplyBody::SteerPending { reading, len, crc };
+                    return self.send(id, pending, tx);
                 }
-                self.answer(id, ReplyBody::Steer(reply), max_len, tx);
+                let seq = Some(reply.seq);
+                self.answer(id, ReplyBody::Steer(reply), seq, max_len, tx);
             }
             _ => self.fault(id, Fault::NotSteering, tx),
         }
@@ -119,7 +122,14 @@ impl Core {
 
     /// Sends a steering answer whole when it is at most `max_len` bytes, else announces it for
     /// `SteerFetch` (a noisy line damages long frames; short parts get through).
-    fn answer(&mut self, id: u16, body: ReplyBody, max_len: u16, tx: &mut dyn FnMut(&[u8])) {
+    fn answer(
+        &mut self,
+        id: u16,
+        body: ReplyBody,
+        reading: Option<u32>,
+        max_len: u16,
+        tx: &mut dyn FnMut(&[u8]),
+    ) {
         // Cannot fail: the buffer is sized from the largest steering answer, checked by tests.
         let Ok(bytes) = postcard::to_slice(&body, &mut self.steer_answer) else {
             return self.send(id, body, tx);
@@ -130,7 +140,7 @@ impl Core {
         if len <= max_len {
             self.send(id, body, tx);
         } else {
-            self.send(id, ReplyBody::SteerPending { len, crc }, tx);
+            self.send(id, ReplyBody::SteerPending { reading, len, crc }, tx);
         }
     }
 

@@ -191,6 +191,9 @@ pub enum ReplyBody {
     /// [`ReplyBody::Steer`]) is `len` bytes, more than the request allowed: fetch it with
     /// `SteerFetch`; `crc` is the CRC-32 of the whole.
     SteerPending {
+        /// What it answers: the reading of this sequence number, or (`None`) the start. A late
+        /// copy of an earlier announcement is told apart by it.
+        reading: Option<u32>,
         /// Length of the encoded answer.
         len: u16,
         /// CRC-32 of the encoded answer.
