@@ -49,12 +49,13 @@ mod layered;
 mod measure;
 pub mod random;
 mod reading;
+mod roll;
 mod run;
 mod world;
 
 pub use closed::{
-    closed_loop, closed_loop_in, in_process, ClosedLoopError, ClosedRun, Conditions, Controller,
-    TrackerFaults,
+    closed_loop, closed_loop_in, closed_loop_observed, in_process, ClosedLoopError, ClosedRun,
+    Conditions, Controller, Seen, TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
 pub use effects::{EffectsError, WorldEffects, WORLD_KEYS};
@@ -62,5 +63,6 @@ pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
 pub use reading::Measurement;
+pub use roll::{roll_error_deg, roll_trace, RollSample, RollSummary};
 pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};
 pub use world::{Executed, World, WorldError, MIN_FACTOR};
