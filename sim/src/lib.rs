@@ -5,7 +5,9 @@
 //! A [`World`] executes driver [`Step`](planner_core::execute::schedule::Step)s on a perturbed
 //! needle and records the true tip path; [`open_loop`] runs a whole schedule; [`closed_loop`]
 //! lets a [`Controller`] (the in-process steering of `planner-core`, or anything that answers
-//! tracker readings) replace the steps as the tracker reports the tip; the [`Perturbation`] holds
+//! tracker readings) replace the steps as the tracker reports the tip ([`closed_loop_observed`]
+//! shows each answered reading with the true tip frame, and [`roll_trace`] the in-process
+//! controller's roll error along a run); the [`Perturbation`] holds
 //! the model's parameters with their literature-motivated defaults (docs/execution.md).
 //!
 //! What it is not: not a device and not a transport. The simulated *device* (the firmware's
