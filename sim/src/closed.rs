@@ -11,6 +11,7 @@ use crate::world::World;
 use crate::world::WorldError;
 use crate::{EffectsError, PerturbError, Perturbation, WorldEffects};
 use planner_core::execute::schedule::{Schedule, Step};
+use planner_core::model::kinematics::Frame;
 use planner_core::steer::{
     Command, Pose, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
     TipMeasurement,
@@ -158,6 +159,17 @@ struct Tracker {
 }
 
 impl Tracker {
+    fn new(faults: &TrackerFaults, seed: u64) -> Tracker {
+        Tracker {
+            faults: *faults,
+            g: seeded(seed ^ FAULT_STREAM),
+            seq: 0,
+            dropout_until: f32::NEG_INFINITY,
+            depth: 0.0,
+            previous: None,
+        }
+    }
+
     /// The readings one world measurement turns into: the reading itself, and maybe a repeat or
     /// an old one after it (marked `true`: the tracker's fault, whose answers are not acted on).
     fn readings(&mut self, m: &Measurement) -> Vec<(TipMeasurement, bool)> {
@@ -254,6 +266,36 @@ pub fn closed_loop_in<C: Controller>(
     controller: &mut C,
     seed: u64,
 ) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
+    let unseen = |_: &Seen<'_, C>| {};
+    closed_loop_observed(
+        scenario, planned, schedule, conditions, controller, seed, unseen,
+    )
+}
+
+/// What an observer of a closed-loop run sees after each reading the controller answered (a
+/// tracker's injected repeat or old reading is not shown).
+pub struct Seen<'a, C> {
+    /// The reading the controller was given.
+    pub reading: &'a TipMeasurement,
+    /// The true tip frame when the reading was taken.
+    pub tip: &'a Frame,
+    /// The step the world was executing.
+    pub step: &'a Step,
+    /// The controller, having answered the reading.
+    pub controller: &'a C,
+}
+
+/// [`closed_loop_in`], `observe` called after each reading the controller answered. Observing
+/// changes nothing: the run is the same, bit for bit.
+pub fn closed_loop_observed<C: Controller>(
+    scenario: &Scenario,
+    planned: &Planned,
+    schedule: &Schedule,
+    conditions: &Conditions<'_>,
+    controller: &mut C,
+    seed: u64,
+    mut observe: impl FnMut(&Seen<'_, C>),
+) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
     let (p, faults) = (conditions.perturbation, conditions.faults);
     let mut world = World::with_effects(scenario, schedule, p, conditions.effects, seed).map_err(
         |e| match e {
@@ -261,14 +303,7 @@ pub fn closed_loop_in<C: Controller>(
             WorldError::Effects(e) => ClosedLoopError::Effects(e),
         },
     )?;
-    let mut tracker = Tracker {
-        faults: *faults,
-        g: seeded(seed ^ FAULT_STREAM),
-        seq: 0,
-        dropout_until: f32::NEG_INFINITY,
-        depth: 0.0,
-        previous: None,
-    };
+    let mut tracker = Tracker::new(faults, seed);
     let mut steps: Vec<Step> = schedule.steps.to_vec();
     let mut stop: Option<StopReason> = None;
     let mut predicted_miss_mm = None;
@@ -279,7 +314,7 @@ pub fn closed_loop_in<C: Controller>(
     'continuations: loop {
         let mut next: Option<Vec<Step>> = None;
         for step in &steps {
-            world.execute(step, |m| {
+            world.execute_seen(step, |m, tip| {
                 for (reading, injected) in tracker.readings(m) {
                     let reply = match controller.update(&reading) {
                         Ok(r) => r,
@@ -291,6 +326,13 @@ pub fn closed_loop_in<C: Controller>(
                     if injected {
                         continue; // the tracker's repeat or old reading: nothing new to act on
                     }
+                    let (reading, controller) = (&reading, &*controller);
+                    observe(&Seen {
+                        reading,
+                        tip,
+                        step,
+                        controller,
+                    });
                     if reply.replanned {
                         replan_evaluations.push(reply.evaluations);
                     }

@@ -6,6 +6,7 @@ use crate::effects::layers::Move;
 use crate::reading::Measurement;
 use crate::world::{Executed, World};
 use crate::MAX_PIECE_MM;
+use planner_core::model::kinematics::Frame;
 use planner_core::SegmentKind;
 use std::ops::ControlFlow;
 
@@ -19,7 +20,7 @@ impl World {
         length: f32,
         true_len: f32,
         radius: f32,
-        on_measure: &mut impl FnMut(&Measurement) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
     ) -> Executed {
         let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
         let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
@@ -40,7 +41,7 @@ impl World {
             commanded = length * share;
             self.moved();
             let m = self.measure();
-            if on_measure(&m).is_break() && k < pieces {
+            if on_measure(&m, &self.tip).is_break() && k < pieces {
                 return Executed {
                     inserted_mm: commanded,
                     interrupted: true,

@@ -5,11 +5,13 @@
 //! A [`World`] executes driver [`Step`](planner_core::execute::schedule::Step)s on a perturbed
 //! needle and records the true tip path; [`open_loop`] runs a whole schedule; [`closed_loop`]
 //! lets a [`Controller`] (the in-process steering of `planner-core`, or anything that answers
-//! tracker readings) replace the steps as the tracker reports the tip; the [`Perturbation`] holds
-//! the model's parameters with their literature-motivated defaults (docs/execution.md), and the
-//! [`WorldEffects`] what the planner's model leaves out (a 5-DOF sensor, field bias and
-//! registration error, layered tissue, a pushed target, late imaging and tracking: all off by
-//! default, [`World::with_effects`], [`open_loop_in`], [`closed_loop_in`]).
+//! tracker readings) replace the steps as the tracker reports the tip ([`closed_loop_observed`]
+//! shows each answered reading with the true tip frame, and [`roll_trace`] the in-process
+//! controller's roll error along a run); the [`Perturbation`] holds the model's parameters with
+//! their literature-motivated defaults (docs/execution.md), and the [`WorldEffects`] what the
+//! planner's model leaves out (a 5-DOF sensor, field bias and registration error, layered
+//! tissue, a pushed target, late imaging and tracking: all off by default,
+//! [`World::with_effects`], [`open_loop_in`], [`closed_loop_in`]).
 //!
 //! What it is not: not a device and not a transport. The simulated *device* (the firmware's
 //! request handler on a pty, TCP or in-process) is `hil-sim`; the link to a device is
@@ -52,12 +54,13 @@ mod layered;
 mod measure;
 pub mod random;
 mod reading;
+mod roll;
 mod run;
 mod world;
 
 pub use closed::{
-    closed_loop, closed_loop_in, in_process, ClosedLoopError, ClosedRun, Conditions, Controller,
-    TrackerFaults,
+    closed_loop, closed_loop_in, closed_loop_observed, in_process, ClosedLoopError, ClosedRun,
+    Conditions, Controller, Seen, TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
 pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WORLD_KEYS};
@@ -65,5 +68,6 @@ pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
 pub use reading::Measurement;
+pub use roll::{roll_error_deg, roll_trace, RollSample, RollSummary};
 pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};
 pub use world::{Executed, World, WorldError, MIN_FACTOR};

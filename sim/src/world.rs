@@ -246,6 +246,16 @@ impl World {
         step: &Step,
         mut on_measure: impl FnMut(&Measurement) -> ControlFlow<()>,
     ) -> Executed {
+        self.execute_seen(step, |m, _| on_measure(m))
+    }
+
+    /// [`World::execute`], `on_measure` also seeing the true tip frame at each measurement
+    /// (what the tracker's reading should have been; the world's own draws are the same).
+    pub fn execute_seen(
+        &mut self,
+        step: &Step,
+        mut on_measure: impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+    ) -> Executed {
         let mut draw = StepDraw::default();
         let done = match step.op {
             Op::Rotate { angle_deg } => {
@@ -253,7 +263,7 @@ impl World {
                 self.last = Last::Rotate;
                 self.moved();
                 let m = self.measure();
-                let _ = on_measure(&m);
+                let _ = on_measure(&m, &self.tip);
                 Executed {
                     inserted_mm: 0.0,
                     interrupted: false,
@@ -335,7 +345,7 @@ impl World {
         length_mm: f32,
         duty: f32,
         draw: &mut StepDraw,
-        on_measure: &mut impl FnMut(&Measurement) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
     ) -> Executed {
         if self.last != Last::Duty {
             self.segment_factor = 1.0 + normal(&mut self.physics, self.p.segment_curvature_spread);
@@ -393,7 +403,7 @@ impl World {
         length: f32,
         radius: f32,
         draw: &mut StepDraw,
-        on_measure: &mut impl FnMut(&Measurement) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
     ) -> Executed {
         let sd = self.p.insertion_error_mm * libm::sqrtf(length.max(0.0) / 100.0);
         let error = normal(&mut self.physics, sd);
@@ -423,7 +433,7 @@ impl World {
             t_prev = t;
             self.moved();
             let m = self.measure();
-            if on_measure(&m).is_break() && k < pieces {
+            if on_measure(&m, &self.tip).is_break() && k < pieces {
                 return Executed {
                     inserted_mm: commanded,
                     interrupted: true,
