@@ -23,35 +23,18 @@ impl World {
         on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
     ) -> Executed {
         let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
-        let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
-        let nominal = true_len / pieces as f32;
-        let mut commanded = 0.0;
-        for k in 1..=pieces {
-            let share = k as f32 / pieces as f32;
-            let mut moves = std::mem::take(&mut self.moves);
+        let nominal = true_len / libm::ceilf(true_len / spacing).max(1.0);
+        self.in_pieces(length, true_len, on_measure, |w, _| {
+            let mut moves = std::mem::take(&mut w.moves);
             moves.clear();
-            if let Some(l) = self.fx.layers.as_mut() {
-                l.advance(self.depth, nominal, &mut moves);
+            if let Some(l) = w.fx.layers.as_mut() {
+                l.advance(w.depth, nominal, &mut moves);
             }
             for m in &moves {
-                self.move_tip(kind, m, radius);
+                w.move_tip(kind, m, radius);
             }
-            self.moves = moves;
-            self.commanded += length * share - commanded;
-            commanded = length * share;
-            self.moved();
-            let m = self.measure();
-            if on_measure(&m, &self.tip).is_break() && k < pieces {
-                return Executed {
-                    inserted_mm: commanded,
-                    interrupted: true,
-                };
-            }
-        }
-        Executed {
-            inserted_mm: length,
-            interrupted: false,
-        }
+            w.moves = moves;
+        })
     }
 
     /// One move of the tip, recorded at most 1 mm apart (a jump too: the tip passes through).

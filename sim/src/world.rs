@@ -412,25 +412,42 @@ impl World {
         if self.fx.layers.is_some() {
             return self.push_layered(kind, length, true_len, radius, on_measure);
         }
-        let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
-        let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
         let start = self.tip;
-        let (mut t_prev, mut commanded) = (0.0, 0.0);
-        for k in 1..=pieces {
-            let share = k as f32 / pieces as f32;
+        let mut t_prev = 0.0;
+        self.in_pieces(length, true_len, on_measure, |w, share| {
             let t = true_len * share;
-            self.clearance_along(
+            w.clearance_along(
                 &start.advanced(kind, t_prev, radius),
                 kind,
                 t - t_prev,
                 radius,
             );
-            self.tip = start.advanced(kind, t, radius);
-            self.record(self.tip.p);
-            self.depth += t - t_prev;
+            w.tip = start.advanced(kind, t, radius);
+            w.record(w.tip.p);
+            w.depth += t - t_prev;
+            t_prev = t;
+        })
+    }
+
+    /// A push of `length` (commanded; `true_len` as the tissue takes it) in pieces of at most
+    /// the tracker's spacing: `advance(world, share)` moves the tip through the piece that ends
+    /// at `share` of the push, then the robot's count follows and the tracker reads; the
+    /// controller may break off after any piece but the last.
+    pub(crate) fn in_pieces(
+        &mut self,
+        length: f32,
+        true_len: f32,
+        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        mut advance: impl FnMut(&mut World, f32),
+    ) -> Executed {
+        let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
+        let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
+        let mut commanded = 0.0;
+        for k in 1..=pieces {
+            let share = k as f32 / pieces as f32;
+            advance(self, share);
             self.commanded += length * share - commanded;
             commanded = length * share;
-            t_prev = t;
             self.moved();
             let m = self.measure();
             if on_measure(&m, &self.tip).is_break() && k < pieces {

@@ -83,16 +83,22 @@ pub fn needle() -> Command {
     c
 }
 
-/// Runs `needle` with `args` (which ask for JSON), asserts that it succeeds and returns what it
-/// printed.
-pub fn needle_json(args: &[&str]) -> serde_json::Value {
+/// Runs `needle` with `args`, asserts that it succeeds and returns what it printed, byte for
+/// byte (compare these for bit-for-bit equality: parsing JSON may round a float's last bit).
+pub fn needle_stdout(args: &[&str]) -> Vec<u8> {
     let out = needle().args(args).output().expect("run needle");
     assert!(
         out.status.success(),
         "needle {args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).expect("needle prints JSON")
+    out.stdout
+}
+
+/// Runs `needle` with `args` (which ask for JSON), asserts that it succeeds and returns what it
+/// printed.
+pub fn needle_json(args: &[&str]) -> serde_json::Value {
+    serde_json::from_slice(&needle_stdout(args)).expect("needle prints JSON")
 }
 
 /// The paper's scenario as an encoded plan request carrying `n` obstacles (any count the wire

@@ -1,7 +1,7 @@
 //! `needle simulate --world`: the clinical world's keys in the JSON, repeated bit for bit for a
 //! seed, changed key by key with `--perturb`, and bad names and values refused naming the key.
 
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, needle_fails_with, needle_json, needle_stdout};
 use needle_sim::WORLD_KEYS;
 
 fn paper() -> String {
@@ -24,19 +24,7 @@ fn the_clinical_world_repeats_bit_for_bit_and_prints_its_keys() {
         "--json",
         "--detail",
     ];
-    let run = |threads: &str| {
-        let out = needle()
-            .args(args)
-            .args(["--threads", threads])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        out.stdout
-    };
+    let run = |threads: &str| needle_stdout(&[&args[..], &["--threads", threads]].concat());
     let once = run("1");
     assert_eq!(once, run("2"), "the same seed, the same bits");
     let v: serde_json::Value = serde_json::from_slice(&once).unwrap();
@@ -57,6 +45,7 @@ fn the_clinical_world_repeats_bit_for_bit_and_prints_its_keys() {
 
 #[test]
 fn bad_worlds_and_effects_are_clear_errors() {
+    let paper_text = std::fs::read_to_string(paper()).unwrap();
     for (args, says) in [
         (vec!["--world", "lab"], "unknown world `lab`"),
         (
@@ -82,27 +71,16 @@ fn bad_worlds_and_effects_are_clear_errors() {
             "layer_depths_mm: the depths must ascend",
         ),
     ] {
-        let out = needle()
-            .args(["simulate", &paper()])
-            .args(&args)
-            .output()
-            .unwrap();
-        assert!(!out.status.success(), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(says), "{args:?}: {err}");
-        assert!(!err.contains("panicked"), "{err}");
+        let args = [&["simulate", "{}"][..], &args].concat();
+        needle_fails_with(&paper_text, &args, says);
     }
 }
 
 #[test]
 fn the_table_names_the_world_when_it_is_not_the_default() {
     let run = |world: &str| {
-        let out = needle()
-            .args(["simulate", &paper(), "--runs", "3", "--world", world])
-            .output()
-            .unwrap();
-        assert!(out.status.success());
-        String::from_utf8(out.stdout).unwrap()
+        let out = needle_stdout(&["simulate", &paper(), "--runs", "3", "--world", world]);
+        String::from_utf8(out).unwrap()
     };
     assert!(run("clinical").contains("world: tracker_dof=5 tracker_bias_mm=0.3"));
     assert!(!run("default").contains("world:"));
@@ -121,17 +99,11 @@ fn a_scenario_names_its_world_as_the_flag_does() {
     )
     .unwrap();
     let run = |path: &str, extra: &[&str]| {
-        let out = needle()
-            .args(["simulate", path, "--runs", "4", "--closed-loop", "--json"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let args = [
+            &["simulate", path, "--runs", "4", "--closed-loop", "--json"][..],
+            extra,
+        ];
+        let v = needle_json(&args.concat());
         (v["world"].clone(), v["summary"].clone())
     };
     let from_file = run(file.to_str().unwrap(), &[]);
