@@ -52,6 +52,7 @@ pub mod effects;
 mod executed;
 mod layered;
 mod measure;
+mod pieces;
 pub mod random;
 mod reading;
 mod roll;

@@ -32,7 +32,7 @@ use crate::effects::{Active, EffectsError, WorldEffects};
 use crate::executed::executed_part;
 use crate::random::{seeded, Draw, SplitMix64};
 use crate::reading::Measurement;
-use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM, MAX_PIECE_MM};
+use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM};
 use planner_core::execute::nominal::posture_frame;
 use planner_core::execute::perturbation::TorsionPlay;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
@@ -427,40 +427,6 @@ impl World {
             w.depth += t - t_prev;
             t_prev = t;
         })
-    }
-
-    /// A push of `length` (commanded; `true_len` as the tissue takes it) in pieces of at most
-    /// the tracker's spacing: `advance(world, share)` moves the tip through the piece that ends
-    /// at `share` of the push, then the robot's count follows and the tracker reads; the
-    /// controller may break off after any piece but the last.
-    pub(crate) fn in_pieces(
-        &mut self,
-        length: f32,
-        true_len: f32,
-        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
-        mut advance: impl FnMut(&mut World, f32),
-    ) -> Executed {
-        let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
-        let pieces = libm::ceilf(true_len / spacing).max(1.0) as u32;
-        let mut commanded = 0.0;
-        for k in 1..=pieces {
-            let share = k as f32 / pieces as f32;
-            advance(self, share);
-            self.commanded += length * share - commanded;
-            commanded = length * share;
-            self.moved();
-            let m = self.measure();
-            if on_measure(&m, &self.tip).is_break() && k < pieces {
-                return Executed {
-                    inserted_mm: commanded,
-                    interrupted: true,
-                };
-            }
-        }
-        Executed {
-            inserted_mm: length,
-            interrupted: false,
-        }
     }
 
     pub(crate) fn record(&mut self, p: V3) {
