@@ -13,7 +13,7 @@ pub use crate::budgets::verdict;
 pub use crate::figures::{table, BoardFigures};
 use anyhow::{bail, Context, Result};
 use needle_link::{Client, ClientConfig};
-use planner_core::wire::PlanResult;
+use planner_core::wire::{ChanceRequest, PlanResult};
 use planner_core::Scenario;
 use serde_json::Value;
 use std::io::Write;
@@ -66,11 +66,13 @@ pub struct NamedScenario {
     pub name: String,
     /// The scenario.
     pub scenario: Scenario,
+    /// The collision bound it is planned under, if its file sets one.
+    pub chance: Option<ChanceRequest>,
 }
 
-/// Reads a scenario file (`needle`'s TOML reader; passed in, since this crate sits below
-/// `needle-cli`).
-pub type LoadScenario<'a> = &'a dyn Fn(&Path) -> Result<Scenario>;
+/// Reads a scenario file and its collision bound (`needle`'s TOML reader; passed in, since this
+/// crate sits below `needle-cli`).
+pub type LoadScenario<'a> = &'a dyn Fn(&Path) -> Result<(Scenario, Option<ChanceRequest>)>;
 
 /// Loads scenario files with `load`, named by their stem.
 pub fn load_scenarios(files: &[PathBuf], load: LoadScenario) -> Result<Vec<NamedScenario>> {
@@ -82,8 +84,12 @@ pub fn load_scenarios(files: &[PathBuf], load: LoadScenario) -> Result<Vec<Named
                 .and_then(|s| s.to_str())
                 .unwrap_or("scenario")
                 .to_owned();
-            let scenario = load(f)?;
-            Ok(NamedScenario { name, scenario })
+            let (scenario, chance) = load(f)?;
+            Ok(NamedScenario {
+                name,
+                scenario,
+                chance,
+            })
         })
         .collect()
 }
@@ -133,10 +139,10 @@ pub fn measure(
     let mut instructions = Vec::new();
     let mut matches_host = Vec::new();
     for s in scenarios {
-        let host = encoded(&planner_core::plan_scheduled(&s.scenario))?;
+        let host = encoded(&planner_core::device::plan_as_device(&s.scenario, s.chance))?;
         let before = qemu.counts()?.len();
         let on_device = device
-            .plan(&s.scenario, &mut |_| {})
+            .plan_bounded(&s.scenario, s.chance, &mut |_| {})
             .with_context(|| format!("planning {} on {}", s.name, board.name))?;
         let counts = qemu.counts()?;
         if counts.len() != before + 1 {
@@ -195,7 +201,8 @@ pub fn measure_all(
 /// `needle device-bench` options.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario files (default: examples/paper.toml and examples/space.toml).
+    /// Scenario files (default: examples/paper.toml, space.toml and paper-bounded.toml); a
+    /// file's collision bound, if it sets one, is planned under on the device too.
     files: Vec<PathBuf>,
     /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
     /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`), as a JSON
@@ -241,6 +248,7 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
         vec![
             root.join("examples/paper.toml"),
             root.join("examples/space.toml"),
+            root.join("examples/paper-bounded.toml"),
         ]
     } else {
         args.files.clone()

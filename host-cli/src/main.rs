@@ -1,6 +1,6 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
@@ -137,19 +137,6 @@ fn load(args: &PlanArgs) -> Result<Scenario> {
     Ok(scenario)
 }
 
-/// Prints a plan as `plan` and `send` do: the table (and with `--schedule` the schedule's), or
-/// the JSON report with `best.schedule` (`best` is `null` when no form is feasible, and there is
-/// no schedule).
-fn print_plan(
-    args: &PlanArgs,
-    scenario: &Scenario,
-    report: &PlanReport,
-    schedule: Option<&Schedule>,
-    stats: Stats,
-) -> Result<()> {
-    print_plan_predicted(args, scenario, report, schedule, stats, None)
-}
-
 /// What a plan predicts about its execution (the scenario has `[execution]` or a bound).
 struct Predicted<'a> {
     execution: &'a Execution,
@@ -157,7 +144,9 @@ struct Predicted<'a> {
     chance: Option<&'a ChancePlan>,
 }
 
-/// [`print_plan`] with the predictions, when there are any.
+/// Prints a plan as `plan` and `send` do: the table (and with `--schedule` the schedule's), or
+/// the JSON report with `best.schedule` (`best` is `null` when no form is feasible, and there is
+/// no schedule), with the predictions when there are any.
 fn print_plan_predicted(
     args: &PlanArgs,
     scenario: &Scenario,
@@ -228,37 +217,32 @@ fn plan(args: &PlanArgs) -> Result<()> {
 
 fn send(args: &SendArgs) -> Result<()> {
     let scenario = load(&args.plan)?;
-    // A device plans without the bound: its plan would silently not keep it.
-    if load_execution(&args.plan.file)?
-        .max_collision_probability
-        .is_some()
-    {
-        bail!(
-            "{}: plan this scenario here (needle plan), or on the device without the bound",
-            needle_cli::simulate::request::HOST_ONLY_BOUND
-        );
-    }
-    let (result, device) = device::send::plan_on_device(&scenario, &args.link)?;
-    let planned = result.context("planning failed")?;
-    let stats = Stats {
-        time_us: device.time_us,
+    let execution = load_execution(&args.plan.file)?;
+    let made = match device::checked::plan_checked(&scenario, &execution, &args.link)? {
+        device::checked::Sent::Planned(made) => *made,
+        device::checked::Sent::Refused(e) => return Err(e),
     };
-    if planned.report.best().is_none() {
-        print_plan(&args.plan, &scenario, &planned.report, None, stats)?;
-        return reachable(&planned.report);
-    }
-    let schedule = device::verify::verified_schedule(&scenario, &planned)?;
-    print_plan(
+    let report = made.report();
+    let predicted = made.risks.clone().map(|risks| Predicted {
+        execution: &execution,
+        risks,
+        chance: made.chance.as_ref(),
+    });
+    print_plan_predicted(
         &args.plan,
         &scenario,
-        &planned.report,
-        Some(schedule),
-        stats,
+        report,
+        made.schedule()?,
+        made.stats,
+        predicted.as_ref(),
     )?;
-    if let Some(dir) = &args.plan.export {
-        needle_cli::report::slicer::export(dir, &scenario, &planned.report)?;
+    if report.best().is_none() {
+        return reachable(report);
     }
-    Ok(())
+    if let Some(dir) = &args.plan.export {
+        needle_cli::report::slicer::export(dir, &scenario, report)?;
+    }
+    made.verdict()
 }
 
 fn bench(args: &BenchArgs) -> Result<()> {
@@ -313,7 +297,9 @@ fn main() -> ExitCode {
         Command::Info { link, json } => device::commands::info(link, *json),
         Command::Ports => device::commands::ports(),
         Command::Bench(a) => bench(a),
-        Command::DeviceBench(a) => needle_devtools::device_bench::run(a, &load_scenario),
+        Command::DeviceBench(a) => {
+            needle_devtools::device_bench::run(a, &needle_cli::scenario::load_plan_request)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

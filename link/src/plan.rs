@@ -5,14 +5,18 @@ use crate::error::{too_large, LinkError};
 use crate::exchange::is_line_fault;
 use crate::transport::Transport;
 use planner_core::model::form::Form;
-use planner_core::wire::{PlanRequest, PlanResult, ReplyBody, RequestBody, MAX_PLAN_REQUEST};
+use planner_core::wire::{
+    ChanceRequest, PlanRequest, PlanResult, ReplyBody, RequestBody, MAX_PLAN_REQUEST,
+};
 use planner_core::Scenario;
 use std::time::{Duration, Instant};
 
 /// One progress report of the device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Progress {
-    /// Forms done.
+    /// The round of a plan under a collision bound (from 1; always 1 without one).
+    pub round: u8,
+    /// Forms done in this round.
     pub done: u8,
     /// Forms in all.
     pub total: u8,
@@ -29,8 +33,23 @@ impl<T: Transport> Client<T> {
         scenario: &Scenario,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<PlanResult, LinkError> {
+        self.plan_bounded(scenario, None, progress)
+    }
+
+    /// Plans `scenario` on the device under the collision bound `chance` (none: as
+    /// [`Client::plan`]).
+    pub fn plan_bounded(
+        &mut self,
+        scenario: &Scenario,
+        chance: Option<ChanceRequest>,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<PlanResult, LinkError> {
         let mut buf = vec![0u8; MAX_PLAN_REQUEST];
-        let request = postcard::to_slice(&PlanRequest::new(scenario), &mut buf)
+        let request = PlanRequest {
+            chance,
+            ..PlanRequest::new(scenario)
+        };
+        let request = postcard::to_slice(&request, &mut buf)
             .map_err(|_| too_large("scenario too large to encode"))?
             .to_vec();
         self.plan_encoded(&request, progress)
@@ -76,6 +95,7 @@ impl<T: Transport> Client<T> {
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(u16, u32), LinkError> {
         let mut news = Progress {
+            round: 1,
             done: 0,
             total: 0,
             form: None,
@@ -83,7 +103,7 @@ impl<T: Transport> Client<T> {
         };
         let mut last_news = Instant::now();
         let mut longest_gap = Duration::ZERO;
-        let mut seen = 0u8;
+        let mut seen = (1u8, 0u8);
         loop {
             if let Some((fid, len, crc)) = self.finished.take() {
                 if fid == id {
@@ -153,9 +173,9 @@ impl<T: Transport> Client<T> {
                 })?;
                 self.on_plan_news(id, &reply, &mut news, progress)?;
             }
-            if news.done != seen {
+            if (news.round, news.done) != seen {
                 let now = Instant::now();
-                seen = news.done;
+                seen = (news.round, news.done);
                 longest_gap = longest_gap.max(now - last_news);
                 last_news = now;
             }
@@ -173,12 +193,14 @@ impl<T: Transport> Client<T> {
     ) -> Result<(), LinkError> {
         match *body {
             ReplyBody::Progress {
+                round,
                 done,
                 total,
                 form,
                 feasible,
-            } if done > news.done || news.total == 0 => {
+            } if (round, done) > (news.round, news.done) || news.total == 0 => {
                 *news = Progress {
+                    round,
                     done,
                     total,
                     form,

@@ -6,12 +6,16 @@
 //! that also raises `PROTOCOL_VERSION` (or, as for the schedule in the result, one made to a
 //! version not yet released).
 
+use planner_core::chance::ChanceFigures;
+use planner_core::execute::perturbation::Perturbation;
+use planner_core::execute::risk::Execution;
 use planner_core::execute::schedule::{Op, Posture, Schedule, Step, Steps};
 use planner_core::report::{FormOutcomes, Segments};
+use planner_core::steer::NoiseModel;
 use planner_core::wire::crc::crc32;
 use planner_core::wire::{
-    encode_frame, Chunk, Directed, Fault, Header, PlanRequest, PlanResult, Reply, ReplyBody,
-    Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK,
+    encode_frame, ChanceRequest, Chunk, DevicePlan, Directed, Fault, Header, PlanRequest,
+    PlanResult, Reply, ReplyBody, Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK,
 };
 use planner_core::{
     Form, FormOutcome, Insertion, PlanError, PlanReport, Scenario, ScheduledPlan, SegmentKind,
@@ -126,7 +130,30 @@ fn exchange() -> String {
         capacity: 32,
     });
     let result = postcard::to_stdvec(&result).unwrap();
-    let plan_ok: PlanResult = Ok(fixed_plan());
+    let plan_ok: PlanResult = Ok(DevicePlan {
+        planned: fixed_plan(),
+        chance: None,
+    });
+    let mut margins = heapless::Vec::new();
+    margins.extend_from_slice(&[0.0, 1.25, 0.5]).unwrap();
+    let plan_bounded: PlanResult = Ok(DevicePlan {
+        planned: fixed_plan(),
+        chance: Some(ChanceFigures {
+            collision_probability: Some(0.0075),
+            target_error_p95: Some(1.5),
+            margins,
+            rounds: 2,
+            within_bound: true,
+        }),
+    });
+    let bounded_request = PlanRequest::bounded(
+        &scenario,
+        ChanceRequest {
+            bound: 0.01,
+            model: Perturbation::default(),
+            execution: Execution::Steered(NoiseModel::DEFAULT),
+        },
+    );
     let req = |id, body| Request {
         header: Header::new(id),
         body,
@@ -184,6 +211,7 @@ fn exchange() -> String {
             frame(&rep(
                 3,
                 ReplyBody::Progress {
+                    round: 2,
                     done: 4,
                     total: 10,
                     form: Form::parse("RL"),
@@ -215,6 +243,14 @@ fn exchange() -> String {
         ("result", hex(&result)),
         ("fault", frame(&rep(9, ReplyBody::Fault(Fault::BadCrc)))),
         ("result_plan", hex(&postcard::to_stdvec(&plan_ok).unwrap())),
+        (
+            "result_plan_bounded",
+            hex(&postcard::to_stdvec(&plan_bounded).unwrap()),
+        ),
+        (
+            "request_bounded",
+            hex(&postcard::to_stdvec(&bounded_request).unwrap()),
+        ),
     ];
     lines.iter().fold(String::new(), |mut s, (name, hex)| {
         writeln!(s, "{name} {hex}").unwrap();

@@ -254,7 +254,9 @@ fn the_device_answers_an_unreachable_target_with_every_form_and_no_best() {
     let mut lines_only = planner_core::model::form::FormSet(0);
     lines_only.insert(planner_core::Form::parse("L").unwrap());
     s.options.forms = lines_only;
-    let on_device = plan_on_service(&s).expect("a finished plan, not an error");
+    let on_device = plan_on_service(&s)
+        .expect("a finished plan, not an error")
+        .planned;
     assert_eq!(on_device.report.best, None);
     assert_eq!(on_device.schedule, None);
     assert!(!on_device.report.forms.is_empty());

@@ -6,11 +6,8 @@ use crate::convert::python_value;
 use crate::errors::{guarded, message, Failed, PlanError};
 use crate::plan::{degree, form_words, planned, Planned};
 use crate::scenario::Scenario;
-use anyhow::Context;
 use needle_cli::device::commands::{info_json, LinkArgs};
-use needle_cli::device::send::plan_on_device;
-use needle_cli::device::verify::verified_schedule;
-use needle_cli::report::{plan_json, Stats};
+use needle_cli::device::checked::{plan_checked, Sent};
 use needle_cli::scenario::restrict;
 use pyo3::prelude::*;
 
@@ -82,40 +79,20 @@ impl Device {
         max_degree: Option<i64>,
     ) -> PyResult<Planned<'py>> {
         let words = forms.map(form_words).transpose()?;
-        if scenario.execution.max_collision_probability.is_some() {
-            return Err(crate::errors::ScenarioError::new_err(format!(
-                "{}: plan this scenario here (needle plan), or on the device without the bound",
-                needle_cli::simulate::request::HOST_ONLY_BOUND
-            )));
-        }
         let mut core = scenario.core.clone();
         restrict(&mut core, degree(max_degree)?, words.as_deref())
             .map_err(|e| crate::errors::scenario_error(&e))?;
         let link = self.link.clone();
+        let execution = scenario.execution;
         let made = py.detach(|| {
             guarded(|| {
-                Ok(match plan_on_device(&core, &link) {
+                Ok(match plan_checked(&core, &execution, &link) {
                     Err(e) => Err(Wrong::Device(e)),
-                    Ok((result, device)) => match result.context("planning failed") {
-                        Err(e) => Err(Wrong::Plan(e)),
-                        Ok(plan) => {
-                            let stats = Stats {
-                                time_us: device.time_us,
-                            };
-                            if plan.report.best().is_none() {
-                                let json = plan_json(&core, &plan.report, None, stats);
-                                let unreachable = planner_core::PlanError::Unreachable;
-                                Ok((json, Some(unreachable.to_string())))
-                            } else {
-                                match verified_schedule(&core, &plan) {
-                                    Err(e) => Err(Wrong::Device(e)),
-                                    Ok(s) => {
-                                        Ok((plan_json(&core, &plan.report, Some(s), stats), None))
-                                    }
-                                }
-                            }
-                        }
-                    },
+                    Ok(Sent::Refused(e)) => Err(Wrong::Plan(e)),
+                    Ok(Sent::Planned(made)) => {
+                        let verdict = made.verdict().err().map(|e| message(&e));
+                        Ok((made.json(&core, &execution), verdict))
+                    }
                 })
             })
         });

@@ -90,20 +90,3 @@ fn a_reader_that_closes_the_pipe_early_ends_the_command_quietly() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(first.starts_with(b"{\"runs\":400"));
 }
-
-/// A scenario with a collision bound is not handed to a device, which would plan it without the
-/// bound: `needle send` refuses it before connecting.
-#[test]
-fn a_bounded_scenario_is_not_sent_to_a_device() {
-    let text = std::fs::read_to_string(example("paper")).unwrap().replacen(
-        "[planner]\n",
-        "[planner]\nmax_collision_probability = 0.05\n",
-        1,
-    );
-    assert!(text.contains("max_collision_probability"));
-    needle_fails_with(
-        &text,
-        &["send", "{}", "--tcp", "127.0.0.1:1"],
-        "planner.max_collision_probability is planned on the host only",
-    );
-}

@@ -127,7 +127,11 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
         postcard::to_stdvec(&on_device).unwrap(),
         postcard::to_stdvec(&host).unwrap()
     );
-    let schedule = on_device.unwrap().schedule.expect("the device's schedule");
+    let schedule = on_device
+        .unwrap()
+        .planned
+        .schedule
+        .expect("the device's schedule");
     assert_eq!(
         postcard::to_stdvec(&schedule).unwrap(),
         postcard::to_stdvec(&host.unwrap().schedule.unwrap()).unwrap(),

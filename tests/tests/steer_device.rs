@@ -1,6 +1,7 @@
 //! Closed-loop steering with the controller on a device: the firmware in QEMU and hil-sim over
 //! a pty steer the simulated insertions exactly as the in-process controller does, bit for bit
-//! (the JSON of `needle simulate --closed-loop --detail`, every point of every run).
+//! (the JSON of `needle simulate --closed-loop --detail`, every point of every run), the plan of
+//! `examples/paper-bounded.toml` made on the device under its collision bound.
 
 mod firmware_support;
 mod wire_support;
@@ -43,8 +44,8 @@ fn simulate(file: &str, runs: &str, device: &[&str]) -> Vec<u8> {
     out.stdout
 }
 
-fn assert_device_steers_like_the_host(device: &[&str], paper: &str, space: &str) {
-    for (name, runs) in [("paper", paper), ("space", space)] {
+fn assert_device_steers_like_the_host(device: &[&str], runs: &[(&str, &str)]) {
+    for &(name, runs) in runs {
         let file = example(name);
         let file = file.to_str().unwrap();
         let host = simulate(file, runs, &[]);
@@ -67,24 +68,29 @@ fn assert_device_steers_like_the_host(device: &[&str], paper: &str, space: &str)
 fn hil_sim_over_a_pty_steers_like_the_host() {
     let sim = SimProcess::start(&[]);
     assert!(sim.address.starts_with("/dev/"), "{}", sim.address);
-    assert_device_steers_like_the_host(&["--port", &sim.address], "20", "5");
+    let runs = [("paper", "20"), ("space", "5"), ("paper-bounded", "5")];
+    assert_device_steers_like_the_host(&["--port", &sim.address], &runs);
 }
 
-fn firmware_steers_like_the_host(test: &str, paper: &str, space: &str) {
+fn firmware_steers_like_the_host(test: &str, runs: &[(&str, &str)]) {
     if !emulator_ready(test) {
         return;
     }
     let image = build_firmware("mps2-an386", "mps2-an386");
     let mut qemu = Qemu::start("mps2-an386", &image);
-    assert_device_steers_like_the_host(&["--tcp", &qemu.addr], paper, space);
+    assert_device_steers_like_the_host(&["--tcp", &qemu.addr], runs);
     assert!(qemu.running(), "the firmware stopped QEMU (a fault)");
 }
 
 /// The normal suite's share: each emulated reading costs about a million instructions, so 20 + 5
-/// runs take minutes in QEMU; the full set is the ignored test below.
+/// runs take minutes in QEMU; the full set is the ignored test below. The bounded paper plan is
+/// made on the firmware under its 1 % bound before it is steered.
 #[test]
 fn the_firmware_in_qemu_steers_like_the_host() {
-    firmware_steers_like_the_host("the_firmware_in_qemu_steers_like_the_host", "4", "1");
+    firmware_steers_like_the_host(
+        "the_firmware_in_qemu_steers_like_the_host",
+        &[("paper", "2"), ("space", "1"), ("paper-bounded", "2")],
+    );
 }
 
 /// The long campaign: 20 paper and 5 space runs (`cargo test --release -p needle-e2e --test
@@ -94,7 +100,6 @@ fn the_firmware_in_qemu_steers_like_the_host() {
 fn the_firmware_in_qemu_steers_20_paper_and_5_space_runs_like_the_host() {
     firmware_steers_like_the_host(
         "the_firmware_in_qemu_steers_20_paper_and_5_space_runs_like_the_host",
-        "20",
-        "5",
+        &[("paper", "20"), ("space", "5"), ("paper-bounded", "5")],
     );
 }

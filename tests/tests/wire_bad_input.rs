@@ -223,7 +223,7 @@ fn progress_arrives_once_per_form() {
     let s = Scenario::paper();
     let mut seen = Vec::new();
     let result = c.plan(&s, &mut |p| seen.push(p)).unwrap();
-    let forms = result.unwrap().report.forms.len();
+    let forms = result.unwrap().planned.report.forms.len();
     let done: Vec<u8> = seen.iter().map(|p| p.done).filter(|&d| d > 0).collect();
     assert_eq!(done, (1..=forms as u8).collect::<Vec<_>>());
     assert!(seen.iter().all(|p| usize::from(p.total) == forms));

@@ -45,7 +45,7 @@ fn steering_over_a_noisy_line_gives_the_in_process_figures() {
     let result = client
         .plan(&s, &mut |_| {})
         .expect("a plan through the noise");
-    assert_eq!(result.unwrap().schedule, Some(Ok(sched.clone())));
+    assert_eq!(result.unwrap().planned.schedule, Some(Ok(sched.clone())));
     let p = Perturbation::default();
     let faults = TrackerFaults::default();
     let mut repeated = 0;

@@ -24,6 +24,8 @@ fn assert_device_schedule_is_the_hosts(client: &mut Client<Sim>, scenario: &Scen
         .plan(scenario, &mut |_| {})
         .expect("link")
         .expect("a plan");
+    assert!(on_device.chance.is_none());
+    let on_device = on_device.planned;
     let device = on_device
         .schedule
         .as_ref()
@@ -63,7 +65,7 @@ fn the_device_sends_the_hosts_schedule_bit_for_bit() {
     lrr.options.forms = only;
     assert_eq!(assert_device_schedule_is_the_hosts(&mut client, &lrr), 5);
     let on_device = client.plan(&lrr, &mut |_| {}).unwrap().unwrap();
-    let ops = on_device.schedule.unwrap().unwrap().steps;
+    let ops = on_device.planned.schedule.unwrap().unwrap().steps;
     assert!(ops.iter().any(|s| matches!(s.op, Op::Rotate { .. })));
     // A slower driver changes the device's durations exactly as the host's.
     let mut slow = load("paper");

@@ -6,7 +6,7 @@ use super::commands::LinkArgs;
 use anyhow::{anyhow, bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use needle_link::{Client, LinkError, LinkStats, Progress, Transport};
-use planner_core::wire::{DeviceInfo, Fault, PlanResult};
+use planner_core::wire::{ChanceRequest, DeviceInfo, Fault, PlanResult};
 use planner_core::Scenario;
 use std::time::{Duration, Instant};
 
@@ -35,9 +35,11 @@ fn restarted(e: &LinkError) -> bool {
     )
 }
 
-/// Plans `scenario` on the device, with a progress bar on a terminal.
+/// Plans `scenario` on the device (under the collision bound `chance`, if any), with a
+/// progress bar on a terminal.
 pub fn plan_on_device(
     scenario: &Scenario,
+    chance: Option<ChanceRequest>,
     link: &LinkArgs,
 ) -> Result<(PlanResult, DevicePlanStats)> {
     let config = link.config()?;
@@ -46,7 +48,7 @@ pub fn plan_on_device(
     let (mut client, mut info) = link.connect_within(config, limit)?;
     let mut restarts = 0;
     loop {
-        let result = plan_once(scenario, &mut client, &info)?;
+        let result = plan_once(scenario, chance, &mut client, &info)?;
         let e = match result {
             Ok(r) => {
                 let stats = DevicePlanStats {
@@ -108,6 +110,7 @@ fn reconnect(
 /// One attempt at the plan on `client`; the outer error is not worth starting over for.
 fn plan_once(
     scenario: &Scenario,
+    chance: Option<ChanceRequest>,
     client: &mut Client<Box<dyn Transport>>,
     info: &DeviceInfo,
 ) -> Result<Result<PlanResult, LinkError>> {
@@ -131,13 +134,18 @@ fn plan_once(
         bar.set_length(u64::from(p.total));
         bar.set_position(u64::from(p.done));
         if let Some(f) = p.form {
+            // Under a collision bound every round plans the forms again, obstacles grown.
+            let round = match chance {
+                Some(_) => format!("round {}, ", p.round),
+                None => String::new(),
+            };
             bar.set_message(format!(
-                "{f}: {}",
+                "{round}{f}: {}",
                 if p.feasible { "feasible" } else { "infeasible" }
             ));
         }
     };
-    let result = client.plan(scenario, &mut on_progress);
+    let result = client.plan_bounded(scenario, chance, &mut on_progress);
     bar.finish_and_clear();
     Ok(result)
 }

@@ -2,10 +2,81 @@
 //! pass the nominal model's execution (`execute::nominal::check`) and equal, bit for bit, the
 //! schedule the host builds from the same report. `needle send` refuses anything else.
 
+use crate::scenario::Execution;
 use anyhow::{anyhow, bail, Context, Result};
+use planner_core::chance::ChancePlan;
 use planner_core::execute::nominal::check;
+use planner_core::execute::risk::{risk_by_obstacle, ObstacleRisk};
 use planner_core::execute::schedule::{schedule, Op, Schedule};
-use planner_core::{Scenario, ScheduledPlan};
+use planner_core::wire::DevicePlan;
+use planner_core::{Scenario, ScheduledPlan, MAX_OBSTACLES};
+
+/// The device's figures for a plan under the scenario's collision bound, once the prediction
+/// made here from its plan gives the same probability and miss, bit for bit, and the same
+/// verdict; `None` for a scenario without a bound (and a device that reports none).
+pub fn verified_chance(
+    scenario: &Scenario,
+    execution: &Execution,
+    answer: &DevicePlan,
+) -> Result<Option<ChancePlan>> {
+    let (bound, figures) = match (execution.max_collision_probability, &answer.chance) {
+        (None, None) => return Ok(None),
+        (Some(_), None) => bail!("the device planned without the collision bound it was given"),
+        (None, Some(_)) => bail!("the device reports a collision bound it was not given"),
+        (Some(b), Some(f)) => (b, f),
+    };
+    let risk = match &answer.planned.schedule {
+        Some(Ok(s)) => {
+            let mut by_obstacle = [ObstacleRisk::default(); MAX_OBSTACLES];
+            let model = &execution.model;
+            let spread = execution.predicted_as();
+            Some(risk_by_obstacle(
+                scenario,
+                s,
+                model,
+                spread,
+                &mut by_obstacle,
+            ))
+        }
+        _ => None,
+    };
+    let bits = |v: Option<f32>| v.map(f32::to_bits);
+    let here = (
+        bits(risk.map(|r| r.collision_probability)),
+        bits(risk.map(|r| r.target_error_p95)),
+    );
+    let there = (
+        bits(figures.collision_probability),
+        bits(figures.target_error_p95),
+    );
+    if here != there {
+        bail!(
+            "the device's predicted collision probability and miss ({:?}, {:?}) differ from \
+             those computed here from its plan ({:?}, {:?})",
+            figures.collision_probability,
+            figures.target_error_p95,
+            risk.map(|r| r.collision_probability),
+            risk.map(|r| r.target_error_p95)
+        );
+    }
+    let within = risk.is_some_and(|r| r.collision_probability <= bound);
+    if within != figures.within_bound {
+        bail!("the device's verdict on the bound {bound} differs from the one reached here");
+    }
+    if figures.margins.len() != scenario.obstacles.len()
+        || figures
+            .margins
+            .iter()
+            .any(|m| !(m.is_finite() && *m >= 0.0))
+    {
+        bail!("the device's obstacle margins are not one finite, non-negative length per obstacle");
+    }
+    Ok(Some(ChancePlan::from_figures(
+        answer.planned.clone(),
+        figures,
+        risk,
+    )))
+}
 
 /// The device's schedule of `plan`, once it passes both checks; otherwise why not.
 pub fn verified_schedule<'a>(scenario: &Scenario, plan: &'a ScheduledPlan) -> Result<&'a Schedule> {

@@ -60,6 +60,28 @@ pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalP
 }
 
 impl LocalPlan {
+    /// A plan a device made (`chance`: its figures under the bound, checked here), with this
+    /// machine's predictions of it, so it is printed and judged as `needle plan` prints and
+    /// judges its own.
+    pub fn from_device(
+        scenario: &Scenario,
+        execution: &Execution,
+        planned: ScheduledPlan,
+        chance: Option<ChancePlan>,
+        stats: Stats,
+    ) -> LocalPlan {
+        let risks = execution
+            .given
+            .then(|| form_risks(scenario, &planned.report, execution));
+        LocalPlan {
+            planned,
+            chance,
+            risks,
+            stats,
+            bound: execution.max_collision_probability,
+        }
+    }
+
     /// The report of every form.
     pub fn report(&self) -> &PlanReport {
         &self.planned.report

@@ -75,6 +75,16 @@ impl Default for Execution {
 }
 
 impl Execution {
+    /// What a device is told to plan under the collision bound, if the scenario has one.
+    pub fn chance_request(&self) -> Option<planner_core::wire::ChanceRequest> {
+        self.max_collision_probability
+            .map(|bound| planner_core::wire::ChanceRequest {
+                bound,
+                model: self.model,
+                execution: self.predicted_as(),
+            })
+    }
+
     /// How the planner predicts the spread: open loop, or the closed loop's (the steering's own
     /// estimator noise model, as `[steering]` tells it, never the world's).
     pub fn predicted_as(&self) -> risk::Execution {
@@ -166,6 +176,18 @@ fn depths_of(value: &toml::Value) -> Result<LayerDepths> {
 pub fn load_execution(path: &Path) -> Result<Execution> {
     let file = ScenarioFile::load(path)?;
     execution_of(&file).with_context(|| format!("in scenario {}", path.display()))
+}
+
+/// The scenario file at `path` as a device is asked to plan it: the scenario, and the collision
+/// bound with its execution model if the file sets one.
+pub fn load_plan_request(
+    path: &Path,
+) -> Result<(
+    planner_core::Scenario,
+    Option<planner_core::wire::ChanceRequest>,
+)> {
+    let scenario = super::build::load_scenario(path)?;
+    Ok((scenario, load_execution(path)?.chance_request()))
 }
 
 #[cfg(test)]

@@ -23,15 +23,17 @@ impl<T: Transport> Controller for LinkController<'_, T> {
     }
 }
 
-/// Connects to the device at `link` and has it plan `setup`'s scenario: its plan must be the
-/// host's, bit for bit, for it to steer the insertion the host plans.
+/// Connects to the device at `link` and has it plan `setup`'s scenario (under its collision
+/// bound, if any): its plan must be the host's, bit for bit, for it to steer the insertion the
+/// host plans.
 pub fn device_planning(setup: &Setup, link: &LinkArgs) -> Result<Client<Box<dyn Transport>>> {
     let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
+    let chance = setup.bound.as_ref().map(|b| b.request());
     let planned_there = client
-        .plan(&setup.scenario, &mut |_| {})
+        .plan_bounded(&setup.scenario, chance, &mut |_| {})
         .context("planning on the device")?
         .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
-    match &planned_there.schedule {
+    match &planned_there.planned.schedule {
         Some(Ok(s)) if *s == setup.prepared.schedule => Ok(client),
         _ => bail!("the device's plan differs from the host's: it cannot steer the same insertion"),
     }

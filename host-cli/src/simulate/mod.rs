@@ -52,6 +52,17 @@ pub struct BoundNotMet {
     pub best: f32,
 }
 
+impl PlanBound {
+    /// What a device is told to plan under this bound.
+    pub fn request(&self) -> planner_core::wire::ChanceRequest {
+        planner_core::wire::ChanceRequest {
+            bound: self.max_collision_probability,
+            model: self.model,
+            execution: self.execution,
+        }
+    }
+}
+
 impl std::fmt::Display for BoundNotMet {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(

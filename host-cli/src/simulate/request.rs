@@ -9,7 +9,7 @@ use super::steering::summarise_steering;
 use super::{summarise, PlanBound};
 use crate::scenario::execution::execution_of;
 use crate::scenario::{restrict, ObstacleShape, ScenarioFile};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use needle_sim::{ClosedRun, Run, TrackerFaults, WorldEffects, WORLD_KEYS};
 use std::path::Path;
 
@@ -43,11 +43,6 @@ pub struct Results {
     /// The steered runs.
     pub closed: Option<Vec<ClosedRun>>,
 }
-
-/// Why a device cannot take a scenario with a collision bound (the spread does not fit its
-/// flash): the start of the message of every command that would hand it one.
-pub const HOST_ONLY_BOUND: &str =
-    "planner.max_collision_probability is planned on the host only: the device plans without it";
 
 /// `result` with the message naming the scenario file, when it came from one.
 fn in_scenario<T>(result: Result<T>, path: Option<&Path>) -> Result<T> {
@@ -101,14 +96,6 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
             max_collision_probability,
             execution: execution.predicted_as(),
         });
-    // The device plans without the bound (the spread does not fit its flash): its plan would
-    // not be the host's, and it could not steer the insertion the host simulates.
-    if r.closed_loop && r.on_device && bound.is_some() {
-        bail!(
-            "{HOST_ONLY_BOUND}, so it cannot steer this plan (steer in-process, or on the device \
-             without the bound; docs/execution.md)"
-        );
-    }
     for kv in &r.faults {
         faults.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
     }

@@ -37,6 +37,8 @@ pub struct Setup {
     pub runs: usize,
     /// Seed of the first run.
     pub seed: u64,
+    /// The collision bound the plan keeps, if any (a device plans under it too).
+    pub bound: Option<PlanBound>,
 }
 
 /// What is kept of each run beyond its figures.
@@ -139,6 +141,7 @@ impl Setup {
             config: SteerConfig::DEFAULT,
             runs,
             seed,
+            bound: bound.copied(),
         })
     }
 

@@ -44,7 +44,6 @@ pub struct ChancePlan {
 /// What a plan under a collision bound achieved, without the plan: what a device reports beside
 /// it (the host re-derives the probability and the miss from the plan to check them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ChanceFigures {
     /// The best form's predicted probability of entering an obstacle; `None` without a best
     /// form.

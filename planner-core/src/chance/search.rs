@@ -104,6 +104,11 @@ impl ChanceSearch {
         })
     }
 
+    /// The scenario, with its true obstacles.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
     /// Forms planned in each round.
     pub fn forms_per_round(&self) -> usize {
         self.session.as_ref().map_or(0, PlanSession::form_count)
@@ -267,4 +272,3 @@ fn within_bound_by_another_form(
         }
     }
 }
-

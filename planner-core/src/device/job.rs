@@ -3,9 +3,90 @@
 
 use super::upload::Upload;
 use super::Core;
+use crate::chance::{ChanceSearch, ChanceStep};
+use crate::error::PlanError;
 use crate::model::form::Form;
+use crate::model::scenario::Scenario;
 use crate::session::PlanSession;
-use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
+use crate::wire::{ChanceRequest, DevicePlan, Fault, PlanRequest, PlanResult, ReplyBody};
+
+/// What a job plans with: every form once, or rounds of every form under a collision bound.
+// Both are large, and the job lives in a static with no heap to box them in.
+#[allow(clippy::large_enum_variant)]
+pub(super) enum Planner {
+    Plain(PlanSession),
+    Bounded(ChanceSearch),
+}
+
+impl Planner {
+    fn new(scenario: Scenario, chance: Option<ChanceRequest>) -> Result<Planner, PlanError> {
+        Ok(match chance {
+            None => Planner::Plain(PlanSession::new(scenario)?),
+            Some(c) => {
+                Planner::Bounded(ChanceSearch::new(scenario, c.model, c.bound, c.execution)?)
+            }
+        })
+    }
+
+    fn forms_per_round(&self) -> usize {
+        match self {
+            Planner::Plain(s) => s.form_count(),
+            Planner::Bounded(s) => s.forms_per_round(),
+        }
+    }
+
+    /// Plans one unit: `Ok(Some((round, form, feasible)))` for a form planned, `Ok(Some((round,
+    /// None, _)))` for a round judged, `Ok(None)` once nothing is left.
+    fn step(&mut self) -> Result<Option<(u32, Option<Form>, bool)>, PlanError> {
+        match self {
+            Planner::Plain(s) => Ok(s.step().map(|o| (1, Some(o.form), o.feasible))),
+            Planner::Bounded(s) => Ok(s.step()?.map(|step| match step {
+                ChanceStep::Form {
+                    round,
+                    form,
+                    feasible,
+                } => (round, Some(form), feasible),
+                ChanceStep::RoundEnded { round } => (round, None, false),
+            })),
+        }
+    }
+
+    /// The finished plan as the device reports it.
+    fn result(self) -> PlanResult {
+        match self {
+            Planner::Plain(session) => Ok(DevicePlan {
+                planned: session.scheduled_so_far(),
+                chance: None,
+            }),
+            Planner::Bounded(search) => {
+                let obstacles = search.scenario().obstacles.len();
+                let planned = search.finish()?;
+                Ok(DevicePlan {
+                    chance: Some(planned.figures(obstacles)),
+                    planned: planned.planned,
+                })
+            }
+        }
+    }
+}
+
+/// What a device answers to a plan request for `scenario` (under the collision bound `chance`,
+/// if any), computed here: the host's side of every bit-for-bit comparison.
+///
+/// ```
+/// use planner_core::device::plan_as_device;
+/// use planner_core::Scenario;
+///
+/// let answer = plan_as_device(&Scenario::paper(), None).unwrap();
+/// assert!(answer.chance.is_none());
+/// let here = planner_core::plan_scheduled(&Scenario::paper()).unwrap();
+/// assert_eq!(format!("{:?}", answer.planned), format!("{here:?}"));
+/// ```
+pub fn plan_as_device(scenario: &Scenario, chance: Option<ChanceRequest>) -> PlanResult {
+    let mut planner = Planner::new(scenario.clone(), chance)?;
+    while planner.step()?.is_some() {}
+    planner.result()
+}
 
 /// The request in progress or last finished.
 // The session is large, but the service lives in a static with no heap to box it in.
@@ -22,7 +103,8 @@ pub(super) enum Job {
         id: u16,
         total_bytes: u16,
         request_crc: u32,
-        session: PlanSession,
+        planner: Planner,
+        round: u8,
         done: u8,
         forms: u8,
         last: Option<(Form, bool)>,
@@ -49,14 +131,18 @@ impl Core {
                     return self.fault(id, Fault::BadScenario, tx);
                 }
             };
-        match request.into_scenario().and_then(PlanSession::new) {
-            Ok(session) => {
-                let forms = session.form_count() as u8;
+        match request
+            .into_parts()
+            .and_then(|(scenario, chance)| Planner::new(scenario, chance))
+        {
+            Ok(planner) => {
+                let forms = planner.forms_per_round() as u8;
                 self.job = Job::Planning {
                     id,
                     total_bytes: total,
                     request_crc: up.crc,
-                    session,
+                    planner,
+                    round: 1,
                     done: 0,
                     forms,
                     last: None,
@@ -76,7 +162,8 @@ impl Core {
             id,
             total_bytes,
             request_crc,
-            session,
+            planner,
+            round,
             done,
             last,
             ..
@@ -90,13 +177,21 @@ impl Core {
             total: *total_bytes,
             crc: *request_crc,
         };
-        match session.step() {
-            Some(o) => {
-                *last = Some((o.form, o.feasible));
+        match planner.step() {
+            Ok(Some((r, Some(form), feasible))) => {
+                let r = u8::try_from(r).unwrap_or(u8::MAX);
+                if r != *round {
+                    *round = r;
+                    *done = 0;
+                }
+                *last = Some((form, feasible));
                 *done = done.saturating_add(1);
                 self.status(id, tx);
             }
-            None => self.finish(id, up, tx),
+            // A round judged: its forms were reported one by one, the next round's follow.
+            Ok(Some((_, None, _))) => {}
+            Ok(None) => self.finish(id, up, tx),
+            Err(e) => self.store_result(id, up, &Err(e), tx),
         }
         true
     }
@@ -106,9 +201,9 @@ impl Core {
     /// [`Core::step`] plans a form.
     #[inline(never)]
     fn finish(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
-        if let Job::Planning { session, .. } = core::mem::replace(&mut self.job, Job::Idle) {
-            // Called once `step` found no form left.
-            let result: PlanResult = Ok(session.scheduled_so_far());
+        if let Job::Planning { planner, .. } = core::mem::replace(&mut self.job, Job::Idle) {
+            // Called once `step` found no work left.
+            let result = planner.result();
             self.stats.plans += 1;
             self.store_result(id, up, &result, tx);
         }
@@ -155,11 +250,13 @@ impl Core {
             },
             Job::Planning {
                 id: a,
+                round,
                 done,
                 forms,
                 last,
                 ..
             } if *a == id => ReplyBody::Progress {
+                round: *round,
                 done: *done,
                 total: *forms,
                 form: last.map(|(f, _)| f),

@@ -21,6 +21,7 @@ use crate::wire::{
     encode_frame, Chunk, Fault, FrameDecoder, Header, Reply, ReplyBody, ENCODE_SCRATCH, MAX_CHUNK,
     MAX_FRAME, MAX_PLAN_REQUEST, MAX_PLAN_RESULT, MAX_STEER_ANSWER,
 };
+pub use job::plan_as_device;
 use job::Job;
 use receive::Inbox;
 pub use receive::RX_QUEUE;
@@ -240,7 +241,8 @@ mod tests {
     fn the_service_fits_its_ram_budget() {
         let size = core::mem::size_of::<DeviceService>();
         std::println!("DeviceService: {size} bytes");
-        // 8 KiB before steering; the controller's state (scenario, estimate, steps) is 1.4 KiB.
-        assert!(size <= 9 * 1024, "{size} bytes");
+        // 8 KiB before steering; the controller's state (scenario, estimate, steps) is 1.4 KiB,
+        // the search under a collision bound (the true scenario, the last round's plan) 3.8 KiB.
+        assert!(size <= 13 * 1024, "{size} bytes");
     }
 }

@@ -70,7 +70,11 @@ impl Core {
             .ok()
             .and_then(|r| r.ok())
             .ok_or(Fault::NoPlan)?;
-        let schedule = planned.schedule.and_then(|s| s.ok()).ok_or(Fault::NoPlan)?;
+        let schedule = planned
+            .planned
+            .schedule
+            .and_then(|s| s.ok())
+            .ok_or(Fault::NoPlan)?;
         Steering::start(&scenario, &schedule, config).map_err(|e| match e {
             SteerError::BadConfig => Fault::BadSteerConfig,
             _ => Fault::NoPlan,

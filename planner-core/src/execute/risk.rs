@@ -85,7 +85,8 @@ pub fn execution_risk(scenario: &Scenario, schedule: &Schedule, p: &Perturbation
 
 /// How the schedule is executed: as it is (open loop), or steered from the tracked tip by the
 /// controller whose estimator has the given noise model.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Execution {
     /// The schedule as it is.
     OpenLoop,

@@ -145,3 +145,17 @@ impl MaxSize for ScheduledPlan {
     const MAX_SIZE: usize =
         PlanReport::MAX_SIZE + <Option<Result<Schedule, ScheduleError>> as MaxSize>::MAX_SIZE;
 }
+
+impl MaxSize for crate::execute::perturbation::Perturbation {
+    const MAX_SIZE: usize = 11 * f32::MAX_SIZE;
+}
+impl MaxSize for crate::execute::risk::Execution {
+    // Variant tag, then the widest: `Steered(NoiseModel)`.
+    const MAX_SIZE: usize = 1 + crate::steer::NoiseModel::MAX_SIZE;
+}
+impl MaxSize for crate::chance::ChanceFigures {
+    const MAX_SIZE: usize = 2 * Option::<f32>::MAX_SIZE
+        + heapless::Vec::<f32, { crate::MAX_OBSTACLES }>::MAX_SIZE
+        + u32::MAX_SIZE
+        + bool::MAX_SIZE;
+}

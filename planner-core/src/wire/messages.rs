@@ -6,8 +6,11 @@
 
 use super::max_size::{max, MaxSize};
 use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
+use crate::chance::ChanceFigures;
 use crate::error::PlanError;
+use crate::execute::perturbation::Perturbation;
 use crate::execute::plan_with_schedule::ScheduledPlan;
+use crate::execute::risk::Execution;
 use crate::execute::schedule::Steps;
 use crate::model::form::Form;
 use crate::model::scenario::{
@@ -18,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 7;
+pub const PROTOCOL_VERSION: u8 = 8;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -150,7 +153,10 @@ pub enum ReplyBody {
     },
     /// Sent once per form finished (and in answer to `Status` while planning).
     Progress {
-        /// Forms done.
+        /// The round of a plan under a collision bound (each round plans every form with the
+        /// obstacles grown further), counted from 1; always 1 without a bound.
+        round: u8,
+        /// Forms done (in this round).
         done: u8,
         /// Forms to plan.
         total: u8,
@@ -344,6 +350,20 @@ pub struct PlanRequest {
     pub options: PlannerOptions,
     /// The driver that will execute the plan.
     pub driver: Driver,
+    /// Plan under a bound on the predicted collision probability
+    /// ([`ChanceSearch`](crate::chance::ChanceSearch)); `None` plans without one.
+    pub chance: Option<ChanceRequest>,
+}
+
+/// What a plan under a collision bound needs beyond the scenario.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChanceRequest {
+    /// The largest predicted probability of entering an obstacle, in (0, 1).
+    pub bound: f32,
+    /// The execution's perturbation model.
+    pub model: Perturbation,
+    /// How the plan will be executed (the spread differs open loop and steered).
+    pub execution: Execution,
 }
 
 impl PlanRequest {
@@ -357,7 +377,23 @@ impl PlanRequest {
             weights: s.weights,
             options: s.options,
             driver: s.driver,
+            chance: None,
         }
+    }
+
+    /// The request for a scenario planned under a collision bound.
+    pub fn bounded(s: &Scenario, chance: ChanceRequest) -> Self {
+        PlanRequest {
+            chance: Some(chance),
+            ..PlanRequest::new(s)
+        }
+    }
+
+    /// The scenario (and the bound, if any), or the typed error for more obstacles than the
+    /// planner holds.
+    pub fn into_parts(self) -> Result<(Scenario, Option<ChanceRequest>), PlanError> {
+        let chance = self.chance;
+        Ok((self.into_scenario()?, chance))
     }
 
     /// The scenario, or the typed error for more obstacles than the planner holds.
@@ -376,7 +412,17 @@ impl PlanRequest {
 
 /// What a plan ends with: the report with its best form's motor schedule, or the planner's typed
 /// error.
-pub type PlanResult = Result<ScheduledPlan, PlanError>;
+pub type PlanResult = Result<DevicePlan, PlanError>;
+
+/// A finished plan as a device reports it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DevicePlan {
+    /// The report with its best form's motor schedule (under a bound, that of the round the
+    /// search settled on: its clearances are to the grown obstacles).
+    pub planned: ScheduledPlan,
+    /// Under a collision bound, what the plan achieved; `None` without one.
+    pub chance: Option<ChanceFigures>,
+}
 
 impl MaxSize for Header {
     const MAX_SIZE: usize = u8::MAX_SIZE + u16::MAX_SIZE;
@@ -421,7 +467,7 @@ impl MaxSize for ReplyBody {
             max(
                 u16::MAX_SIZE + u32::MAX_SIZE,
                 max(
-                    max(2 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
+                    max(3 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
                     max(
                         max(Steps::MAX_SIZE, SteerReply::MAX_SIZE),
                         SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE,
@@ -443,5 +489,14 @@ impl MaxSize for PlanRequest {
         + heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::MAX_SIZE
         + Weights::MAX_SIZE
         + PlannerOptions::MAX_SIZE
-        + Driver::MAX_SIZE;
+        + Driver::MAX_SIZE
+        + Option::<ChanceRequest>::MAX_SIZE;
+}
+
+impl MaxSize for ChanceRequest {
+    const MAX_SIZE: usize = f32::MAX_SIZE + Perturbation::MAX_SIZE + Execution::MAX_SIZE;
+}
+
+impl MaxSize for DevicePlan {
+    const MAX_SIZE: usize = ScheduledPlan::MAX_SIZE + Option::<ChanceFigures>::MAX_SIZE;
 }

@@ -19,8 +19,8 @@ pub use frame::{
 };
 pub use max_size::MaxSize;
 pub use messages::{
-    Chunk, DeviceInfo, Fault, Header, PlanRequest, PlanResult, Reply, ReplyBody, Request,
-    RequestBody, MAX_CHUNK, PROTOCOL_VERSION,
+    ChanceRequest, Chunk, DeviceInfo, DevicePlan, Fault, Header, PlanRequest, PlanResult, Reply,
+    ReplyBody, Request, RequestBody, MAX_CHUNK, PROTOCOL_VERSION,
 };
 pub use obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 

@@ -1,6 +1,7 @@
 //! Size bounds, framing round trips and the decoder's faults.
 
 use super::*;
+use crate::chance::ChanceFigures;
 use crate::execute::schedule::{Op, Posture, Schedule, ScheduleError, Step, Steps, MAX_STEPS};
 use crate::execute::ScheduledPlan;
 use crate::model::form::{Form, FormSet, SegmentKind};
@@ -85,7 +86,29 @@ fn worst_schedule() -> Schedule {
     }
 }
 
+fn worst_figures() -> ChanceFigures {
+    let mut margins = heapless::Vec::new();
+    while margins.push(1.0f32).is_ok() {}
+    ChanceFigures {
+        collision_probability: Some(0.5),
+        target_error_p95: Some(1.5),
+        margins,
+        rounds: u32::MAX,
+        within_bound: true,
+    }
+}
+
+fn worst_chance_request() -> ChanceRequest {
+    ChanceRequest {
+        bound: 0.01,
+        model: crate::execute::perturbation::Perturbation::default(),
+        execution: crate::execute::risk::Execution::Steered(crate::steer::NoiseModel::DEFAULT),
+    }
+}
+
 #[test]
+// Test code: one worst case per type, read top to bottom.
+#[allow(clippy::too_many_lines)]
 fn bounds_are_exact_for_worst_case_values() {
     assert_eq!(encoded_len(&worst_outcome()), FormOutcome::MAX_SIZE);
     assert_eq!(encoded_len(&worst_report()), PlanReport::MAX_SIZE);
@@ -105,7 +128,12 @@ fn bounds_are_exact_for_worst_case_values() {
         schedule: Some(Ok(worst_schedule())),
     };
     assert_eq!(encoded_len(&planned), ScheduledPlan::MAX_SIZE);
-    let result: PlanResult = Ok(planned);
+    let figures = worst_figures();
+    assert_eq!(encoded_len(&figures), ChanceFigures::MAX_SIZE);
+    let result: PlanResult = Ok(DevicePlan {
+        planned,
+        chance: Some(figures),
+    });
     assert_eq!(encoded_len(&result), MAX_PLAN_RESULT);
     let err = PlanError::TooManyObstacles {
         given: u16::MAX,
@@ -137,6 +165,7 @@ fn bounds_are_exact_for_worst_case_values() {
         &req.weights,
         &req.options,
         &req.driver,
+        Some(worst_chance_request()),
     );
     assert_eq!(encoded_len(&full), MAX_PLAN_REQUEST);
     req.obstacles = WireObstacles::default();
@@ -293,6 +322,7 @@ fn too_many_obstacles_decode_into_a_typed_error() {
         &base.weights,
         &base.options,
         &base.driver,
+        &base.chance,
     );
     let mut buf = [0u8; MAX_PLAN_REQUEST];
     let bytes = postcard::to_slice(&shaped, &mut buf).unwrap();

@@ -1,0 +1,40 @@
+//! A plan made on the device and re-checked here, whole: its schedule (against the nominal model
+//! and the host's own, bit for bit) and, under a collision bound, its predicted figures. What
+//! `needle send` prints and the Python `Device.plan` returns.
+
+use super::commands::LinkArgs;
+use super::send::plan_on_device;
+use super::verify::{verified_chance, verified_schedule};
+use crate::report::local::LocalPlan;
+use crate::report::Stats;
+use crate::scenario::Execution;
+use anyhow::{anyhow, Result};
+use planner_core::Scenario;
+
+/// How a plan on the device ended, once its answer passed every check.
+pub enum Sent {
+    /// The plan, printed and judged as `needle plan` prints and judges its own (boxed: it holds
+    /// the whole report).
+    Planned(Box<LocalPlan>),
+    /// The device's planner refused the scenario (its typed error, as `needle plan` gives it).
+    Refused(anyhow::Error),
+}
+
+/// Plans `scenario` on the device at `link`, under `execution`'s collision bound if it has one,
+/// and checks the answer. `Err` when the link fails or the answer fails a check.
+pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
+    let (result, device) = plan_on_device(scenario, execution.chance_request(), link)?;
+    let answer = match result {
+        Ok(a) => a,
+        Err(e) => return Ok(Sent::Refused(anyhow!(e).context("planning failed"))),
+    };
+    let stats = Stats {
+        time_us: device.time_us,
+    };
+    let checked = verified_chance(scenario, execution, &answer)?;
+    let made = LocalPlan::from_device(scenario, execution, answer.planned, checked, stats);
+    if made.report().best().is_some() {
+        verified_schedule(scenario, &made.planned)?;
+    }
+    Ok(Sent::Planned(Box::new(made)))
+}
