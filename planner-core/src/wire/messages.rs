@@ -5,17 +5,8 @@
 //! line only the damaged chunk is sent again, and every frame stays small.
 
 use super::max_size::{max, MaxSize};
-use super::obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
-use crate::chance::ChanceFigures;
-use crate::error::PlanError;
-use crate::execute::perturbation::Perturbation;
-use crate::execute::plan_with_schedule::ScheduledPlan;
-use crate::execute::risk::Execution;
 use crate::execute::schedule::Steps;
 use crate::model::form::Form;
-use crate::model::scenario::{
-    Driver, Entry, Needle, Obstacle, PlannerOptions, Scenario, Target, Weights,
-};
 use crate::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
 use serde::{Deserialize, Serialize};
 
@@ -70,7 +61,7 @@ pub enum RequestBody {
         /// Echoed back.
         nonce: u32,
     },
-    /// Part of an encoded [`PlanRequest`] starting at `offset`; the plan starts once all `total`
+    /// Part of an encoded [`PlanRequest`](super::PlanRequest) starting at `offset`; the plan starts once all `total`
     /// bytes are in and their CRC-32 is `crc`. Answered by [`ReplyBody::Uploaded`] (the host
     /// continues from `received`). A repeat of a finished upload (same id, length and CRC: the
     /// same scenario) is acknowledged without planning again.
@@ -86,7 +77,7 @@ pub enum RequestBody {
     },
     /// Where is request `id`? Answered by `Uploaded`, `Progress` or `Finished`.
     Status,
-    /// Send part of the finished plan's encoded [`PlanResult`]: answered by [`ReplyBody::Part`].
+    /// Send part of the finished plan's encoded [`PlanResult`](super::PlanResult): answered by [`ReplyBody::Part`].
     Fetch {
         /// First byte wanted.
         offset: u16,
@@ -165,7 +156,7 @@ pub enum ReplyBody {
         /// Whether that form gave a feasible path.
         feasible: bool,
     },
-    /// The plan is done: fetch `len` bytes of encoded [`PlanResult`] whose CRC-32 is `crc`.
+    /// The plan is done: fetch `len` bytes of encoded [`PlanResult`](super::PlanResult) whose CRC-32 is `crc`.
     Finished {
         /// Length of the encoded result.
         len: u16,
@@ -333,97 +324,6 @@ pub struct DeviceInfo {
     pub upload_capacity: u16,
 }
 
-/// The planning problem as uploaded: the scenario with a counted obstacle list.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PlanRequest {
-    /// Needle mechanics.
-    pub needle: Needle,
-    /// Entry.
-    pub entry: Entry,
-    /// Target.
-    pub target: Target,
-    /// Obstacles.
-    pub obstacles: WireObstacles,
-    /// Weights.
-    pub weights: Weights,
-    /// Planner options.
-    pub options: PlannerOptions,
-    /// The driver that will execute the plan.
-    pub driver: Driver,
-    /// Plan under a bound on the predicted collision probability
-    /// ([`ChanceSearch`](crate::chance::ChanceSearch)); `None` plans without one.
-    pub chance: Option<ChanceRequest>,
-}
-
-/// What a plan under a collision bound needs beyond the scenario.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ChanceRequest {
-    /// The largest predicted probability of entering an obstacle, in (0, 1).
-    pub bound: f32,
-    /// The execution's perturbation model.
-    pub model: Perturbation,
-    /// How the plan will be executed (the spread differs open loop and steered).
-    pub execution: Execution,
-}
-
-impl PlanRequest {
-    /// The request for a scenario.
-    pub fn new(s: &Scenario) -> Self {
-        PlanRequest {
-            needle: s.needle,
-            entry: s.entry,
-            target: s.target,
-            obstacles: WireObstacles::from_obstacles(&s.obstacles),
-            weights: s.weights,
-            options: s.options,
-            driver: s.driver,
-            chance: None,
-        }
-    }
-
-    /// The request for a scenario planned under a collision bound.
-    pub fn bounded(s: &Scenario, chance: ChanceRequest) -> Self {
-        PlanRequest {
-            chance: Some(chance),
-            ..PlanRequest::new(s)
-        }
-    }
-
-    /// The scenario (and the bound, if any), or the typed error for more obstacles than the
-    /// planner holds.
-    pub fn into_parts(self) -> Result<(Scenario, Option<ChanceRequest>), PlanError> {
-        let chance = self.chance;
-        Ok((self.into_scenario()?, chance))
-    }
-
-    /// The scenario, or the typed error for more obstacles than the planner holds.
-    pub fn into_scenario(self) -> Result<Scenario, PlanError> {
-        Ok(Scenario {
-            needle: self.needle,
-            entry: self.entry,
-            target: self.target,
-            obstacles: self.obstacles.into_obstacles()?,
-            weights: self.weights,
-            options: self.options,
-            driver: self.driver,
-        })
-    }
-}
-
-/// What a plan ends with: the report with its best form's motor schedule, or the planner's typed
-/// error.
-pub type PlanResult = Result<DevicePlan, PlanError>;
-
-/// A finished plan as a device reports it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DevicePlan {
-    /// The report with its best form's motor schedule (under a bound, that of the round the
-    /// search settled on: its clearances are to the grown obstacles).
-    pub planned: ScheduledPlan,
-    /// Under a collision bound, what the plan achieved; `None` without one.
-    pub chance: Option<ChanceFigures>,
-}
-
 impl MaxSize for Header {
     const MAX_SIZE: usize = u8::MAX_SIZE + u16::MAX_SIZE;
 }
@@ -480,23 +380,4 @@ impl MaxSize for ReplyBody {
 
 impl MaxSize for Reply {
     const MAX_SIZE: usize = Header::MAX_SIZE + ReplyBody::MAX_SIZE;
-}
-
-impl MaxSize for PlanRequest {
-    const MAX_SIZE: usize = Needle::MAX_SIZE
-        + Entry::MAX_SIZE
-        + Target::MAX_SIZE
-        + heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::MAX_SIZE
-        + Weights::MAX_SIZE
-        + PlannerOptions::MAX_SIZE
-        + Driver::MAX_SIZE
-        + Option::<ChanceRequest>::MAX_SIZE;
-}
-
-impl MaxSize for ChanceRequest {
-    const MAX_SIZE: usize = f32::MAX_SIZE + Perturbation::MAX_SIZE + Execution::MAX_SIZE;
-}
-
-impl MaxSize for DevicePlan {
-    const MAX_SIZE: usize = ScheduledPlan::MAX_SIZE + Option::<ChanceFigures>::MAX_SIZE;
 }

@@ -11,6 +11,7 @@ pub mod frame;
 pub mod max_size;
 pub mod messages;
 pub mod obstacles;
+pub mod plan;
 pub mod steer;
 
 pub use frame::{
@@ -19,10 +20,11 @@ pub use frame::{
 };
 pub use max_size::MaxSize;
 pub use messages::{
-    ChanceRequest, Chunk, DeviceInfo, DevicePlan, Fault, Header, PlanRequest, PlanResult, Reply,
-    ReplyBody, Request, RequestBody, MAX_CHUNK, PROTOCOL_VERSION,
+    Chunk, DeviceInfo, Fault, Header, Reply, ReplyBody, Request, RequestBody, MAX_CHUNK,
+    PROTOCOL_VERSION,
 };
 pub use obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
+pub use plan::{ChanceRequest, DevicePlan, PlanRequest, PlanResult};
 
 /// Largest encoded [`PlanRequest`]: the device's upload buffer.
 pub const MAX_PLAN_REQUEST: usize = <PlanRequest as MaxSize>::MAX_SIZE;
