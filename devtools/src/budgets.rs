@@ -104,7 +104,7 @@ pub const BUDGETS: &[Budget] = &[
         protects:
             "each tracker reading answered (estimate, and a replan when needed) in about 6 ms \
                    at 168 MHz: a quarter of the 25 ms between a 40 Hz tracker's readings, and \
-                   2.6 times the worst reading measured (0.39 M)",
+                   2.4 times the worst reading measured (0.42 M)",
     },
 ];
 

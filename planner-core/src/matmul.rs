@@ -41,17 +41,27 @@ pub(crate) fn add_outer<const N: usize>(
     }
 }
 
-/// Column-major `out (rows × cols) = a (rows × inner) · b (inner × cols)`.
+/// Column-major `out (rows × cols) = a (rows × inner) · b (inner × cols)`: each column of `out`
+/// gathered as `a`'s columns scaled by that column of `b`, `k` ascending, which adds every
+/// element's products in the same order as a dot product would (the same bits), over contiguous
+/// columns (no strided reads, no bounds checks in the inner loop).
 #[inline(never)]
 fn mul_into(a: &[f32], rows: usize, inner: usize, b: &[f32], cols: usize, out: &mut [f32]) {
-    for (j, out_col) in out.chunks_exact_mut(rows).take(cols).enumerate() {
-        let b_col = &b[j * inner..(j + 1) * inner];
-        for (i, o) in out_col.iter_mut().enumerate() {
-            let mut s = a[i] * b_col[0];
-            for (k, bk) in b_col.iter().enumerate().skip(1) {
-                s += a[k * rows + i] * *bk;
+    for (out_col, b_col) in out
+        .chunks_exact_mut(rows)
+        .zip(b.chunks_exact(inner))
+        .take(cols)
+    {
+        let mut a_cols = a.chunks_exact(rows).zip(b_col);
+        if let Some((a0, b0)) = a_cols.next() {
+            for (o, x) in out_col.iter_mut().zip(a0) {
+                *o = x * b0;
             }
-            *o = s;
+        }
+        for (a_col, bk) in a_cols {
+            for (o, x) in out_col.iter_mut().zip(a_col) {
+                *o += x * bk;
+            }
         }
     }
 }
