@@ -63,6 +63,10 @@ struct LabArgs {
     /// With --lab: delay of each pose after its piece (ms).
     #[arg(long, requires = "lab", default_value_t = 0)]
     latency_ms: u64,
+    /// With --lab: delay of each piece's report after its pose (ms), as a robot whose word
+    /// travels slower than the tracker's stream.
+    #[arg(long, requires = "lab", default_value_t = 0)]
+    report_delay_ms: u64,
     /// With --lab, a fault for tests: the tracker goes quiet after this many poses.
     #[arg(long, requires = "lab")]
     tracker_silent_after: Option<u32>,
@@ -136,6 +140,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             seed: a.seed,
             rate_hz: l.rate,
             latency_ms: l.latency_ms,
+            report_delay_ms: l.report_delay_ms,
             tracker_silent_after: l.tracker_silent_after,
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,

@@ -41,6 +41,10 @@ pub struct LabConfig {
     pub rate_hz: f64,
     /// Delay of each pose after its piece (ms).
     pub latency_ms: u64,
+    /// Delay of each piece's report after its pose went out (ms): a robot whose word travels
+    /// slower than the tracker's stream, so that the stream's copies of the new pose arrive
+    /// before the report.
+    pub report_delay_ms: u64,
     /// Test fault: the tracker sends no pose after this many in an insertion.
     pub tracker_silent_after: Option<u32>,
     /// Test fault: the robot reports nothing after this many pieces in an insertion.
@@ -244,6 +248,7 @@ impl Lab {
                     } else {
                         self.tracker.silence();
                     }
+                    std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
                     robot.report(RobotReport::Progress {
                         piece: robot.pieces,
                         depth_mm: m.depth_mm + self.misreport(robot.pieces),
