@@ -7,6 +7,7 @@ pub mod progress;
 pub mod robot;
 pub mod session;
 pub mod slicer;
+pub mod sphere;
 pub mod steer;
 pub mod tracker;
 pub mod viewers;
