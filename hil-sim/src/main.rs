@@ -9,7 +9,7 @@
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use hil_sim::lab::{Lab, LabConfig, TrackerClients};
+use hil_sim::lab::{Lab, LabConfig, TrackerClients, TrackerConfig};
 use hil_sim::serve::{serve, ServeConfig};
 use hil_sim::{DeviceService, LineConfig, IDENTITY};
 use std::io::Write;
@@ -63,6 +63,10 @@ struct LabArgs {
     /// With --lab: delay of each pose after its piece (ms).
     #[arg(long, requires = "lab", default_value_t = 0)]
     latency_ms: u64,
+    /// With --lab: delay of each piece's report after its pose (ms), as a robot whose word
+    /// travels slower than the tracker's stream.
+    #[arg(long, requires = "lab", default_value_t = 0)]
+    report_delay_ms: u64,
     /// With --lab, a fault for tests: the tracker goes quiet after this many poses.
     #[arg(long, requires = "lab")]
     tracker_silent_after: Option<u32>,
@@ -81,6 +85,27 @@ struct LabArgs {
     /// scenario frame); the tracker then reports in the tracker's frame.
     #[arg(long, requires = "lab")]
     registration: Option<std::path::PathBuf>,
+    /// With --lab and --registration: the tracker also sends the registration as a TRANSFORM of
+    /// this name (to each client on connecting, and with each pose), as `needle steer
+    /// --registration-name` takes it.
+    #[arg(long, requires = "registration", value_name = "NAME")]
+    registration_name: Option<String>,
+    /// With --registration-name, a fault for tests: after this many pieces the registration sent
+    /// is moved 5 mm along x (the poses stay in the first one's frame).
+    #[arg(long, requires = "registration_name")]
+    registration_change_after: Option<u32>,
+    /// With --lab: the tracker also streams the newest pose free-running at this rate (Hz), as
+    /// PLUS streams a tool, besides sending each piece's pose when it is measured.
+    #[arg(long, requires = "lab", value_name = "HZ")]
+    stream_rate: Option<f64>,
+    /// With --stream-rate: every 50 periods this many poses go out back to back in one write.
+    #[arg(long, requires = "stream_rate", default_value_t = 1)]
+    stream_burst: u32,
+    /// With --lab, a fault for tests: before every this many pieces' pose one bad frame (in
+    /// turn: a bad CRC, a wrong body size, a 20-byte name not UTF-8, a non-rigid matrix, a
+    /// 20-byte name one letter off the tip's).
+    #[arg(long, requires = "lab")]
+    bad_frames_every: Option<u32>,
 }
 
 /// Serves the simulated lab until killed.
@@ -90,6 +115,12 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
         l.rate.is_finite() && l.rate >= 0.0,
         "--rate must be 0 or more"
     );
+    if let Some(hz) = l.stream_rate {
+        anyhow::ensure!(
+            hz.is_finite() && (1.0..=100_000.0).contains(&hz),
+            "--stream-rate must be within 1 and 100000 Hz"
+        );
+    }
     let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &[])?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
@@ -109,19 +140,27 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             seed: a.seed,
             rate_hz: l.rate,
             latency_ms: l.latency_ms,
+            report_delay_ms: l.report_delay_ms,
             tracker_silent_after: l.tracker_silent_after,
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
+        },
+        tracker: TrackerClients::new(TrackerConfig {
             registration: l
                 .registration
                 .as_deref()
                 .map(needle_cli::lab::wire::load_registration)
                 .transpose()?,
-        },
-        tracker: TrackerClients::default(),
+            registration_name: l.registration_name.clone(),
+            registration_change_after: l.registration_change_after,
+            bad_frames_every: l.bad_frames_every,
+        }),
     };
     lab.tracker.accept(tracker);
+    if let Some(hz) = l.stream_rate {
+        lab.tracker.stream(hz, l.stream_burst);
+    }
     lab.serve(robot, |run| {
         if let Ok(line) = serde_json::to_string(run) {
             let _ = writeln!(out, "{line}");

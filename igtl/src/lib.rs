@@ -10,8 +10,9 @@
 //! version 2 frames (protocol v3) wrap it in an extended header and metadata, which
 //! [`FrameInfo::extended`] holds.
 //!
-//! The bounds (`MAX_*` constants next to each type) make a decoded [`Frame`] about 5 KiB, most
-//! of it the 256 points of a POLYDATA: a decoder on a small stack holds one frame at a time.
+//! The bounds (`MAX_*` constants next to each type) make a decoded [`Frame`] about 6.5 KiB, most
+//! of it the 256 points and 512 triangles of a POLYDATA: a decoder on a small stack holds one
+//! frame at a time.
 //!
 //! ```
 //! use needle_igtl::{decode_frame, encode_frame, Extended, FrameInfo, Message, TextEncoding};

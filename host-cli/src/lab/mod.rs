@@ -2,11 +2,14 @@
 //! commanding a robot, and what the simulated lab (`hil-sim --lab`) shares with it.
 
 pub mod log;
+pub mod outcome;
 pub mod progress;
 pub mod robot;
 pub mod session;
 pub mod slicer;
+pub mod sphere;
 pub mod steer;
+pub mod tracker;
 pub mod viewers;
 pub mod wire;
 

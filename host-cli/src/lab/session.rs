@@ -3,36 +3,35 @@
 //! quiet.
 //!
 //! The robot reports each piece it finished (`progress`) and waits for a word. A reading is the
-//! newest tip pose that arrived after the previous reading, with the depth and base roll of the
-//! reported piece; its answer is the word (`go`, a new step list, or `stop`). A pose flagged
-//! invalid (v3 metadata `TransformStatus` other than `OK`, or after a `STATUS` of the tip that is
-//! not OK) is a reading without a pose, as a tracker dropout is in the simulation.
+//! newest tip pose that arrived after the previous reading (older ones are counted as
+//! superseded: [`super::tracker`]), with the depth and base roll of the reported piece; its
+//! answer is the word (`go`, a new step list, or `stop`). A pose flagged invalid (v3 metadata
+//! `TransformStatus` other than `OK`, or after a `STATUS` of the tip that is not OK) is a reading
+//! without a pose, as a tracker dropout is in the simulation.
 
 use super::log::InsertionLog;
+pub use super::outcome::{Ending, LabController, SessionOutcome};
 use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
-use super::wire::{registered_point, registered_pose, send_text, tip_pose, Arrival};
-use crate::simulate::device::LinkController;
-use needle_igtl::{Message, StatusCode, Transform};
-use needle_link::Transport;
-use planner_core::model::kinematics::Frame;
-use planner_core::steer::{
-    Command, Pose, SteerReply, SteerStats, Steering, StopReason, TipMeasurement,
-};
-use serde::Serialize;
+use super::tracker::{TrackerCounts, TrackerState};
+use super::wire::{registered_point, registered_pose, send_text, Arrival};
+use needle_igtl::{Message, Transform};
+use planner_core::steer::{Command, Pose, StopReason, TipMeasurement};
 use serde_json::json;
 use std::net::TcpStream;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 /// What arrives while steering.
 pub enum Event {
-    /// A frame from the tracker.
-    Tracker(Arrival),
-    /// A frame from the robot.
-    Robot(Arrival),
+    /// The tracker's state changed (at most one notice waits: the state itself is in
+    /// [`TrackerState`]).
+    Tracker,
+    /// A frame from the robot (boxed: a frame is about 5 KiB, the other events nothing).
+    Robot(Box<Arrival>),
     /// The tracker's connection ended.
     TrackerClosed,
     /// The robot's connection ended.
@@ -42,116 +41,18 @@ pub enum Event {
 /// The names and limits of a session.
 #[derive(Clone, Debug)]
 pub struct SessionConfig {
-    /// Device name of the tip's `TRANSFORM`.
-    pub tip_name: String,
-    /// Device name of the target's `TRANSFORM`.
-    pub target_name: String,
     /// No tip pose for longer than this: hold, then stop.
     pub tracking_timeout: Duration,
     /// No report from the robot for longer than this after a command: stop.
     pub robot_timeout: Duration,
     /// The needle's arc radius (mm), to draw continuations for Slicer.
     pub arc_radius_mm: f32,
-    /// The tracker's reference frame to the scenario's (none: the same frame).
+    /// The tracker's reference frame to the scenario's (none: the same frame, or the stream's).
     pub registration: Option<Transform>,
-}
-
-/// How an insertion ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ending {
-    /// The controller stopped it (the target reached, or a reason to stop).
-    Controller(StopReason),
-    /// The robot ran out of steps with the controller's verdict still open: missed.
-    StepsRanOut,
-    /// No tip pose within the tracking timeout.
-    TrackingLost,
-    /// No robot report within the robot timeout.
-    RobotNotAnswering,
-    /// Interrupted (Ctrl-C).
-    Interrupted,
-    /// The robot's connection ended.
-    RobotDisconnected,
-    /// The tracker's connection ended.
-    TrackerDisconnected,
-    /// The robot stopped without being told to.
-    RobotStopped,
-    /// The controller (a device) did not answer a reading.
-    ControllerNotAnswering,
-    /// The robot reported progress its commands cannot give.
-    RobotDisagrees,
-}
-
-impl Ending {
-    /// The stop reason as JSON names it; `None`: the target was reached.
-    pub fn stop_reason(self) -> Option<&'static str> {
-        match self {
-            Ending::Controller(StopReason::TargetReached) => None,
-            Ending::Controller(r) => Some(r.name()),
-            Ending::StepsRanOut => Some(StopReason::Missed.name()),
-            Ending::TrackingLost => Some("tracking_lost"),
-            Ending::RobotNotAnswering => Some("robot_not_answering"),
-            Ending::Interrupted => Some("interrupted"),
-            Ending::RobotDisconnected => Some("robot_disconnected"),
-            Ending::TrackerDisconnected => Some("tracker_disconnected"),
-            Ending::RobotStopped => Some("robot_stopped"),
-            Ending::ControllerNotAnswering => Some("device_not_answering"),
-            Ending::RobotDisagrees => Some("robot_disagrees"),
-        }
-    }
-}
-
-/// What a session gives back.
-#[derive(Clone, Debug, Serialize)]
-pub struct SessionOutcome {
-    /// Why it stopped; null: the target was reached.
-    pub stop_reason: Option<&'static str>,
-    /// The controller's estimate of the miss when it stopped (mm), if it gave a verdict.
-    pub predicted_miss_mm: Option<f32>,
-    /// The controller's counters.
-    pub steering: SteerStats,
-    /// Tracker frames rejected by the codec (bad CRC, bad size, not rigid, ...).
-    pub rejected_frames: u32,
-    /// Tip poses flagged invalid and not used.
-    pub invalid_poses: u32,
-    /// Per reading: tip pose received to the robot's command sent (ms).
-    #[serde(skip)]
-    pub latencies_ms: Vec<f64>,
-    /// The robot confirmed the stop (`stopped`).
-    pub robot_stopped: bool,
-}
-
-/// The controller a session consults: in-process, or on a device behind the link.
-pub trait LabController {
-    /// Answers one reading; an error (the device gone quiet) stops the insertion.
-    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String>;
-    /// Its counters, if it can still give them.
-    fn stats(&mut self) -> Option<SteerStats>;
-    /// Its estimated tip, if it shares it (a device does not).
-    fn estimated_tip(&self) -> Option<Frame>;
-}
-
-impl LabController for Steering {
-    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String> {
-        Ok(Steering::update(self, m))
-    }
-    fn stats(&mut self) -> Option<SteerStats> {
-        Some(Steering::stats(self))
-    }
-    fn estimated_tip(&self) -> Option<Frame> {
-        Some(self.estimate().tip)
-    }
-}
-
-impl<T: Transport> LabController for LinkController<'_, T> {
-    fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String> {
-        needle_sim::Controller::update(self, m).map_err(|e| e.to_string())
-    }
-    fn stats(&mut self) -> Option<SteerStats> {
-        needle_sim::Controller::stats(self).ok()
-    }
-    fn estimated_tip(&self) -> Option<Frame> {
-        None
-    }
+    /// The registration comes by the tracker stream, under this name: steering waits for it.
+    pub registration_name: Option<String>,
+    /// How long to wait for the stream's registration before giving up.
+    pub registration_timeout: Duration,
 }
 
 /// Set by a Ctrl-C handler: the session stops the robot and ends.
@@ -168,14 +69,16 @@ pub struct Session<'a> {
     log: &'a mut InsertionLog,
     slicer: &'a mut Slicer,
     events: Receiver<Event>,
-    target: Option<[f32; 3]>,
-    tip: Option<(Option<Pose>, Instant)>,
-    tip_status_ok: bool,
+    tracker: Arc<Mutex<TrackerState>>,
+    /// The registration in use (the file's, or the first the stream sent).
+    registration: Option<Transform>,
+    /// Superseded poses counted at the previous reading.
+    superseded_before: u32,
     /// The robot reported a piece that is not answered yet: (depth, base roll).
     pending: Option<(f32, f32)>,
     /// What the robot was commanded, to check its progress against.
     commanded: Commanded,
-    /// When the tracker was last heard of, or last given cause to move.
+    /// When the tracker was last given cause to move (a tip pose since then also counts).
     tracker_clock: Instant,
     /// When the robot was last commanded, while its report is awaited.
     robot_clock: Option<Instant>,
@@ -184,26 +87,26 @@ pub struct Session<'a> {
 }
 
 impl<'a> Session<'a> {
-    /// A session commanding `robot`, fed by `events`.
+    /// A session commanding `robot`, woken by `events`, reading the tracker's `tracker`.
     pub fn new(
         config: SessionConfig,
         controller: &'a mut dyn LabController,
         robot: TcpStream,
         log: &'a mut InsertionLog,
         slicer: &'a mut Slicer,
-        events: Receiver<Event>,
+        (events, tracker): (Receiver<Event>, Arc<Mutex<TrackerState>>),
     ) -> Self {
         let steering = controller.stats().unwrap_or_default();
         Session {
+            registration: config.registration,
             config,
             controller,
             robot,
             log,
             slicer,
             events,
-            target: None,
-            tip: None,
-            tip_status_ok: true,
+            tracker,
+            superseded_before: 0,
             pending: None,
             commanded: Commanded::default(),
             tracker_clock: Instant::now(),
@@ -213,8 +116,7 @@ impl<'a> Session<'a> {
                 stop_reason: None,
                 predicted_miss_mm: None,
                 steering,
-                rejected_frames: 0,
-                invalid_poses: 0,
+                tracker: TrackerCounts::default(),
                 latencies_ms: Vec::new(),
                 robot_stopped: false,
             },
@@ -236,6 +138,8 @@ impl<'a> Session<'a> {
         let stats = self.controller.stats().unwrap_or(self.outcome.steering);
         self.outcome.steering = stats;
         self.outcome.stop_reason = ending.stop_reason();
+        self.look_at_tracker();
+        let counts = self.outcome.tracker;
         self.log.write(
             "stop",
             json!({
@@ -244,13 +148,79 @@ impl<'a> Session<'a> {
                 "predicted_miss_mm": self.outcome.predicted_miss_mm,
                 "robot_stopped": self.outcome.robot_stopped,
                 "steering": stats,
+                "rejected_frames": counts.rejected_frames,
+                "invalid_poses": counts.invalid_poses,
+                "superseded_poses": counts.superseded_poses,
+                "repeated_poses": counts.repeated_poses,
+                "ignored_frames": counts.ignored_frames,
+                "registrations_refused": counts.registrations_refused,
             }),
         );
         self.slicer.state(self.outcome.stop_reason, true);
         self.outcome
     }
 
+    fn state(&self) -> MutexGuard<'_, TrackerState> {
+        // A reader thread that panicked left the state as it was: still the newest.
+        self.tracker.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Takes the tracker's news: its counts, and its log lines (written here, in order with the
+    /// session's own). Clears the notice, so the reader sends the next one.
+    fn look_at_tracker(&mut self) {
+        let (counts, notes) = {
+            let mut s = self.state();
+            s.notice_pending = false;
+            (s.counts, std::mem::take(&mut s.notes))
+        };
+        self.outcome.tracker = counts;
+        for (event, fields) in notes {
+            self.log.write(event, fields);
+        }
+    }
+
+    /// With `--registration-name`: waits for the stream's first registration (nothing is sent to
+    /// the robot before it); `None` once it is in, or the ending if it does not come.
+    fn await_registration(&mut self) -> Option<Ending> {
+        let name = self.config.registration_name.clone()?;
+        let deadline = Instant::now() + self.config.registration_timeout;
+        loop {
+            self.look_at_tracker();
+            let received = self.state().registration;
+            if let Some(reg) = received {
+                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
+                self.log.write(
+                    "registration",
+                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
+                );
+                self.registration = Some(reg);
+                return None;
+            }
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                return Some(Ending::Interrupted);
+            }
+            if Instant::now() > deadline {
+                let waited_ms = self.config.registration_timeout.as_millis() as u64;
+                self.log.write(
+                    "no_registration",
+                    json!({ "name": name, "waited_ms": waited_ms }),
+                );
+                return Some(Ending::NoRegistration);
+            }
+            match self.events.recv_timeout(POLL) {
+                Ok(Event::TrackerClosed) => return Some(Ending::TrackerDisconnected),
+                Ok(Event::RobotClosed) | Err(RecvTimeoutError::Disconnected) => {
+                    return Some(Ending::RobotDisconnected)
+                }
+                Ok(_) | Err(RecvTimeoutError::Timeout) => {}
+            }
+        }
+    }
+
     fn steer(&mut self, steps: &[planner_core::execute::schedule::Step]) -> Ending {
+        if let Some(ending) = self.await_registration() {
+            return ending;
+        }
         self.commanded.list_sent(steps);
         for c in step_list(steps) {
             if self.command(c).is_err() {
@@ -263,27 +233,33 @@ impl<'a> Session<'a> {
             if INTERRUPTED.load(Ordering::SeqCst) {
                 return Ending::Interrupted;
             }
+            self.look_at_tracker();
             if let Some(ending) = self.answer_if_ready() {
                 return ending;
             }
+            // Looked at on every turn: a tracker streaming fast never lets the wait time out.
+            if let Some(ending) = self.timed_out() {
+                return ending;
+            }
             match self.events.recv_timeout(POLL) {
-                Ok(event) => {
-                    if let Some(ending) = self.on_event(event) {
+                Ok(Event::Tracker) | Err(RecvTimeoutError::Timeout) => {}
+                Ok(Event::TrackerClosed) => return Ending::TrackerDisconnected,
+                Ok(Event::RobotClosed) | Err(RecvTimeoutError::Disconnected) => {
+                    return Ending::RobotDisconnected
+                }
+                Ok(Event::Robot(arrival)) => {
+                    if let Some(ending) = self.on_robot(arrival.0) {
                         return ending;
                     }
                 }
-                Err(RecvTimeoutError::Timeout) => {
-                    if let Some(ending) = self.timed_out() {
-                        return ending;
-                    }
-                }
-                Err(RecvTimeoutError::Disconnected) => return Ending::RobotDisconnected,
             }
         }
     }
 
     fn timed_out(&self) -> Option<Ending> {
-        if self.tracker_clock.elapsed() > self.config.tracking_timeout {
+        let last_tip = self.state().last_tip_at;
+        let heard = last_tip.map_or(self.tracker_clock, |t| t.max(self.tracker_clock));
+        if heard.elapsed() > self.config.tracking_timeout {
             return Some(Ending::TrackingLost);
         }
         match self.robot_clock {
@@ -292,56 +268,17 @@ impl<'a> Session<'a> {
         }
     }
 
-    fn on_event(&mut self, event: Event) -> Option<Ending> {
-        match event {
-            Event::TrackerClosed => Some(Ending::TrackerDisconnected),
-            Event::RobotClosed => Some(Ending::RobotDisconnected),
-            Event::Tracker((Err(e), _)) => {
-                self.outcome.rejected_frames += 1;
-                self.log
-                    .write("rejected", json!({ "error": format!("{e:?}") }));
-                None
-            }
-            Event::Tracker((Ok(frame), at)) => {
-                let name = frame.info.device_name.as_str();
-                let flagged = frame
-                    .info
-                    .extended
-                    .as_ref()
-                    .and_then(|e| e.metadata.get("TransformStatus"))
-                    .is_some_and(|s| s != "OK");
-                match frame.message {
-                    Message::Transform(t) if name == self.config.tip_name => {
-                        let valid = self.tip_status_ok && !flagged;
-                        if !valid {
-                            self.outcome.invalid_poses += 1;
-                        }
-                        let pose = valid.then(|| self.registered(tip_pose(&t)));
-                        self.tip = Some((pose, at));
-                        self.tracker_clock = Instant::now();
-                    }
-                    Message::Transform(t) if name == self.config.target_name => {
-                        let p = t.translation();
-                        self.target = Some(match &self.config.registration {
-                            Some(reg) => registered_point(reg, p),
-                            None => p,
-                        });
-                    }
-                    Message::Status(s) if name == self.config.tip_name => {
-                        self.tip_status_ok = s.code == StatusCode::OK;
-                    }
-                    _ => {}
-                }
-                None
-            }
-            Event::Robot((frame, _)) => self.on_robot(frame),
+    fn registered(&self, pose: Pose) -> Pose {
+        match &self.registration {
+            Some(reg) => registered_pose(reg, pose),
+            None => pose,
         }
     }
 
-    fn registered(&self, pose: Pose) -> Pose {
-        match &self.config.registration {
-            Some(reg) => registered_pose(reg, pose),
-            None => pose,
+    fn registered_target(&self, p: [f32; 3]) -> [f32; 3] {
+        match &self.registration {
+            Some(reg) => registered_point(reg, p),
+            None => p,
         }
     }
 
@@ -384,7 +321,13 @@ impl<'a> Session<'a> {
     /// Answers the reported piece once a new tip pose is in.
     fn answer_if_ready(&mut self) -> Option<Ending> {
         let (depth_mm, base_deg) = self.pending?;
-        let (pose, at) = self.tip.take()?;
+        let (tip, target, superseded) = {
+            let mut s = self.state();
+            (s.take_tip()?, s.target, s.counts.superseded_poses)
+        };
+        let superseded_poses = superseded.saturating_sub(self.superseded_before);
+        self.superseded_before = superseded;
+        let (pose, at) = (tip.pose.map(|p| self.registered(p)), tip.at);
         self.pending = None;
         self.seq += 1;
         let m = TipMeasurement {
@@ -392,7 +335,7 @@ impl<'a> Session<'a> {
             depth_mm,
             base_deg,
             pose,
-            target: pose.and(self.target),
+            target: pose.and(target.map(|t| self.registered_target(t))),
         };
         let reply = match self.controller.update(&m) {
             Ok(r) => r,
@@ -429,7 +372,12 @@ impl<'a> Session<'a> {
         // After the commands it caused, with the time from the pose to them.
         self.log.write(
             "reading",
-            json!({ "measurement": m, "reply": reply, "latency_ms": latency_ms }),
+            json!({
+                "measurement": m,
+                "reply": reply,
+                "latency_ms": latency_ms,
+                "superseded_poses": superseded_poses,
+            }),
         );
         let replaced = match &reply.command {
             Command::Replace(s) => Some(&s[..]),
@@ -464,8 +412,11 @@ impl<'a> Session<'a> {
         let deadline = Instant::now() + self.config.robot_timeout;
         while let Some(left) = deadline.checked_duration_since(Instant::now()) {
             match self.events.recv_timeout(left) {
-                Ok(Event::Robot((Ok(f), _))) => {
-                    if let Message::String(s) = f.message {
+                Ok(Event::Robot(arrival)) => {
+                    if let (Ok(f), _) = *arrival {
+                        let Message::String(s) = f.message else {
+                            continue;
+                        };
                         if s.text.parse() == Ok(RobotReport::Stopped) {
                             self.outcome.robot_stopped = true;
                             return;

@@ -8,7 +8,7 @@ use super::viewers::Viewers;
 use super::wire::{igtl_error, send, tip_transform};
 use anyhow::Result;
 use needle_igtl::messages::point::MAX_POINTS;
-use needle_igtl::messages::polydata::MAX_POLY_POINTS;
+use needle_igtl::messages::polydata::{MAX_POLY_POINTS, MAX_POLY_TRIANGLES};
 use needle_igtl::{Message, PointElement, PointList, PolyData, Status, StatusCode, StringMessage};
 use planner_core::execute::nominal::{execute_from, sample};
 use planner_core::execute::schedule::{Schedule, Step};
@@ -20,6 +20,9 @@ use std::time::Duration;
 pub const PLAN_DEVICE: &str = "NeedlePlan";
 /// Device name of the obstacles (the first 16; then `NeedleObstacles2`, ...).
 pub const OBSTACLES_DEVICE: &str = "NeedleObstacles";
+/// Device name of the obstacles as a model of spheres (the first 6; then
+/// `NeedleObstaclesModel2`, ...).
+pub const OBSTACLES_MODEL_DEVICE: &str = "NeedleObstaclesModel";
 /// Device name of the newest continuation.
 pub const CONTINUATION_DEVICE: &str = "NeedleContinuation";
 /// Device name of the estimated tip.
@@ -105,7 +108,36 @@ impl Slicer {
         self.scene = true;
         self.path(PLAN_DEVICE, &points);
         self.obstacles(scenario);
+        self.obstacles_model(scenario);
         self.scene = false;
+    }
+
+    /// The obstacles as a model: each a sphere of its radius (a twice-split icosahedron's 42
+    /// points on it, 80 triangles), as many a `POLYDATA` as its bounds hold:
+    /// `NeedleObstaclesModel`, then `NeedleObstaclesModel2`, ...
+    fn obstacles_model(&mut self, scenario: &Scenario) {
+        let (unit, faces) = super::sphere::unit_sphere();
+        let per_message = (MAX_POLY_POINTS / unit.len()).min(MAX_POLY_TRIANGLES / faces.len());
+        for (k, chunk) in scenario.obstacles.chunks(per_message).enumerate() {
+            let mut points = Vec::new();
+            let mut triangles = Vec::new();
+            for ob in chunk {
+                let base = points.len() as u32;
+                points.extend(
+                    unit.iter()
+                        .map(|u| [0, 1, 2].map(|i| ob.center[i] + ob.radius * u[i])),
+                );
+                triangles.extend(faces.iter().map(|f| f.map(|i| base + i)));
+            }
+            let device = match k {
+                0 => OBSTACLES_MODEL_DEVICE.to_string(),
+                _ => format!("{OBSTACLES_MODEL_DEVICE}{}", k + 1),
+            };
+            match PolyData::mesh(&points, &triangles) {
+                Ok(m) => self.send(&device, &Message::PolyData(m)),
+                Err(e) => self.failure = Some(format!("{device}: {e:?}")),
+            }
+        }
     }
 
     /// The obstacles as fiducials of their diameter, [`MAX_POINTS`] a message: `NeedleObstacles`,

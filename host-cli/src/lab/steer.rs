@@ -6,7 +6,8 @@ use super::log::InsertionLog;
 use super::robot::step_list;
 use super::session::{Event, LabController, Session, SessionConfig, SessionOutcome, INTERRUPTED};
 use super::slicer::Slicer;
-use super::wire::{load_registration, read_frames, TARGET_DEVICE, TIP_DEVICE};
+use super::tracker::{TrackerNames, TrackerState};
+use super::wire::{load_registration, read_frames, Arrival, TARGET_DEVICE, TIP_DEVICE};
 use crate::device::commands::LinkArgs;
 use crate::simulate::closed_loop_setup;
 use crate::simulate::device::{device_planning, start_steering, LinkController};
@@ -17,7 +18,8 @@ use serde_json::json;
 use std::net::{TcpStream, ToSocketAddrs};
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
-use std::sync::mpsc::{channel, Sender};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 /// `needle steer`
@@ -36,8 +38,16 @@ pub struct SteerArgs {
     pub target_name: String,
     /// The registration: a JSON file with `rotation` (row-major) and `translation_mm`, taking a
     /// point of the tracker's reference frame to the scenario's (default: the same frame).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "registration_name")]
     pub registration: Option<PathBuf>,
+    /// The registration from the tracker stream: the device name of a TRANSFORM taking a point
+    /// of the tracker's reference frame to the scenario's (as the file's), e.g.
+    /// ReferenceToScenario. Steering waits for the first one; a later different one is refused.
+    #[arg(long, value_name = "NAME")]
+    pub registration_name: Option<String>,
+    /// With --registration-name: how long to wait for it before giving up ("no_registration").
+    #[arg(long, requires = "registration_name", default_value_t = 5000)]
+    pub registration_timeout_ms: u64,
     /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
     #[arg(long)]
     pub robot: String,
@@ -132,7 +142,8 @@ pub struct SteerJson {
     pub form: String,
     /// Why it stopped, as `needle simulate --closed-loop --json --detail` names it per run, plus
     /// the lab's own: `tracking_lost`, `robot_not_answering`, `interrupted`,
-    /// `robot_disconnected`, `tracker_disconnected`, `robot_stopped`. Null: reached.
+    /// `robot_disconnected`, `tracker_disconnected`, `robot_stopped`, `robot_disagrees`,
+    /// `device_not_answering`, `no_registration`. Null: reached.
     #[serde(flatten)]
     pub outcome: SessionOutcome,
     /// Tip pose received to robot command sent.
@@ -151,19 +162,60 @@ fn connect(what: &str, address: &str) -> Result<TcpStream> {
     Ok(s)
 }
 
-fn forward(
-    stream: &TcpStream,
-    tx: &Sender<Event>,
-    wrap: fn(super::wire::Arrival) -> Event,
-    end: Event,
-) -> Result<()> {
+/// Events waiting for the session at most: the robot's reader waits when they are this many
+/// (the robot is lock-step: a few frames a piece), the tracker's sends at most one notice.
+const EVENTS_WAITING: usize = 64;
+
+/// Reads the robot's frames into `tx`.
+fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<()> {
     let (frames, ended) = (tx.clone(), tx.clone());
     read_frames(
         stream.try_clone()?,
-        move |a| frames.send(wrap(a)).is_ok(),
+        move |a| frames.send(Event::Robot(Box::new(a))).is_ok(),
         move || {
-            let _ = ended.send(end);
+            let _ = ended.send(Event::RobotClosed);
         },
+    );
+    Ok(())
+}
+
+/// Reads the tracker's frames into a shared [`TrackerState`] (bounded whatever the rate), and
+/// tells the session with a notice when none is waiting already.
+fn forward_tracker(
+    stream: &TcpStream,
+    tx: &SyncSender<Event>,
+    names: TrackerNames,
+) -> Result<Arc<Mutex<TrackerState>>> {
+    let state = Arc::new(Mutex::new(TrackerState::default()));
+    let (shared, notices, ended) = (state.clone(), tx.clone(), tx.clone());
+    read_frames(
+        stream.try_clone()?,
+        move |a: Arrival| {
+            let notify = {
+                let mut s = shared.lock().unwrap_or_else(|p| p.into_inner());
+                s.on_frame(&names, a);
+                !std::mem::replace(&mut s.notice_pending, true)
+            };
+            // Full: the session has news waiting anyway; it reads the state, not the notice.
+            !notify
+                || !matches!(
+                    notices.try_send(Event::Tracker),
+                    Err(TrySendError::Disconnected(_))
+                )
+        },
+        move || {
+            let _ = ended.send(Event::TrackerClosed);
+        },
+    );
+    Ok(state)
+}
+
+/// A device name must fit the header's 20 bytes, or no frame can ever carry it.
+fn check_name(flag: &str, name: &str) -> Result<()> {
+    anyhow::ensure!(
+        !name.is_empty() && name.len() <= needle_igtl::header::DEVICE_NAME_SIZE,
+        "{flag} `{name}`: an OpenIGTLink device name has 1 to 20 bytes, this one {}",
+        name.len()
     );
     Ok(())
 }
@@ -176,6 +228,11 @@ pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
 
 /// Runs `needle steer`.
 pub fn run_steer(a: &SteerArgs) -> Result<()> {
+    check_name("--tip-name", &a.tip_name)?;
+    check_name("--target-name", &a.target_name)?;
+    if let Some(name) = &a.registration_name {
+        check_name("--registration-name", name)?;
+    }
     let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
     let key = "tracking_lost_after_mm";
     let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
@@ -236,22 +293,28 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
     slicer.plan(&setup.scenario, schedule);
     let tracker = connect("tracker", &a.tracker)?;
     let robot = connect("robot", &a.robot)?;
-    let (tx, rx) = channel();
-    forward(&tracker, &tx, Event::Tracker, Event::TrackerClosed)?;
-    forward(&robot, &tx, Event::Robot, Event::RobotClosed)?;
+    let (tx, rx) = sync_channel(EVENTS_WAITING);
+    let names = TrackerNames {
+        tip: a.tip_name.clone(),
+        target: a.target_name.clone(),
+        registration: a.registration_name.clone(),
+    };
+    let tracker_state = forward_tracker(&tracker, &tx, names)?;
+    forward_robot(&robot, &tx)?;
     drop(tx);
     // A second handler cannot be set (a test calling twice): the first one still flags.
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
     let config = SessionConfig {
-        tip_name: a.tip_name.clone(),
-        target_name: a.target_name.clone(),
         tracking_timeout: Duration::from_millis(a.tracking_timeout_ms),
         robot_timeout: Duration::from_millis(a.robot_timeout_ms),
         arc_radius_mm: setup.scenario.needle.curvature_radius,
         registration,
+        registration_name: a.registration_name.clone(),
+        registration_timeout: Duration::from_millis(a.registration_timeout_ms),
     };
+    let events: (Receiver<Event>, _) = (rx, tracker_state);
     let outcome =
-        Session::new(config, controller, robot, &mut log, &mut slicer, rx).run(&schedule.steps);
+        Session::new(config, controller, robot, &mut log, &mut slicer, events).run(&schedule.steps);
     let _ = tracker.shutdown(std::net::Shutdown::Both);
     if let Some(e) = &slicer.failure {
         eprintln!("needle steer: Slicer was not shown everything: {e}");
@@ -261,7 +324,8 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
 
 fn print(a: &SteerArgs, form: String, outcome: SessionOutcome, log: &InsertionLog) -> Result<()> {
     let latency = Latency::of(&outcome.latencies_ms);
-    let interrupted = outcome.stop_reason == Some("interrupted");
+    let stop_reason = outcome.stop_reason;
+    let interrupted = stop_reason == Some("interrupted");
     if a.json {
         let j = SteerJson {
             seed: a.seed,
@@ -295,10 +359,22 @@ fn print(a: &SteerArgs, form: String, outcome: SessionOutcome, log: &InsertionLo
                 l.median, l.max, l.readings
             );
         }
+        let t = outcome.tracker;
+        println!(
+            "tracker: {} poses superseded, {} invalid, {} frames rejected, {} ignored",
+            t.superseded_poses, t.invalid_poses, t.rejected_frames, t.ignored_frames
+        );
     }
     if let Some(e) = &log.failure {
         eprintln!("needle steer: the insertion log is incomplete: {e}");
     }
     anyhow::ensure!(!interrupted, "interrupted: the robot was told to stop");
+    if let (Some("no_registration"), Some(name)) = (stop_reason, &a.registration_name) {
+        anyhow::bail!(
+            "no registration TRANSFORM named {name} came from the tracker within {} ms: \
+             nothing was steered (the robot was told to stop)",
+            a.registration_timeout_ms
+        );
+    }
     Ok(())
 }

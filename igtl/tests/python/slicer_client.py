@@ -123,6 +123,7 @@ def describe(m):
     elif m.message_type == "POLYDATA":
         d["points"] = m.points.astype(float).tolist()
         d["lines"] = cells(m.lines)
+        d["polygons"] = cells(m.polygons)
         d["repacked_identical"] = m.repacked_identical
     elif m.message_type == "STATUS":
         d.update(code=m.code, subcode=m.subcode, error_name=m.error_name, text=m.text)

@@ -1,9 +1,10 @@
 //! The simulated lab: the robot, tissue and tracker of `needle simulate` (needle-sim's
 //! [`World`]) behind the lab link, so that `needle steer` runs end to end on one machine.
 //!
-//! - The tracker is an OpenIGTLink server as PLUS is: every client gets each pose the world
-//!   measures, a `TRANSFORM` named `TargetToReference` (the target as imaging sees it) then one
-//!   named `NeedleTipToReference` (the tip frame: e2 the bevel, e3 the heading).
+//! - The tracker is an OpenIGTLink server as PLUS is ([`tracker`]): every client gets each pose
+//!   the world measures, a `TRANSFORM` named `TargetToReference` (the target as imaging sees it)
+//!   then one named `NeedleTipToReference` (the tip frame: e2 the bevel, e3 the heading); with a
+//!   stream rate it also repeats the newest pose at that rate.
 //! - The robot is an OpenIGTLink server speaking the robot mapping of
 //!   [`needle_cli::lab::robot`]: it takes a step list, executes it piece by piece exactly as
 //!   [`World::execute`] does, reports each piece's progress and waits for the host's word (go
@@ -15,22 +16,21 @@
 //! seed bit for bit. `rate_hz` paces the pieces (at most that many a second), `latency_ms`
 //! delays each pose; neither changes a figure.
 
-use anyhow::{anyhow, bail, Context, Result};
+pub mod tracker;
+
+use anyhow::{anyhow, Context, Result};
 use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
-use needle_cli::lab::wire::{inverse, registered_point, registered_pose};
-use needle_cli::lab::wire::{now, read_frames, send, send_text, send_with, tip_transform};
-use needle_cli::lab::wire::{TARGET_DEVICE, TIP_DEVICE};
+use needle_cli::lab::wire::{read_frames, send_text};
 use needle_cli::simulate::setup::Setup;
-use needle_igtl::{Extended, FrameInfo, Message, Status, StatusCode, TextEncoding, Transform};
-use needle_sim::{finish, Measurement, World};
+use needle_igtl::Message;
+use needle_sim::{finish, World};
 use planner_core::execute::schedule::Step;
-use planner_core::steer::Pose;
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
 use std::ops::ControlFlow;
 use std::sync::mpsc::{channel, Receiver};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+pub use tracker::{TrackerClients, TrackerConfig};
 
 /// How the lab runs.
 #[derive(Clone, Copy, Debug, Default)]
@@ -41,6 +41,10 @@ pub struct LabConfig {
     pub rate_hz: f64,
     /// Delay of each pose after its piece (ms).
     pub latency_ms: u64,
+    /// Delay of each piece's report after its pose went out (ms): a robot whose word travels
+    /// slower than the tracker's stream, so that the stream's copies of the new pose arrive
+    /// before the report.
+    pub report_delay_ms: u64,
     /// Test fault: the tracker sends no pose after this many in an insertion.
     pub tracker_silent_after: Option<u32>,
     /// Test fault: the robot reports nothing after this many pieces in an insertion.
@@ -51,9 +55,6 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
-    /// The registration the host is given (tracker to scenario frame): the tracker reports in
-    /// the frame it maps from. None: the tracker's frame is the scenario's.
-    pub registration: Option<Transform>,
 }
 
 /// How a pose is flagged invalid.
@@ -61,117 +62,6 @@ pub struct LabConfig {
 enum Flag {
     Metadata,
     Status,
-}
-
-/// How long the robot waits for a tracker client before its first piece (a pose sent to nobody
-/// would be lost to the host).
-const TRACKER_WAIT: Duration = Duration::from_secs(10);
-
-/// The tracker's clients; a client whose socket fails is dropped.
-#[derive(Clone, Default)]
-pub struct TrackerClients(Arc<Mutex<Vec<TcpStream>>>);
-
-impl TrackerClients {
-    /// Accepts tracker clients on `listener` for the life of the process.
-    pub fn accept(&self, listener: TcpListener) {
-        let clients = self.clone();
-        std::thread::spawn(move || {
-            for conn in listener.incoming().flatten() {
-                let _ = conn.set_nodelay(true);
-                if let Ok(mut list) = clients.0.lock() {
-                    list.push(conn);
-                }
-            }
-        });
-    }
-
-    /// Drops the clients that hung up, and counts the others: a client of an earlier
-    /// insertion must not stand in for the one about to steer.
-    fn live(&self) -> usize {
-        let Ok(mut list) = self.0.lock() else {
-            return 0;
-        };
-        list.retain(|c| {
-            let mut byte = [0u8; 1];
-            let hung_up = c.set_nonblocking(true).is_err()
-                || match c.peek(&mut byte) {
-                    Ok(0) => true,
-                    Ok(_) => false,
-                    Err(e) => e.kind() != std::io::ErrorKind::WouldBlock,
-                };
-            !hung_up && c.set_nonblocking(false).is_ok()
-        });
-        list.len()
-    }
-
-    fn wait_for_one(&self) -> Result<()> {
-        let start = Instant::now();
-        while self.live() == 0 {
-            if start.elapsed() > TRACKER_WAIT {
-                bail!("no tracker client connected");
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        Ok(())
-    }
-
-    /// Sends the target and the tip of `m` to every client, the tip flagged invalid by `flag`.
-    fn publish(
-        &self,
-        m: &Measurement,
-        flag: Option<Flag>,
-        to_tracker: Option<&Transform>,
-    ) -> Result<()> {
-        let m = &match to_tracker {
-            Some(t) => in_frame(t, m),
-            None => *m,
-        };
-        let tip = tip_transform(m.position, m.heading, m.bevel)
-            .map_err(|e| anyhow!("the simulated tip is no pose: {e:?}"))?;
-        let target = Transform::new(Transform::IDENTITY.rotation(), m.target)
-            .map_err(|e| anyhow!("the simulated target is no position: {e:?}"))?;
-        let mut tip_info = FrameInfo::new(TIP_DEVICE).map_err(|e| anyhow!("{e:?}"))?;
-        tip_info.timestamp = now();
-        if flag == Some(Flag::Metadata) {
-            let mut ext = Extended::default();
-            ext.metadata
-                .insert("TransformStatus", TextEncoding::UsAscii, "INVALID")
-                .map_err(|e| anyhow!("{e:?}"))?;
-            tip_info.extended = Some(ext);
-        }
-        let status = |code| Message::Status(Status::new(code));
-        let by_status = flag == Some(Flag::Status);
-        let mut list = self
-            .0
-            .lock()
-            .map_err(|_| anyhow!("tracker clients poisoned"))?;
-        list.retain_mut(|c| {
-            send(c, TARGET_DEVICE, &Message::Transform(target)).is_ok()
-                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::NOT_READY)).is_ok())
-                && send_with(c, &tip_info, &Message::Transform(tip)).is_ok()
-                && (!by_status || send(c, TIP_DEVICE, &status(StatusCode::OK)).is_ok())
-        });
-        Ok(())
-    }
-}
-
-/// A measurement in the frame `t` maps the scenario's frame to.
-fn in_frame(t: &Transform, m: &Measurement) -> Measurement {
-    let pose = registered_pose(
-        t,
-        Pose {
-            position: m.position,
-            heading: m.heading,
-            bevel: Some(m.bevel),
-        },
-    );
-    Measurement {
-        position: pose.position,
-        heading: pose.heading,
-        bevel: pose.bevel.unwrap_or(m.bevel),
-        target: registered_point(t, m.target),
-        ..*m
-    }
 }
 
 /// How an insertion ended, from the robot's side.
@@ -327,14 +217,15 @@ impl Lab {
         let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
         let mut steps = match robot.commands.recv() {
             Ok(RobotCommand::Steps { count }) => robot.steps(count),
+            Ok(RobotCommand::Stop) => {
+                // A host that gave up before steering (no registration came) hears it stopped.
+                robot.report(RobotReport::Stopped);
+                None
+            }
             _ => None,
         }
         .context("the host sent no step list")?;
         self.tracker.wait_for_one()?;
-        let to_tracker = match &self.config.registration {
-            Some(reg) => Some(inverse(reg).map_err(|e| anyhow!("registration: {e:?}"))?),
-            None => None,
-        };
         let mut end = None;
         let mut last_piece = Instant::now();
         while end.is_none() {
@@ -349,14 +240,15 @@ impl Lab {
                         .tracker_silent_after
                         .is_none_or(|n| robot.pieces <= n)
                     {
-                        if let Err(e) =
-                            self.tracker
-                                .publish(m, self.flag(robot.pieces), to_tracker.as_ref())
-                        {
+                        let flag = self.flag(robot.pieces);
+                        if let Err(e) = self.tracker.publish(m, flag, robot.pieces) {
                             failure = Some(e);
                             return ControlFlow::Break(());
                         }
+                    } else {
+                        self.tracker.silence();
                     }
+                    std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
                     robot.report(RobotReport::Progress {
                         piece: robot.pieces,
                         depth_mm: m.depth_mm + self.misreport(robot.pieces),
