@@ -113,13 +113,18 @@ pub const ESTIMATOR_STRETCHES: usize = 32;
 pub struct EstimatorProfile {
     variance: [f32; ESTIMATOR_STRETCHES],
     stretch_mm: f32,
+    /// The tracker's hidden error (`registration_mm` squared): no fix narrows it, so the tip the
+    /// loop steers is off by it wherever the estimate is.
+    hidden: f32,
 }
 
 impl EstimatorProfile {
-    /// The variance per axis at `depth` (mm²).
+    /// The variance per axis at `depth` (mm²), the tracker's hidden error included: how far the
+    /// steered tip may be from where the loop believes it, so also the margin the steering keeps
+    /// (as [`Estimate::margin_sd`](crate::steer::estimate::Estimate::margin_sd) does).
     pub fn at(&self, depth: f32) -> f32 {
         let i = (depth / self.stretch_mm).max(0.0) as usize;
-        self.variance[i.min(ESTIMATOR_STRETCHES - 1)]
+        self.variance[i.min(ESTIMATOR_STRETCHES - 1)] + self.hidden
     }
 }
 
@@ -136,6 +141,7 @@ pub fn estimator_profile(
     let mut out = EstimatorProfile {
         variance: [0.0; ESTIMATOR_STRETCHES],
         stretch_mm: (total / ESTIMATOR_STRETCHES as f32).max(1e-3),
+        hidden: noise.registration_mm * noise.registration_mm,
     };
     let first = noise.entry_position_mm * noise.entry_position_mm;
     out.variance[0] = first;
@@ -332,6 +338,32 @@ mod tests {
                 "{key}: {pinned}"
             );
         }
+    }
+
+    /// The tracker's hidden error adds its variance at every depth, so a plan steered by a tracker
+    /// with one is predicted riskier (and a bounded plan keeps farther away).
+    #[test]
+    fn the_hidden_registration_error_widens_the_steered_spread() {
+        use crate::execute::risk::{risk_by_obstacle, Execution, ObstacleRisk};
+        let (scenario, s) = paper_schedule();
+        let p = Perturbation::default();
+        let registered = NoiseModel {
+            registration_mm: 0.6,
+            ..NoiseModel::DEFAULT
+        };
+        let plain = estimator_profile(&scenario, &s, &p, &NoiseModel::DEFAULT);
+        let hidden = estimator_profile(&scenario, &s, &p, &registered);
+        for depth in [0.0, 10.0, 45.0, 90.0] {
+            let added = hidden.at(depth) - plain.at(depth);
+            assert!((added - 0.36).abs() < 1e-5, "{depth}: {added}");
+        }
+        let mut by = [ObstacleRisk::default(); crate::MAX_OBSTACLES];
+        let mut risk = |noise| {
+            risk_by_obstacle(&scenario, &s, &p, Execution::Steered(noise), &mut by)
+                .collision_probability
+        };
+        let (without, with) = (risk(NoiseModel::DEFAULT), risk(registered));
+        assert!(with > without, "{without} {with}");
     }
 
     /// Midway the estimator's variance is what its fixes leave, under one reading's (the filter
