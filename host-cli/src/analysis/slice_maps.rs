@@ -19,7 +19,8 @@ pub struct SliceMap {
     pub chosen: Vec<Segment>,
 }
 
-/// Where the three planes cross (`needle plot --slice-at`).
+/// Where the three planes cross (`needle plot --slice-at`). The first three, when outside every
+/// map, are moved into the nearest map's box of voxel centres; a typed point outside is an error.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SliceAt {
     /// The best path's point of least clearance to the obstacles (the target when it has none).
@@ -28,7 +29,6 @@ pub enum SliceAt {
     Target,
     /// The entry.
     Entry,
-    // These three are moved into the nearest map's box when they lie outside every map.
     /// A point (RAS, mm).
     Point([f64; 3]),
 }
@@ -126,7 +126,7 @@ pub(crate) fn label_at(map: &LabelMap, p: [f64; 3]) -> Option<i64> {
     Some(map.at(g[0], g[1], g[2]))
 }
 
-/// The point `at` names, checked to lie inside at least one of `maps`.
+/// The point `at` names, inside at least one of `maps` (see [`SliceAt`]).
 pub fn slice_point(
     at: &SliceAt,
     maps: &[SliceMap],
