@@ -1,7 +1,8 @@
 //! `needle cover` on label maps written by implementations nobody here wrote: NIfTI by nibabel
 //! and NRRD by pynrrd (in LPS raw and in RAS gzip), from the venv `scripts/python-env` makes
-//! (`tests/python/label_maps.py`). The three files hold the same anatomy: the same spheres to
-//! 1e-4 mm, the ball one sphere on its centre, hardly larger than the ball.
+//! (`tests/python/label_maps.py`; nibabel's own test files: `nibabel_data.rs`). The three files
+//! hold the same anatomy: the same spheres to 1e-4 mm, the ball one sphere on its centre, hardly
+//! larger than the ball.
 
 use needle_e2e::label_files::cover_spheres;
 use needle_e2e::{needle_json, venv_python, workspace};

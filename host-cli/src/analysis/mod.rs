@@ -10,6 +10,8 @@ pub mod pieces;
 pub mod plan_file;
 pub mod plot;
 pub mod rrt;
+pub mod slice_maps;
+pub mod slices;
 pub mod svg;
 pub mod sweep;
 pub mod sweep_plot;

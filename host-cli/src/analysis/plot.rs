@@ -83,17 +83,19 @@ impl Strands {
     }
 }
 
-struct View {
-    h: usize,
-    v: usize,
-    lo: [f64; 2],
-    scale: f64,
-    origin: [f64; 2],
-    size: [f64; 2],
+/// One frame of a picture: world axes `h` (across) and `v` (up) drawn from `lo` at `scale` px
+/// per mm, the frame's top-left corner at `origin` and its size `size` (px).
+pub(crate) struct View {
+    pub(crate) h: usize,
+    pub(crate) v: usize,
+    pub(crate) lo: [f64; 2],
+    pub(crate) scale: f64,
+    pub(crate) origin: [f64; 2],
+    pub(crate) size: [f64; 2],
 }
 
 impl View {
-    fn px(&self, p: [f32; 3]) -> [f64; 2] {
+    pub(crate) fn px(&self, p: [f32; 3]) -> [f64; 2] {
         let (h, v) = (f64::from(p[self.h]), f64::from(p[self.v]));
         [
             self.origin[0] + (h - self.lo[0]) * self.scale,
@@ -102,7 +104,7 @@ impl View {
     }
 
     /// Many thin polylines as one path element (nothing when there are none).
-    fn lines(&self, svg: &mut Svg, lines: &[Vec<[f32; 3]>], class: &str, style: &str) {
+    pub(crate) fn lines(&self, svg: &mut Svg, lines: &[Vec<[f32; 3]>], class: &str, style: &str) {
         if lines.is_empty() {
             return;
         }
@@ -156,7 +158,8 @@ fn extent(s: &Scene<'_>, scenario: &Scenario, h: usize, v: usize) -> ([f64; 2], 
     (lo, hi)
 }
 
-fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
+/// The frame, ticks, grid and axis titles of `view`, whose axes end at `hi`.
+pub(crate) fn axes(svg: &mut Svg, view: &View, hi: [f64; 2]) {
     let [x0, y0] = view.origin;
     let [w, hgt] = view.size;
     svg.group("axes");
@@ -340,7 +343,7 @@ fn obstacles(svg: &mut Svg, view: &View, scenario: &Scenario, shapes: &[Obstacle
 }
 
 /// The planned paths, the best last: on top of the others.
-fn plan_paths(svg: &mut Svg, view: &View, paths: &[PlotPath]) {
+pub(crate) fn plan_paths(svg: &mut Svg, view: &View, paths: &[PlotPath]) {
     let order = paths
         .iter()
         .filter(|p| !p.best)

@@ -70,17 +70,29 @@ pub fn selected(map: &LabelMap, labels: &[i64], segments: &[String]) -> Result<V
     if present.is_empty() {
         bail!("the map has no labelled voxels (every voxel is 0)");
     }
+    // A segment the file names but no voxel holds (Slicer keeps a segment emptied by editing).
+    let empty = |s: &Segment| {
+        anyhow!(
+            "segment {:?} (label {}) is empty: the file names it, but no voxel holds label {}",
+            s.name,
+            s.label,
+            s.label
+        )
+    };
     if !labels.is_empty() {
         return labels
             .iter()
             .map(|&l| {
-                present
-                    .iter()
-                    .find(|s| s.label == l)
-                    .cloned()
-                    .ok_or_else(|| {
-                        anyhow!("label {l} is not in the map (its labels: {})", label_list())
-                    })
+                if let Some(s) = present.iter().find(|s| s.label == l) {
+                    return Ok(s.clone());
+                }
+                match map.named.iter().find(|s| s.label == l) {
+                    Some(s) => Err(empty(s)),
+                    None => Err(anyhow!(
+                        "label {l} is not in the map (its labels: {})",
+                        label_list()
+                    )),
+                }
             })
             .collect();
     }
@@ -98,13 +110,16 @@ pub fn selected(map: &LabelMap, labels: &[i64], segments: &[String]) -> Result<V
         return segments
             .iter()
             .map(|n| {
-                present
-                    .iter()
-                    .find(|s| &s.name == n)
-                    .cloned()
-                    .ok_or_else(|| {
-                        anyhow!("no segment named {n:?} has voxels (segments: {})", names())
-                    })
+                if let Some(s) = present.iter().find(|s| &s.name == n) {
+                    return Ok(s.clone());
+                }
+                match map.named.iter().find(|s| &s.name == n) {
+                    Some(s) => Err(empty(s)),
+                    None => Err(anyhow!(
+                        "no segment is named {n:?} (segments with voxels: {})",
+                        names()
+                    )),
+                }
             })
             .collect();
     }

@@ -4,10 +4,12 @@ use super::args::ScenarioArgs;
 use super::output::{title_of, write};
 use crate::analysis::plan_file;
 use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene};
+use crate::analysis::slice_maps::{slice_maps, slice_point, SliceAt};
+use crate::analysis::slices::{slices_svg, SliceScene};
 use crate::report::{path_points, PlanJson};
 use crate::scenario::approx::Method;
 use crate::scenario::ScenarioFile;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use planner_core::{PlanReport, Scenario};
 use std::path::{Path, PathBuf};
 
@@ -74,6 +76,15 @@ pub struct PlotArgs {
     /// Output SVG file.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
+    /// With `[[anatomy]]`: where the axial, coronal and sagittal slices of the label maps cross:
+    /// `closest` (the best path's point nearest an obstacle), `target`, `entry`, or `X,Y,Z`
+    /// (RAS, mm); it must lie inside a label map.
+    #[arg(long, value_name = "WHERE")]
+    pub slice_at: Option<SliceAt>,
+    /// With `[[anatomy]]`: draw the two projections of a scenario without anatomy instead of
+    /// the slices.
+    #[arg(long, conflicts_with = "slice_at")]
+    pub projections: bool,
 }
 
 /// Runs `needle plot`.
@@ -97,6 +108,16 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
                 .with_context(|| format!("in plan {}", p.display()))?
         }
     };
+    let file = ScenarioFile::load(&a.scenario.source.file)?;
+    if !file.anatomy.is_empty() && !a.projections {
+        return write_slices(a, &file, &scenario, &paths, &notes);
+    }
+    if a.slice_at.is_some() {
+        bail!(
+            "--slice-at: {} has no [[anatomy]] to slice",
+            a.scenario.source.file.display()
+        );
+    }
     let scene = Scene {
         title: format!(
             "{}: optimal path of each form",
@@ -109,4 +130,28 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         executed: vec![],
     };
     write(&a.output, &scene_svg(&scenario, &scene))
+}
+
+/// `needle plot` of a scenario with anatomy: slices of its label maps.
+fn write_slices(
+    a: &PlotArgs,
+    file: &ScenarioFile,
+    scenario: &Scenario,
+    paths: &[PlotPath],
+    notes: &[String],
+) -> Result<()> {
+    let maps = slice_maps(file)?;
+    let at = a.slice_at.clone().unwrap_or(SliceAt::Closest);
+    let point = slice_point(&at, &maps, scenario, paths.iter().find(|p| p.best))?;
+    let scene = SliceScene {
+        title: format!(
+            "{}: label map slices and the optimal path of each form",
+            title_of(&a.scenario.source.file)
+        ),
+        maps: &maps,
+        paths,
+        notes,
+        at: point,
+    };
+    write(&a.output, &slices_svg(scenario, &scene))
 }
