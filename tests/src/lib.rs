@@ -121,6 +121,7 @@ pub fn request_with_obstacles(n: usize) -> Vec<u8> {
         base.weights,
         base.options,
         base.driver,
+        base.chance,
     ))
     .expect("a request encodes")
 }

@@ -122,7 +122,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     let on_device = client
         .plan(&paper, &mut |_| {})
         .expect("plan after bad input");
-    let host = planner_core::plan_scheduled(&paper);
+    let host = planner_core::device::plan_as_device(&paper, None);
     assert_eq!(
         postcard::to_stdvec(&on_device).unwrap(),
         postcard::to_stdvec(&host).unwrap()
@@ -134,7 +134,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
         .expect("the device's schedule");
     assert_eq!(
         postcard::to_stdvec(&schedule).unwrap(),
-        postcard::to_stdvec(&host.unwrap().schedule.unwrap()).unwrap(),
+        postcard::to_stdvec(&host.unwrap().planned.schedule.unwrap()).unwrap(),
         "the device's schedule is the host's"
     );
     drop(client);

@@ -5,11 +5,12 @@ mod wire_support;
 use hil_sim::InProcess;
 use needle_e2e::request_with_obstacles;
 use needle_link::{Client, ClientConfig, LinkError};
+use planner_core::device::plan_as_device;
 use planner_core::wire::{
     encode_frame, encode_payload, Fault, Header, Reply, ReplyBody, Request, RequestBody,
     ENCODE_SCRATCH, MAX_FRAME, MAX_PLAN_REQUEST, PROTOCOL_VERSION, WIRE_MAX_OBSTACLES,
 };
-use planner_core::{plan_scheduled, Field, PlanError, Scenario, MAX_OBSTACLES};
+use planner_core::{Field, PlanError, Scenario, MAX_OBSTACLES};
 use std::time::Duration;
 use wire_support::Sim;
 
@@ -64,7 +65,7 @@ fn assert_still_serves(c: &mut Client<Sim>) {
     let mut s = Scenario::paper();
     s.options.forms = planner_core::model::form::FormSet::default();
     s.options.max_control_degree = 2;
-    let local = plan_scheduled(&s);
+    let local = plan_as_device(&s, None);
     let remote = c.plan(&s, &mut |_| {}).expect("the device serves again");
     assert_eq!(
         postcard::to_stdvec(&remote).unwrap(),

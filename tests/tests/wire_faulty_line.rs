@@ -9,7 +9,8 @@ mod wire_support;
 
 use hil_sim::InProcess;
 use needle_link::{Client, ClientConfig, LinkError};
-use planner_core::{plan_scheduled, Scenario};
+use planner_core::device::plan_as_device;
+use planner_core::Scenario;
 use std::time::Duration;
 use wire_support::{noisy, Sim};
 
@@ -18,7 +19,7 @@ const REQUESTS: usize = 500;
 #[test]
 fn five_hundred_plans_over_a_noisy_line() {
     let scenario = Scenario::paper();
-    let expected = postcard::to_stdvec(&plan_scheduled(&scenario)).unwrap();
+    let expected = postcard::to_stdvec(&plan_as_device(&scenario, None)).unwrap();
     let device = InProcess::with_lines(noisy(11), noisy(12)).audited();
     let config = ClientConfig {
         timeout: Duration::from_millis(100),
@@ -115,7 +116,7 @@ fn five_hundred_plans_over_a_noisy_line() {
 fn wire_bytes_for_the_paper_scenario() {
     let scenario = Scenario::paper();
     let request = postcard::to_stdvec(&planner_core::wire::PlanRequest::new(&scenario)).unwrap();
-    let result = postcard::to_stdvec(&plan_scheduled(&scenario)).unwrap();
+    let result = postcard::to_stdvec(&plan_as_device(&scenario, None)).unwrap();
     let mut client = Client::new(Sim(InProcess::new()), ClientConfig::default());
     client.hello().unwrap();
     let before = client.stats();

@@ -62,7 +62,7 @@ fn a_quiet_session_asks_nothing_while_planning_and_numbers_from_one() {
     let on_device = client.plan(&paper, &mut |_| {}).expect("plan");
     assert_eq!(
         postcard::to_stdvec(&on_device).unwrap(),
-        postcard::to_stdvec(&planner_core::plan_scheduled(&paper)).unwrap(),
+        postcard::to_stdvec(&planner_core::device::plan_as_device(&paper, None)).unwrap(),
         "the device's plan is the host's"
     );
 
