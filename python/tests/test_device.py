@@ -39,7 +39,8 @@ def test_info_is_the_commands(device_address):
     assert npl.Device(tcp=device_address).info() == needle_json("info", "--tcp", device_address)
 
 
-@pytest.mark.parametrize("name", ["paper", "space"])
+# paper-bounded: planned on the device under its 1 % collision bound, figures checked here.
+@pytest.mark.parametrize("name", ["paper", "space", "paper-bounded"])
 def test_a_plan_on_the_device_is_the_commands_and_the_local_one(device_address, name):
     path = f"examples/{name}.toml"
     scenario = npl.Scenario.from_toml(ROOT / path)

@@ -16,10 +16,10 @@ fn paper() -> String {
     example("paper").to_str().unwrap().to_string()
 }
 
-/// `runs` paper insertions from seed 7 steered on the device at `address` end as `needle
-/// simulate --closed-loop` ends them.
-fn device_steers_the_lab_as_in_process(address: &str, runs: usize) {
-    let file = paper();
+/// `runs` insertions of `name` (an example) from seed 7 steered on the device at `address` end
+/// as `needle simulate --closed-loop` ends them.
+fn device_steers_the_lab_as_in_process(address: &str, name: &str, runs: usize) {
+    let file = example(name).to_str().unwrap().to_string();
     let sim = needle_json(&[
         "simulate",
         &file,
@@ -50,11 +50,12 @@ fn device_steers_the_lab_as_in_process(address: &str, runs: usize) {
     }
 }
 
-/// Three paper insertions steered on hil-sim over TCP.
+/// Twenty paper and five space insertions steered on hil-sim over TCP.
 #[test]
 fn hil_sim_steers_the_lab_as_in_process() {
     let device = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
-    device_steers_the_lab_as_in_process(&device.address, 3);
+    device_steers_the_lab_as_in_process(&device.address, "paper", 20);
+    device_steers_the_lab_as_in_process(&device.address, "space", 5);
 }
 
 /// One paper insertion steered on the firmware in QEMU (each emulated reading costs about a
@@ -66,7 +67,7 @@ fn the_firmware_in_qemu_steers_the_lab_as_in_process() {
     }
     let image = firmware_support::build_firmware("mps2-an386", "mps2-an386");
     let mut qemu = firmware_support::Qemu::start("mps2-an386", &image);
-    device_steers_the_lab_as_in_process(&qemu.addr, 1);
+    device_steers_the_lab_as_in_process(&qemu.addr, "paper", 1);
     assert!(qemu.running(), "the firmware stopped QEMU (a fault)");
 }
 
