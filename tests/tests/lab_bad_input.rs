@@ -6,24 +6,13 @@
 
 mod lab_support;
 
-use lab_support::{log_lines, temp_path, Lab};
-use needle_e2e::{example, needle, needle_json};
+use lab_support::{log_lines, simulated, temp_path, Lab};
+use needle_e2e::{example, needle};
 
 #[test]
 fn bad_frames_are_counted_logged_and_read_past() {
     let file = example("paper").to_str().unwrap().to_string();
-    let expected = needle_json(&[
-        "simulate",
-        &file,
-        "--closed-loop",
-        "--runs",
-        "1",
-        "--seed",
-        "3",
-        "--json",
-        "--detail",
-    ])["runs_detail"][0]
-        .clone();
+    let expected = simulated(&file, 3, 1)[0].clone();
     let log = temp_path("bad-frames.jsonl");
     let mut lab = Lab::start(&file, 3, &["--bad-frames-every", "5"]);
     let v = lab.steer(&file, &["--log", log.to_str().unwrap()]);

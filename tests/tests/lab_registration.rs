@@ -6,7 +6,7 @@
 mod lab_support;
 
 use lab_support::{log_lines, temp_path, Lab};
-use needle_e2e::{example, needle_json};
+use needle_e2e::example;
 use serde_json::Value;
 
 const NAME: &str = "ReferenceToScenario";
@@ -17,18 +17,7 @@ fn paper() -> String {
 
 /// Seed 3's simulated run.
 fn simulated(file: &str) -> Value {
-    let v = needle_json(&[
-        "simulate",
-        file,
-        "--closed-loop",
-        "--runs",
-        "1",
-        "--seed",
-        "3",
-        "--json",
-        "--detail",
-    ]);
-    v["runs_detail"][0].clone()
+    lab_support::simulated(file, 3, 1)[0].clone()
 }
 
 /// A tracker turned 90 degrees about z and moved, as in lab_steer's file test.

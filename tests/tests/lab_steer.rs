@@ -4,29 +4,11 @@
 
 mod lab_support;
 
-use lab_support::{log_lines, temp_path, Lab};
-use needle_e2e::{example, needle_json};
-use serde_json::Value;
+use lab_support::{log_lines, simulated, temp_path, Lab};
+use needle_e2e::example;
 
 fn path(name: &str) -> String {
     example(name).to_str().unwrap().to_string()
-}
-
-/// `needle simulate FILE --closed-loop --runs N --seed FIRST --json --detail`: each run's record.
-fn simulated(file: &str, first: u64, runs: usize) -> Vec<Value> {
-    let (first, runs) = (first.to_string(), runs.to_string());
-    let v = needle_json(&[
-        "simulate",
-        file,
-        "--closed-loop",
-        "--runs",
-        &runs,
-        "--seed",
-        &first,
-        "--json",
-        "--detail",
-    ]);
-    v["runs_detail"].as_array().expect("runs_detail").clone()
 }
 
 /// Steers `runs` insertions of `file` from seed `first` on one lab and compares each with the

@@ -8,24 +8,13 @@
 
 mod lab_support;
 
-use lab_support::{log_lines, temp_path, Lab};
-use needle_e2e::{example, needle_json};
+use lab_support::{log_lines, simulated, temp_path, Lab};
+use needle_e2e::example;
 
 #[test]
 fn a_1khz_stream_with_bursts_steers_as_simulated_without_backlog() {
     let file = example("paper").to_str().unwrap().to_string();
-    let expected = needle_json(&[
-        "simulate",
-        &file,
-        "--closed-loop",
-        "--runs",
-        "1",
-        "--seed",
-        "3",
-        "--json",
-        "--detail",
-    ])["runs_detail"][0]
-        .clone();
+    let expected = simulated(&file, 3, 1)[0].clone();
     let log = temp_path("stream.jsonl");
     // The robot's report 3 ms after its pose: the stream's copies of it arrive first.
     let stream = [

@@ -104,3 +104,21 @@ pub fn log_lines(path: &std::path::Path) -> Vec<Value> {
 pub fn temp_path(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("needle-lab-{}-{name}", std::process::id()))
 }
+
+/// `needle simulate FILE --closed-loop --runs N --seed FIRST --json --detail`: each run's record,
+/// what the lab's insertions of the same seeds must end as.
+pub fn simulated(file: &str, first: u64, runs: usize) -> Vec<Value> {
+    let (first, runs) = (first.to_string(), runs.to_string());
+    let v = needle_e2e::needle_json(&[
+        "simulate",
+        file,
+        "--closed-loop",
+        "--runs",
+        &runs,
+        "--seed",
+        &first,
+        "--json",
+        "--detail",
+    ]);
+    v["runs_detail"].as_array().expect("runs_detail").clone()
+}
