@@ -346,3 +346,31 @@ fn in_frame(t: &Transform, m: &Measurement) -> Measurement {
         ..*m
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-DOF roll is a unit vector across the heading, and a tip frame of it is rigid.
+    #[test]
+    fn the_roll_of_a_5_dof_pose_is_across_the_heading() {
+        let s = 0.5f32.sqrt();
+        for h in [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [s, s, 0.0],
+            [0.6, 0.0, -0.8],
+            [0.48, 0.6, 0.64],
+        ] {
+            let b = across(h);
+            let dot: f32 = (0..3).map(|i| b[i] * h[i]).sum();
+            let norm: f32 = b.iter().map(|x| x * x).sum();
+            assert!(
+                dot.abs() < 1e-6 && (norm - 1.0).abs() < 1e-6,
+                "{h:?}: {b:?}"
+            );
+            assert!(tip_transform([1.0, 2.0, 3.0], h, b).is_ok(), "{h:?}");
+        }
+    }
+}

@@ -306,6 +306,37 @@ mod tests {
             .all(|(e, f)| *e == "rejected" && f["error"] == "BadCrc"));
     }
 
+    /// A target is used once: a reading after no new image has none; a copy of the used one
+    /// (same timestamp) is no new image, a new timestamp is; an unstamped one is always new.
+    #[test]
+    fn a_target_is_used_once() {
+        let target = |x: f32, seconds: u32| -> Arrival {
+            let mut f = tip_frame(x);
+            f.info = FrameInfo::new("TargetToReference").unwrap();
+            f.info.timestamp = Timestamp::from_secs_nanos(seconds, 0);
+            (Ok(f), Instant::now())
+        };
+        let mut s = TrackerState::default();
+        assert_eq!(s.take_target(), None);
+        s.on_frame(&names(), target(1.0, 7));
+        s.on_frame(&names(), target(2.0, 8));
+        assert_eq!(s.take_target(), Some([0.0, 0.0, 2.0]), "the newest");
+        assert_eq!(s.take_target(), None, "no new image");
+        s.on_frame(&names(), target(2.0, 8));
+        assert_eq!(s.take_target(), None, "a copy of the used one");
+        s.on_frame(&names(), target(3.0, 9));
+        assert_eq!(s.take_target(), Some([0.0, 0.0, 3.0]));
+        for _ in 0..2 {
+            s.on_frame(&names(), target(4.0, 0));
+            assert_eq!(
+                s.take_target(),
+                Some([0.0, 0.0, 4.0]),
+                "unstamped: always new"
+            );
+        }
+        assert_eq!(s.counts.ignored_frames, 0);
+    }
+
     #[test]
     fn names_not_listened_to_are_ignored_and_counted() {
         let mut s = TrackerState::default();
