@@ -106,6 +106,30 @@ struct LabArgs {
     /// 20-byte name one letter off the tip's).
     #[arg(long, requires = "lab")]
     bad_frames_every: Option<u32>,
+    /// With --lab: the world the insertions are made in, as `needle simulate --world` names it
+    /// (`default`, `clinical`; docs/execution.md, "The clinical world"); without it, the
+    /// scenario's `[execution]` world.
+    #[arg(long, requires = "lab", value_name = "NAME")]
+    world: Option<String>,
+    /// With --lab: change one perturbation or world effect, KEY=VALUE (repeatable; over
+    /// --world), as `needle simulate --perturb`.
+    #[arg(long = "perturb", requires = "lab", value_name = "KEY=VALUE")]
+    perturb: Vec<String>,
+    /// With --lab: a tracker fault, KEY=VALUE (repeatable; over --world), as `needle simulate
+    /// --fault`: dropout_rate, dropout_mm, outlier_rate, outlier_mm (repeat_rate and stale_rate
+    /// are refused: `needle steer` uses a sample once).
+    #[arg(long = "fault", requires = "lab", value_name = "KEY=VALUE")]
+    fault: Vec<String>,
+}
+
+impl LabArgs {
+    /// The flags of `needle simulate` that make the lab's world.
+    fn world_flags(&self) -> Vec<String> {
+        let world = self.world.iter().map(|w| format!("--world={w}"));
+        let perturb = self.perturb.iter().map(|kv| format!("--perturb={kv}"));
+        let fault = self.fault.iter().map(|kv| format!("--fault={kv}"));
+        world.chain(perturb).chain(fault).collect()
+    }
 }
 
 /// Serves the simulated lab until killed.
@@ -121,7 +145,8 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             "--stream-rate must be within 1 and 100000 Hz"
         );
     }
-    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &[])?;
+    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &l.world_flags())?;
+    hil_sim::lab::check_faults(&setup.faults)?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
     let robot = TcpListener::bind(("127.0.0.1", l.robot_port))
@@ -172,7 +197,12 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
 fn main() -> Result<()> {
     let a = Args::parse();
     if let Some(file) = &a.lab.lab {
-        return serve_lab(file, &a);
+        if let Err(e) = serve_lab(file, &a) {
+            // One line, as `needle simulate` says it (`--perturb: layers = 9 is outside ...`).
+            eprintln!("hil-sim: {e:#}");
+            std::process::exit(1);
+        }
+        return Ok(());
     }
     for (name, rate) in [
         ("--flip-rate", a.flip_rate),

@@ -218,11 +218,15 @@ def simulate(
     form: Optional[str] = None,
     threads: Optional[int] = None,
     compare_open_loop: bool = False,
+    world: Optional[str] = None,
 ) -> Simulation:
     """Plans ``scenario`` and executes the plan in ``runs`` perturbed worlds, as ``needle
     simulate`` does: ``perturb``, ``faults`` and ``steer`` are its ``--perturb``, ``--fault`` and
     ``--steer`` as a dict (``{"curvature_sd": 0.05}``), ``threads`` its ``--threads`` (default:
-    every core). The result is the same on any thread count."""
+    every core), ``world`` its ``--world`` (``"default"`` or ``"clinical"``; ``None``: the
+    scenario's ``[execution]`` world; ``perturb`` and ``faults`` change it). An unknown world
+    raises ``ScenarioError`` with the command's message. The result is the same on any thread
+    count."""
     text, per_run = _native.simulate(
         scenario,
         runs,
@@ -234,6 +238,7 @@ def simulate(
         form,
         threads,
         compare_open_loop,
+        None if world is None else str(world),
     )
     return Simulation(text, per_run)
 

@@ -58,6 +58,7 @@ def simulate(
     form: Optional[str] = None,
     threads: Optional[int] = None,
     compare_open_loop: bool = False,
+    world: Optional[str] = None,
 ) -> Tuple[str, Dict[str, Any]]: ...
 def cover(
     image: str,

@@ -70,7 +70,7 @@ fn assignments(what: &str, d: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<String
 /// Runs `needle simulate --json` on `scenario`; returns the JSON and a dict of per-run arrays.
 #[pyfunction]
 #[pyo3(signature = (scenario, runs=100, seed=1, closed_loop=false, perturb=None, faults=None,
-    steer=None, form=None, threads=None, compare_open_loop=false))]
+    steer=None, form=None, threads=None, compare_open_loop=false, world=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate<'py>(
     py: Python<'py>,
@@ -84,13 +84,14 @@ pub fn simulate<'py>(
     form: Option<String>,
     threads: Option<i64>,
     compare_open_loop: bool,
+    world: Option<String>,
 ) -> PyResult<(String, Bound<'py, PyDict>)> {
     let request = Request {
         runs: usize::try_from(runs).unwrap_or(0),
         seed,
         form,
         perturb: assignments("perturb", perturb)?,
-        world: None,
+        world,
         faults: assignments("faults", faults)?,
         steer: assignments("steer", steer)?,
         closed_loop,

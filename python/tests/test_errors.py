@@ -112,6 +112,12 @@ def paper():
         ({"perturb": {"curvature_spread": [1, 2]}}, ["--perturb", "curvature_spread=[1, 2]"]),
         ({"runs": 0}, ["--runs", "0"]),
         ({"form": "LL"}, ["--form", "LL"]),
+        ({"world": "mars"}, ["--world", "mars"]),
+        ({"world": " "}, ["--world", " "]),
+        (
+            {"world": "clinical", "perturb": {"layers": 9}},
+            ["--world", "clinical", "--perturb", "layers=9"],
+        ),
         (
             {"closed_loop": True, "faults": {"dropout_rate": 2}},
             ["--closed-loop", "--fault", "dropout_rate=2"],

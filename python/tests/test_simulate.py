@@ -69,3 +69,48 @@ def test_a_thousand_runs_come_back_as_arrays(paper):
     assert len(sim.paths) == 1000 and sim.paths[0].shape[1] == 3
     assert int(sim.collided.sum()) == sim.summary["collisions"]
     assert sim.target_errors.max() == pytest.approx(sim.summary["target_error"]["max"], abs=0)
+
+
+@pytest.mark.parametrize("world", ["clinical", "default"])
+def test_a_named_world_equals_the_command(paper, world):
+    sim = npl.simulate(paper, runs=6, seed=2, closed_loop=True, world=world, threads=1)
+    cli = needle_json(
+        "simulate", "examples/paper.toml", "--runs", "6", "--seed", "2", "--closed-loop",
+        "--world", world,
+    )
+    assert sim.to_dict() == cli
+    assert sim.to_dict()["world"]["tracker_dof"] == (5 if world == "clinical" else 6)
+
+
+def test_the_clinical_world_changed_by_perturb_and_faults_equals_the_command(paper):
+    sim = npl.simulate(
+        paper,
+        runs=4,
+        seed=9,
+        closed_loop=True,
+        world="clinical",
+        perturb={"layers": 0},
+        faults={"dropout_rate": 0},
+        compare_open_loop=True,
+    )
+    cli = needle_json(
+        "simulate", "examples/paper.toml", "--runs", "4", "--seed", "9", "--closed-loop",
+        "--world", "clinical", "--perturb", "layers=0", "--fault", "dropout_rate=0",
+        "--compare-open-loop",
+    )
+    assert sim.to_dict() == cli
+
+
+def test_none_is_the_scenarios_world(tmp_path):
+    text = (ROOT / "examples" / "paper.toml").read_text()
+    path = tmp_path / "clinical.toml"
+    path.write_text(text + '\n[execution]\nworld = "clinical"\n')
+    scenario = npl.Scenario.from_toml(str(path))
+    sim = npl.simulate(scenario, runs=3, seed=1)
+    cli = needle_json("simulate", str(path), "--runs", "3", "--seed", "1")
+    assert sim.to_dict() == cli
+    assert sim.to_dict()["world"]["layers"] == 3
+    replaced = npl.simulate(scenario, runs=3, seed=1, world="default")
+    assert replaced.to_dict() == needle_json(
+        "simulate", str(path), "--runs", "3", "--seed", "1", "--world", "default"
+    )

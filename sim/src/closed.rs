@@ -148,8 +148,9 @@ impl<E: std::fmt::Display> std::fmt::Display for ClosedLoopError<E> {
 
 impl<E: std::fmt::Debug + std::fmt::Display> std::error::Error for ClosedLoopError<E> {}
 
-/// The tracker between the world and the controller: numbers readings and injects faults.
-struct Tracker {
+/// The tracker between the world and the controller: numbers readings and injects faults (the
+/// closed loop's, and the simulated lab's, so that both draw the same faults for a seed).
+pub struct Tracker {
     faults: TrackerFaults,
     g: SplitMix64,
     seq: u32,
@@ -159,7 +160,8 @@ struct Tracker {
 }
 
 impl Tracker {
-    fn new(faults: &TrackerFaults, seed: u64) -> Tracker {
+    /// The tracker of the run of `seed`, injecting `faults` (from their own stream).
+    pub fn new(faults: &TrackerFaults, seed: u64) -> Tracker {
         Tracker {
             faults: *faults,
             g: seeded(seed ^ FAULT_STREAM),
@@ -172,7 +174,7 @@ impl Tracker {
 
     /// The readings one world measurement turns into: the reading itself, and maybe a repeat or
     /// an old one after it (marked `true`: the tracker's fault, whose answers are not acted on).
-    fn readings(&mut self, m: &Measurement) -> Vec<(TipMeasurement, bool)> {
+    pub fn readings(&mut self, m: &Measurement) -> Vec<(TipMeasurement, bool)> {
         self.seq += 1;
         let f = self.faults;
         let mut pose = Some(Pose {

@@ -61,7 +61,7 @@ mod world;
 
 pub use closed::{
     closed_loop, closed_loop_in, closed_loop_observed, in_process, ClosedLoopError, ClosedRun,
-    Conditions, Controller, Seen, TrackerFaults,
+    Conditions, Controller, Seen, Tracker, TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
 pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WORLD_KEYS};

@@ -15,6 +15,12 @@
 //! moves until the host answers, so an insertion equals `needle simulate --closed-loop` for that
 //! seed bit for bit. `rate_hz` paces the pieces (at most that many a second), `latency_ms`
 //! delays each pose; neither changes a figure.
+//!
+//! The world is the one `needle simulate` makes of the scenario and its flags (the setup's
+//! perturbation, world effects and tracker faults): a 5-DOF sensor's pose goes out with a roll
+//! of no meaning ([`tracker`]), a reading without a new image without the target, a dropout as
+//! a tip flagged invalid, an outlier at its offset position. The effects' time (latency,
+//! imaging) is the world's clock, not the wall's, so lock-step reproduces them too.
 
 pub mod tracker;
 
@@ -23,7 +29,7 @@ use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_D
 use needle_cli::lab::wire::{read_frames, send_text};
 use needle_cli::simulate::setup::Setup;
 use needle_igtl::Message;
-use needle_sim::{finish, World};
+use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
 use planner_core::execute::schedule::Step;
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
@@ -182,6 +188,37 @@ impl Robot {
     }
 }
 
+/// What the tracker reports of the world's measurement `m` once `faults` had their say: `m`
+/// (at an outlier's position), and whether the pose dropped out. The fault stream draws as in
+/// `needle simulate`'s closed loop, so a seed drops and displaces the same readings.
+fn tracked(faults: &mut Tracker, m: &Measurement) -> (Measurement, bool) {
+    let pose = faults.readings(m).first().and_then(|(r, _)| r.pose);
+    match pose {
+        Some(p) => (
+            Measurement {
+                position: p.position,
+                ..*m
+            },
+            false,
+        ),
+        None => (*m, true),
+    }
+}
+
+/// Refuses the tracker faults the lab cannot serve as `needle simulate` injects them: a reading
+/// sent twice, and an old one sent after a new one, reach the simulated controller (which
+/// counts them) but never `needle steer`'s (which uses a sample once, by its timestamp).
+pub fn check_faults(f: &TrackerFaults) -> Result<()> {
+    for (key, rate) in [("repeat_rate", f.repeat_rate), ("stale_rate", f.stale_rate)] {
+        anyhow::ensure!(
+            rate == 0.0,
+            "--fault {key} = {rate}: the lab does not serve it (`needle steer` uses a tracker \
+             sample once, so its controller would not see what the simulated one does)"
+        );
+    }
+    Ok(())
+}
+
 /// The simulated lab: one planned insertion, served to robot clients one after the other.
 pub struct Lab {
     /// The insertion (as `needle simulate --closed-loop` sets it up).
@@ -212,8 +249,10 @@ impl Lab {
     pub fn insert(&self, conn: TcpStream, seed: u64) -> Result<LabRun> {
         let s = &self.setup;
         let schedule = &s.prepared.schedule;
-        let mut world = World::new(&s.scenario, &schedule.posture, &s.perturbation, seed)
+        let (p, effects) = (&s.perturbation, &s.effects);
+        let mut world = World::with_effects(&s.scenario, schedule, p, effects, seed)
             .map_err(|e| anyhow!("{e}"))?;
+        let mut faults = Tracker::new(&s.faults, seed);
         let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
         let mut steps = match robot.commands.recv() {
             Ok(RobotCommand::Steps { count }) => robot.steps(count),
@@ -240,8 +279,13 @@ impl Lab {
                         .tracker_silent_after
                         .is_none_or(|n| robot.pieces <= n)
                     {
-                        let flag = self.flag(robot.pieces);
-                        if let Err(e) = self.tracker.publish(m, flag, robot.pieces) {
+                        let (m, dropped) = tracked(&mut faults, m);
+                        let flag = if dropped {
+                            Some(Flag::Metadata)
+                        } else {
+                            self.flag(robot.pieces)
+                        };
+                        if let Err(e) = self.tracker.publish(&m, flag, robot.pieces) {
                             failure = Some(e);
                             return ControlFlow::Break(());
                         }

@@ -7,8 +7,13 @@
 //! With a stream rate the newest pose also goes out again at that rate, free-running, as PLUS
 //! streams a tool, optionally in bursts written back to back. The world moves only at piece
 //! boundaries, so between two pieces the stream repeats one sample, with its timestamp (the
-//! piece's measurement time): a host can tell a new sample from a copy. A group of frames is written whole,
-//! under the clients' lock, so the stream and the pieces never interleave their bytes.
+//! piece's measurement time): a host can tell a new sample from a copy. A group of frames is
+//! written whole, under the clients' lock, so the stream and the pieces never interleave their
+//! bytes.
+//!
+//! The world's effects show as a real tracker shows them: a 5-DOF sensor's pose goes out with a
+//! roll by a fixed rule (a 5-DOF tool's roll says nothing), a piece without a new image of the
+//! target goes out without the target, a dropout as a tip flagged invalid.
 
 use super::Flag;
 use anyhow::{anyhow, bail, Result};
@@ -206,7 +211,14 @@ impl TrackerClients {
             Some(reg) => in_frame(&inverse(reg).map_err(|e| anyhow!("{e:?}"))?, &sample.m),
             None => sample.m,
         };
-        let tip = tip_transform(m.position, m.heading, m.bevel)
+        // A 5-DOF coil measures no roll: its pose carries one of no meaning, as a 5-DOF tool's
+        // does (`needle steer --tracker-dof 5` leaves it out).
+        let bevel = if m.roll_seen {
+            m.bevel
+        } else {
+            across(m.heading)
+        };
+        let tip = tip_transform(m.position, m.heading, bevel)
             .map_err(|e| anyhow!("the simulated tip is no pose: {e:?}"))?;
         let target = Transform::new(Transform::IDENTITY.rotation(), m.target)
             .map_err(|e| anyhow!("the simulated target is no position: {e:?}"))?;
@@ -226,10 +238,13 @@ impl TrackerClients {
         let status = |code| Message::Status(Status::new(code));
         let by_status = sample.flag == Some(Flag::Status);
         let mut out = self.registration_frame(sample.piece)?;
-        out.extend(frame(
-            &stamped(TARGET_DEVICE)?,
-            &Message::Transform(target),
-        )?);
+        // No new image of the target since the last piece: no target (imaging at its own rate).
+        if m.target_seen {
+            out.extend(frame(
+                &stamped(TARGET_DEVICE)?,
+                &Message::Transform(target),
+            )?);
+        }
         if by_status {
             out.extend(frame(
                 &stamped(TIP_DEVICE)?,
@@ -242,6 +257,25 @@ impl TrackerClients {
         }
         Ok(out)
     }
+}
+
+/// A unit vector across the unit `heading`, by a fixed rule (the axis least along it, its part
+/// across): the roll a 5-DOF sensor's pose is given, which says nothing of the bevel.
+fn across(heading: [f32; 3]) -> [f32; 3] {
+    let mut axis = [0.0f32; 3];
+    let least = (0..3)
+        .min_by(|&i, &j| heading[i].abs().total_cmp(&heading[j].abs()))
+        .unwrap_or(0);
+    axis[least] = 1.0;
+    let along = heading[least];
+    let v: [f32; 3] = [0, 1, 2].map(|i| axis[i] - along * heading[i]);
+    let n = v
+        .iter()
+        .map(|x| x * x)
+        .sum::<f32>()
+        .sqrt()
+        .max(f32::MIN_POSITIVE);
+    v.map(|x| x / n)
 }
 
 fn info(name: &str) -> Result<FrameInfo> {
@@ -310,5 +344,33 @@ fn in_frame(t: &Transform, m: &Measurement) -> Measurement {
         bevel: pose.bevel.unwrap_or(m.bevel),
         target: registered_point(t, m.target),
         ..*m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-DOF roll is a unit vector across the heading, and a tip frame of it is rigid.
+    #[test]
+    fn the_roll_of_a_5_dof_pose_is_across_the_heading() {
+        let s = 0.5f32.sqrt();
+        for h in [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [s, s, 0.0],
+            [0.6, 0.0, -0.8],
+            [0.48, 0.6, 0.64],
+        ] {
+            let b = across(h);
+            let dot: f32 = (0..3).map(|i| b[i] * h[i]).sum();
+            let norm: f32 = b.iter().map(|x| x * x).sum();
+            assert!(
+                dot.abs() < 1e-6 && (norm - 1.0).abs() < 1e-6,
+                "{h:?}: {b:?}"
+            );
+            assert!(tip_transform([1.0, 2.0, 3.0], h, b).is_ok(), "{h:?}");
+        }
     }
 }

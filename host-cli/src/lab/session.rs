@@ -53,6 +53,9 @@ pub struct SessionConfig {
     pub registration_name: Option<String>,
     /// How long to wait for the stream's registration before giving up.
     pub registration_timeout: Duration,
+    /// The tip sensor measures the roll (6-DOF); a 5-DOF sensor's roll is left out of every
+    /// reading (the controller infers it from how the path bends).
+    pub roll_measured: bool,
 }
 
 /// Set by a Ctrl-C handler: the session stops the robot and ends.
@@ -323,11 +326,18 @@ impl<'a> Session<'a> {
         let (depth_mm, base_deg) = self.pending?;
         let (tip, target, superseded) = {
             let mut s = self.state();
-            (s.take_tip()?, s.target, s.counts.superseded_poses)
+            let tip = s.take_tip()?;
+            // An image of the target is used once: a reading after none new carries none.
+            (tip, s.take_target(), s.counts.superseded_poses)
         };
         let superseded_poses = superseded.saturating_sub(self.superseded_before);
         self.superseded_before = superseded;
-        let (pose, at) = (tip.pose.map(|p| self.registered(p)), tip.at);
+        let roll = self.config.roll_measured;
+        let sensed = tip.pose.map(|p| Pose {
+            bevel: p.bevel.filter(|_| roll),
+            ..p
+        });
+        let (pose, at) = (sensed.map(|p| self.registered(p)), tip.at);
         self.pending = None;
         self.seq += 1;
         let m = TipMeasurement {

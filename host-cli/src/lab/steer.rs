@@ -74,6 +74,12 @@ pub struct SteerArgs {
     /// program's).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Degrees of freedom of the tip sensor: 6 (the tip TRANSFORM's roll is the bevel's) or 5
+    /// (a 5-DOF coil, as the ones that fit a needle: the TRANSFORM's roll means nothing and is
+    /// left out; the controller infers the roll from how the path bends).
+    #[arg(long, value_name = "N", default_value_t = 6,
+          value_parser = clap::value_parser!(u8).range(5..=6))]
+    pub tracker_dof: u8,
     /// Tell the controller one thing, KEY=VALUE (as `needle simulate --steer`).
     #[arg(long = "steer", value_name = "KEY=VALUE")]
     pub steer: Vec<String>,
@@ -311,6 +317,7 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         registration,
         registration_name: a.registration_name.clone(),
         registration_timeout: Duration::from_millis(a.registration_timeout_ms),
+        roll_measured: a.tracker_dof == 6,
     };
     let events: (Receiver<Event>, _) = (rx, tracker_state);
     let outcome =

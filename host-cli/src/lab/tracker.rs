@@ -11,6 +11,10 @@
 //! last pose): it is not used twice (`repeated_poses`), and it does not count as the tracker
 //! being heard. A timestamp of zero (unused) is never taken for a repeat.
 //!
+//! The target is used once too: a reading takes the newest target that arrived since the
+//! previous one, or none (imaging that sees the target less often than the tracker the tip),
+//! and a copy of a used target (by its timestamp, as for the tip) is no new one.
+//!
 //! A pose flagged invalid (v3 metadata `TransformStatus` other than `OK`, or after a `STATUS` of
 //! the tip that is not OK, until an OK one) fills the slot as a pose-less arrival: the reading
 //! goes to the controller as a dropout.
@@ -78,8 +82,10 @@ pub struct TipArrival {
 pub struct TrackerState {
     /// The newest tip pose not yet used.
     pub tip: Option<TipArrival>,
-    /// The newest target, in the tracker's frame.
-    pub target: Option<[f32; 3]>,
+    /// The newest target not yet used, in the tracker's frame, and its header timestamp.
+    pub target: Option<([f32; 3], Timestamp)>,
+    /// The timestamp of the target the previous reading used.
+    used_target_stamp: Option<Timestamp>,
     /// The first registration `TRANSFORM` received: the one used for the whole session.
     pub registration: Option<Transform>,
     /// When the last tip `TRANSFORM` that was not a repeat arrived, used or not.
@@ -100,6 +106,7 @@ impl Default for TrackerState {
         TrackerState {
             tip: None,
             target: None,
+            used_target_stamp: None,
             registration: None,
             last_tip_at: None,
             used_stamp: None,
@@ -156,7 +163,14 @@ impl TrackerState {
                 }
                 self.last_tip_at = Some(at);
             }
-            Message::Transform(t) if name == names.target => self.target = Some(t.translation()),
+            Message::Transform(t) if name == names.target => {
+                let stamp = frame.info.timestamp;
+                // A target sent again after a reading used it (a stream repeating its newest
+                // sample) is no new image.
+                if stamp == Timestamp::default() || self.used_target_stamp != Some(stamp) {
+                    self.target = Some((t.translation(), stamp));
+                }
+            }
             Message::Transform(t) if names.registration.as_deref() == Some(name) => {
                 self.on_registration(t);
             }
@@ -172,6 +186,14 @@ impl TrackerState {
         let tip = self.tip.take()?;
         self.used_stamp = Some(tip.stamp);
         Some(tip)
+    }
+
+    /// Takes the newest target for a reading (`None`: no new one since the last reading); a
+    /// later copy of it is then a repeat.
+    pub fn take_target(&mut self) -> Option<[f32; 3]> {
+        let (target, stamp) = self.target.take()?;
+        self.used_target_stamp = Some(stamp);
+        Some(target)
     }
 
     /// The first registration is kept; a later one that differs from it is refused (counted and
@@ -282,6 +304,37 @@ mod tests {
             .notes
             .iter()
             .all(|(e, f)| *e == "rejected" && f["error"] == "BadCrc"));
+    }
+
+    /// A target is used once: a reading after no new image has none; a copy of the used one
+    /// (same timestamp) is no new image, a new timestamp is; an unstamped one is always new.
+    #[test]
+    fn a_target_is_used_once() {
+        let target = |x: f32, seconds: u32| -> Arrival {
+            let mut f = tip_frame(x);
+            f.info = FrameInfo::new("TargetToReference").unwrap();
+            f.info.timestamp = Timestamp::from_secs_nanos(seconds, 0);
+            (Ok(f), Instant::now())
+        };
+        let mut s = TrackerState::default();
+        assert_eq!(s.take_target(), None);
+        s.on_frame(&names(), target(1.0, 7));
+        s.on_frame(&names(), target(2.0, 8));
+        assert_eq!(s.take_target(), Some([0.0, 0.0, 2.0]), "the newest");
+        assert_eq!(s.take_target(), None, "no new image");
+        s.on_frame(&names(), target(2.0, 8));
+        assert_eq!(s.take_target(), None, "a copy of the used one");
+        s.on_frame(&names(), target(3.0, 9));
+        assert_eq!(s.take_target(), Some([0.0, 0.0, 3.0]));
+        for _ in 0..2 {
+            s.on_frame(&names(), target(4.0, 0));
+            assert_eq!(
+                s.take_target(),
+                Some([0.0, 0.0, 4.0]),
+                "unstamped: always new"
+            );
+        }
+        assert_eq!(s.counts.ignored_frames, 0);
     }
 
     #[test]
