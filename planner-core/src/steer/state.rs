@@ -320,6 +320,7 @@ impl Steering {
         // A spinning shaft has no bevel direction to measure; only its heading counts.
         let bevel = pose.bevel.filter(|b| finite3(b) && !self.spinning).map(v3);
         let usable = finite3(&pose.position) && finite3(&pose.heading);
+        self.estimate.sensor_measures_roll(pose.bevel.is_some());
         if usable && self.estimate.fuse_position(v3(pose.position)) {
             let _ = self.estimate.fuse_orientation(v3(pose.heading), bevel);
             self.last_fix_depth = self.depth;
