@@ -7,30 +7,15 @@
 mod lab_support;
 
 use lab_support::{temp_path, wire_support, Lab};
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, needle};
 use serde_json::Value;
 
 fn path(name: &str) -> String {
     example(name).to_str().unwrap().to_string()
 }
 
-/// `needle simulate FILE --closed-loop --runs N --seed FIRST --json --detail FLAGS`: each run.
 fn simulated(file: &str, first: u64, runs: usize, flags: &[&str]) -> Vec<Value> {
-    let (first, runs) = (first.to_string(), runs.to_string());
-    let mut args = vec![
-        "simulate",
-        file,
-        "--closed-loop",
-        "--runs",
-        &runs,
-        "--seed",
-        &first,
-        "--json",
-        "--detail",
-    ];
-    args.extend_from_slice(flags);
-    let v = needle_json(&args);
-    v["runs_detail"].as_array().expect("runs_detail").clone()
+    lab_support::simulated_with(file, first, runs, flags)
 }
 
 /// Steers the insertions of `file` from seed `first` on a lab started with `lab_flags`, each

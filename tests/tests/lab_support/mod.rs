@@ -108,8 +108,13 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
 /// `needle simulate FILE --closed-loop --runs N --seed FIRST --json --detail`: each run's record,
 /// what the lab's insertions of the same seeds must end as.
 pub fn simulated(file: &str, first: u64, runs: usize) -> Vec<Value> {
+    simulated_with(file, first, runs, &[])
+}
+
+/// [`simulated`] with more of `needle simulate`'s flags (a world, perturbations, faults).
+pub fn simulated_with(file: &str, first: u64, runs: usize, flags: &[&str]) -> Vec<Value> {
     let (first, runs) = (first.to_string(), runs.to_string());
-    let v = needle_e2e::needle_json(&[
+    let mut args = vec![
         "simulate",
         file,
         "--closed-loop",
@@ -119,6 +124,8 @@ pub fn simulated(file: &str, first: u64, runs: usize) -> Vec<Value> {
         &first,
         "--json",
         "--detail",
-    ]);
+    ];
+    args.extend_from_slice(flags);
+    let v = needle_e2e::needle_json(&args);
     v["runs_detail"].as_array().expect("runs_detail").clone()
 }
