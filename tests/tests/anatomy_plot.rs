@@ -273,3 +273,82 @@ fn bad_slice_points_are_clear_errors() {
     assert!(panels(&std::fs::read_to_string(&out).unwrap()).is_empty());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The points of a polyline element, as pixels.
+fn polyline_points(e: &str) -> Vec<[f64; 2]> {
+    attr(e, "points")
+        .split_whitespace()
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            [x.parse().unwrap(), y.parse().unwrap()]
+        })
+        .collect()
+}
+
+/// `needle plan --plot` and `needle simulate --plot` of a scenario with anatomy draw the slices
+/// too: the planned path in each panel, and for the simulation every run's path, which starts
+/// at the entry (0, 15, 0) and ends within a few millimetres of the target (0, 15, 90) in world
+/// coordinates read back from the panels.
+#[test]
+fn plan_and_simulate_plots_slice_the_anatomy() {
+    let dir = scratch("plots");
+    let scenario = write_case(&dir);
+    let s = scenario.to_str().unwrap();
+    let plan_svg = dir.join("plan.svg");
+    let run = needle()
+        .args(["plan", s, "--plot", plan_svg.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&plan_svg).unwrap();
+    let planned = panels(&text);
+    assert_eq!(planned.len(), 3);
+    assert!(planned
+        .iter()
+        .all(|p| !p.elements("polyline class=\"path best\"").is_empty()));
+    let sim_svg = dir.join("simulate.svg");
+    let run = needle()
+        .args(["simulate", s, "--closed-loop", "--runs", "6"])
+        .args(["--plot", sim_svg.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&sim_svg).unwrap();
+    let panels = panels(&text);
+    assert_eq!(panels.len(), 3);
+    for p in &panels {
+        let runs = p.elements("polyline class=\"executed\"");
+        assert_eq!(runs.len(), 6, "every run in the {:?} panel", p.axes);
+        let world = |axis: usize| [0.0, 15.0, 90.0][axis];
+        for r in runs {
+            let pts = polyline_points(r);
+            let first = pts[0];
+            let last = pts[pts.len() - 1];
+            let start = p.world(first[0], first[1]);
+            let end = p.world(last[0], last[1]);
+            for (k, &axis) in p.axes.iter().enumerate() {
+                let entry = [0.0, 15.0, 0.0][axis];
+                assert!(
+                    (start[k] - entry).abs() < 2.0,
+                    "start {start:?} in {:?}",
+                    p.axes
+                );
+                assert!(
+                    (end[k] - world(axis)).abs() < 2.0,
+                    "end {end:?} in {:?}",
+                    p.axes
+                );
+            }
+        }
+    }
+    assert!(text.contains("closed loop, reached the target"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -59,7 +59,7 @@ pub struct Strands {
 }
 
 impl Strands {
-    fn style(&self) -> String {
+    pub(crate) fn style(&self) -> String {
         if self.dashed {
             format!(
                 "stroke:{};stroke-opacity:0.7;stroke-width:1.2;stroke-dasharray:4 2",
@@ -73,7 +73,7 @@ impl Strands {
         }
     }
 
-    fn swatch_style(&self) -> String {
+    pub(crate) fn swatch_style(&self) -> String {
         let dash = if self.dashed {
             ";stroke-dasharray:4 2"
         } else {

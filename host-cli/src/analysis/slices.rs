@@ -1,11 +1,12 @@
 //! `needle plot` of a scenario with `[[anatomy]]`: three orthogonal slices of its label maps
 //! (axial, coronal, sagittal) through one point, with the chosen segments filled, the other
-//! labels faint, the covering spheres cut by each plane, and the planned paths projected onto it.
+//! labels faint, the covering spheres cut by each plane, and the planned (and simulated) paths
+//! projected onto it.
 //!
 //! Every panel carries `data-px="A B S"`: a world point (h, v) in mm is drawn at pixel
 //! (A + S h, B - S v), so tests and scripts can read coordinates back.
 
-use super::plot::{axes, plan_paths, PlotPath, View};
+use super::plot::{axes, plan_paths, PlotPath, Strands, View};
 use super::slice_maps::{label_at, map_box, SliceMap};
 use super::svg::{esc, Svg};
 use planner_core::Scenario;
@@ -21,6 +22,8 @@ pub struct SliceScene<'a> {
     pub paths: &'a [PlotPath],
     /// Extra legend lines.
     pub notes: &'a [String],
+    /// Simulated paths, kind by kind (projected, thin: together tubes around the plan).
+    pub executed: &'a [Strands],
     /// Where the three planes cross (RAS, mm).
     pub at: [f64; 3],
 }
@@ -60,7 +63,8 @@ fn scene_box(scenario: &Scenario, s: &SliceScene<'_>) -> ([f64; 3], [f64; 3]) {
     }
     grow(scenario.entry.position.map(f64::from));
     grow(scenario.target.position.map(f64::from));
-    for p in s.paths.iter().flat_map(|p| &p.points) {
+    let executed = s.executed.iter().flat_map(|e| &e.lines).flatten();
+    for p in s.paths.iter().flat_map(|p| &p.points).chain(executed) {
         grow(p.map(f64::from));
     }
     for k in 0..3 {
@@ -146,6 +150,9 @@ fn legend_lines(s: &SliceScene<'_>) -> Vec<LegendLine> {
         Some("fill:#000;fill-opacity:0.06;stroke:#222".into()),
         "covering sphere cut by the plane".into(),
     ));
+    for e in s.executed {
+        out.push((Some(e.swatch_style()), e.label.clone()));
+    }
     for p in s.paths {
         out.push((Some(format!("fill:{}", p.colour)), p.label.clone()));
     }
@@ -216,6 +223,7 @@ fn panel(
     labels(svg, view, s);
     crosshair(svg, view, s.at);
     sections(svg, view, fixed, scenario, s.at[fixed]);
+    strands(svg, view, s.executed);
     plan_paths(svg, view, s.paths);
     ends(svg, view, scenario);
     svg.raw("</g></g>");
@@ -312,6 +320,19 @@ fn sections(svg: &mut Svg, view: &View, axis: usize, scenario: &Scenario, at: f6
         ));
     }
     svg.end_group();
+}
+
+/// The simulated paths, projected onto the plane.
+fn strands(svg: &mut Svg, view: &View, executed: &[Strands]) {
+    for e in executed {
+        svg.group(&e.class);
+        let style = e.style();
+        for line in &e.lines {
+            let pts: Vec<[f64; 2]> = line.iter().map(|q| view.px(*q)).collect();
+            svg.polyline(&pts, &e.class, &style, "");
+        }
+        svg.end_group();
+    }
 }
 
 /// The entry and the target, projected.

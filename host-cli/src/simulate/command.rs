@@ -4,7 +4,7 @@
 
 use super::args::SimulateArgs;
 use super::device::on_device;
-use super::plot::{simulate_svg, Executed, MAX_DRAWN};
+use super::plot::{simulate_slices_svg, simulate_svg, Executed, MAX_DRAWN};
 use super::request::{self, results_json, Request, Results};
 use super::setup::{Keep, Setup};
 use super::steering::summarise_steering;
@@ -43,13 +43,13 @@ pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
         };
         let title = plot_title(a, &setup, &executed);
         let outcome = &setup.prepared.outcome;
-        file.write(&simulate_svg(
-            &setup.scenario,
-            &shapes,
-            outcome,
-            &executed,
-            &title,
-        ))?;
+        let loaded = ScenarioFile::load(&a.file)?;
+        let svg = if loaded.anatomy.is_empty() {
+            simulate_svg(&setup.scenario, &shapes, outcome, &executed, &title)
+        } else {
+            simulate_slices_svg(&setup.scenario, &loaded, outcome, &executed, &title)?
+        };
+        file.write(&svg)?;
     }
     Ok(())
 }

@@ -2,11 +2,13 @@
 //! around it (both projections in 3-D), drawn with the scenario plot of [`crate::analysis::plot`]:
 //! open-loop runs in red, or, closed loop, the runs that reached the target in red, those stopped
 //! before it dashed in orange and the same worlds open loop (`--compare-open-loop`) in blue, each
-//! with its legend entry.
+//! with its legend entry. With `[[anatomy]]`, the same over slices of the label maps.
 
+use crate::analysis::cli::{anatomy_slices_svg, Slicing};
 use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene, Strands};
+use crate::analysis::slice_maps::SliceAt;
 use crate::report::path_points;
-use crate::scenario::ObstacleShape;
+use crate::scenario::{ObstacleShape, ScenarioFile};
 use needle_sim::{ClosedRun, Run};
 use planner_core::{FormOutcome, Scenario};
 
@@ -97,15 +99,9 @@ fn closed_strands(runs: &[ClosedRun]) -> [Strands; 2] {
     ]
 }
 
-/// The SVG of the executed runs around the plan `outcome`.
-pub fn simulate_svg(
-    scenario: &Scenario,
-    shapes: &[ObstacleShape],
-    outcome: &FormOutcome,
-    executed: &Executed<'_>,
-    title: &str,
-) -> String {
-    // Drawn in this order: the open loop under the closed loop, stopped runs on top.
+/// The strands of `executed`, drawn in this order: the open loop under the closed loop,
+/// stopped runs on top.
+fn all_strands(executed: &Executed<'_>) -> Vec<Strands> {
     let mut strands = Vec::new();
     match (executed.open, executed.closed) {
         (Some(open), None) => strands.push(open_strands(open, "open loop", "executed", RED)),
@@ -118,19 +114,62 @@ pub fn simulate_svg(
         }
         (None, None) => {}
     }
+    strands
+}
+
+/// The planned path of `outcome`, drawn as the best.
+fn planned(scenario: &Scenario, outcome: &FormOutcome) -> PlotPath {
+    PlotPath {
+        label: format!("{}: planned, L = {:.1} mm", outcome.form, outcome.length),
+        form: outcome.form.to_string(),
+        colour: colour_of(outcome.form),
+        points: path_points(scenario, outcome),
+        best: true,
+    }
+}
+
+/// The legend's note on how many paths are drawn.
+fn drawn_note() -> String {
+    format!("at most {MAX_DRAWN} paths of each kind are drawn")
+}
+
+/// The SVG of the executed runs around the plan `outcome`.
+pub fn simulate_svg(
+    scenario: &Scenario,
+    shapes: &[ObstacleShape],
+    outcome: &FormOutcome,
+    executed: &Executed<'_>,
+    title: &str,
+) -> String {
     let scene = Scene {
         title: title.to_string(),
         shapes,
-        paths: vec![PlotPath {
-            label: format!("{}: planned, L = {:.1} mm", outcome.form, outcome.length),
-            form: outcome.form.to_string(),
-            colour: colour_of(outcome.form),
-            points: path_points(scenario, outcome),
-            best: true,
-        }],
-        notes: vec![format!("at most {MAX_DRAWN} paths of each kind are drawn")],
+        paths: vec![planned(scenario, outcome)],
+        notes: vec![drawn_note()],
         tree: vec![],
-        executed: strands,
+        executed: all_strands(executed),
     };
     scene_svg(scenario, &scene)
+}
+
+/// The same with `[[anatomy]]`: slices of the label maps through the planned path's point
+/// nearest an obstacle, the runs projected onto each.
+pub fn simulate_slices_svg(
+    scenario: &Scenario,
+    file: &ScenarioFile,
+    outcome: &FormOutcome,
+    executed: &Executed<'_>,
+    title: &str,
+) -> anyhow::Result<String> {
+    let paths = [planned(scenario, outcome)];
+    let strands = all_strands(executed);
+    let notes = [drawn_note()];
+    let scene = Slicing {
+        file,
+        paths: &paths,
+        notes: &notes,
+        executed: &strands,
+        at: &SliceAt::Closest,
+    };
+    anatomy_slices_svg(scenario, &scene, title)
 }

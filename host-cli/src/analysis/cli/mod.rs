@@ -13,6 +13,8 @@ mod sweep;
 pub use approx::{run_approx, ApproxArgs, ApproxJson};
 pub use args::{RrtArgs, ScenarioArgs, ScenarioFileArgs};
 pub use compare::{run_compare, CompareArgs};
-pub use plot::{plan_scene_paths, run_plot, write_plan_plot, PlotArgs};
+pub use plot::{
+    anatomy_slices_svg, plan_scene_paths, run_plot, write_plan_plot, PlotArgs, Slicing,
+};
 pub use rrt::{run_rrt, RrtCmd, RrtJson};
 pub use sweep::{run_sweep, SweepArgs};

@@ -3,7 +3,7 @@
 use super::args::ScenarioArgs;
 use super::output::{title_of, write};
 use crate::analysis::plan_file;
-use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene};
+use crate::analysis::plot::{colour_of, scene_svg, PlotPath, Scene, Strands};
 use crate::analysis::slice_maps::{slice_maps, slice_point, SliceAt};
 use crate::analysis::slices::{slices_svg, SliceScene};
 use crate::report::{path_points, PlanJson};
@@ -41,7 +41,9 @@ pub fn plan_scene_paths(scenario: &Scenario, report: &PlanReport) -> (Vec<PlotPa
     (paths, notes)
 }
 
-/// Draws every form's path of `report` to `out` (`needle plan --plot`).
+/// Draws every form's path of `report` to `out` (`needle plan --plot`): the two projections, or
+/// with `[[anatomy]]` the slices of its label maps through the best path's point nearest an
+/// obstacle.
 pub fn write_plan_plot(
     file: &Path,
     approx: Option<Method>,
@@ -49,10 +51,23 @@ pub fn write_plan_plot(
     report: &PlanReport,
     out: &Path,
 ) -> Result<()> {
-    let shapes = ScenarioFile::load(file)?
-        .obstacle_shapes(approx)
-        .unwrap_or_default();
+    let loaded = ScenarioFile::load(file)?;
     let (paths, notes) = plan_scene_paths(scenario, report);
+    if !loaded.anatomy.is_empty() {
+        let title = format!(
+            "{}: label map slices and the optimal path of each form",
+            title_of(file)
+        );
+        let scene = Slicing {
+            file: &loaded,
+            paths: &paths,
+            notes: &notes,
+            executed: &[],
+            at: &SliceAt::Closest,
+        };
+        return write(out, &anatomy_slices_svg(scenario, &scene, &title)?);
+    }
+    let shapes = loaded.obstacle_shapes(approx).unwrap_or_default();
     let scene = Scene {
         title: format!("{}: optimal path of each form", title_of(file)),
         shapes: &shapes,
@@ -62,6 +77,35 @@ pub fn write_plan_plot(
         executed: vec![],
     };
     write(out, &scene_svg(scenario, &scene))
+}
+
+/// What to slice and draw for a scenario with `[[anatomy]]`.
+pub struct Slicing<'a> {
+    /// The scenario file (its `[[anatomy]]` maps are read again).
+    pub file: &'a ScenarioFile,
+    /// Planned paths.
+    pub paths: &'a [PlotPath],
+    /// Extra legend lines.
+    pub notes: &'a [String],
+    /// Simulated paths.
+    pub executed: &'a [Strands],
+    /// Where the planes cross.
+    pub at: &'a SliceAt,
+}
+
+/// The slices of the scenario's label maps with its paths, as SVG.
+pub fn anatomy_slices_svg(scenario: &Scenario, s: &Slicing<'_>, title: &str) -> Result<String> {
+    let maps = slice_maps(s.file)?;
+    let point = slice_point(s.at, &maps, scenario, s.paths.iter().find(|p| p.best))?;
+    let scene = SliceScene {
+        title: title.to_string(),
+        maps: &maps,
+        paths: s.paths,
+        notes: s.notes,
+        executed: s.executed,
+        at: point,
+    };
+    Ok(slices_svg(scenario, &scene))
 }
 
 /// `needle plot`
@@ -110,7 +154,19 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
     };
     let file = ScenarioFile::load(&a.scenario.source.file)?;
     if !file.anatomy.is_empty() && !a.projections {
-        return write_slices(a, &file, &scenario, &paths, &notes);
+        let at = a.slice_at.clone().unwrap_or(SliceAt::Closest);
+        let scene = Slicing {
+            file: &file,
+            paths: &paths,
+            notes: &notes,
+            executed: &[],
+            at: &at,
+        };
+        let title = format!(
+            "{}: label map slices and the optimal path of each form",
+            title_of(&a.scenario.source.file)
+        );
+        return write(&a.output, &anatomy_slices_svg(&scenario, &scene, &title)?);
     }
     if a.slice_at.is_some() {
         bail!(
@@ -130,28 +186,4 @@ pub fn run_plot(a: &PlotArgs) -> Result<()> {
         executed: vec![],
     };
     write(&a.output, &scene_svg(&scenario, &scene))
-}
-
-/// `needle plot` of a scenario with anatomy: slices of its label maps.
-fn write_slices(
-    a: &PlotArgs,
-    file: &ScenarioFile,
-    scenario: &Scenario,
-    paths: &[PlotPath],
-    notes: &[String],
-) -> Result<()> {
-    let maps = slice_maps(file)?;
-    let at = a.slice_at.clone().unwrap_or(SliceAt::Closest);
-    let point = slice_point(&at, &maps, scenario, paths.iter().find(|p| p.best))?;
-    let scene = SliceScene {
-        title: format!(
-            "{}: label map slices and the optimal path of each form",
-            title_of(&a.scenario.source.file)
-        ),
-        maps: &maps,
-        paths,
-        notes,
-        at: point,
-    };
-    write(&a.output, &slices_svg(scenario, &scene))
 }
