@@ -285,6 +285,18 @@ fn polyline_points(e: &str) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// Runs `needle ARGS --plot OUT` and returns the SVG it wrote.
+fn drawn(args: &[&str], out: &Path) -> String {
+    let run = needle()
+        .args(args)
+        .args(["--plot", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    std::fs::read_to_string(out).unwrap()
+}
+
 /// `needle plan --plot` and `needle simulate --plot` of a scenario with anatomy draw the slices
 /// too: the planned path in each panel, and for the simulation every run's path, which starts
 /// at the entry (0, 15, 0) and ends within a few millimetres of the target (0, 15, 90) in world
@@ -294,34 +306,14 @@ fn plan_and_simulate_plots_slice_the_anatomy() {
     let dir = scratch("plots");
     let scenario = write_case(&dir);
     let s = scenario.to_str().unwrap();
-    let plan_svg = dir.join("plan.svg");
-    let run = needle()
-        .args(["plan", s, "--plot", plan_svg.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = std::fs::read_to_string(&plan_svg).unwrap();
+    let text = drawn(&["plan", s], &dir.join("plan.svg"));
     let planned = panels(&text);
     assert_eq!(planned.len(), 3);
     assert!(planned
         .iter()
         .all(|p| !p.elements("polyline class=\"path best\"").is_empty()));
-    let sim_svg = dir.join("simulate.svg");
-    let run = needle()
-        .args(["simulate", s, "--closed-loop", "--runs", "6"])
-        .args(["--plot", sim_svg.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = std::fs::read_to_string(&sim_svg).unwrap();
+    let args = ["simulate", s, "--closed-loop", "--runs", "6"];
+    let text = drawn(&args, &dir.join("simulate.svg"));
     let panels = panels(&text);
     assert_eq!(panels.len(), 3);
     for p in &panels {
