@@ -7,7 +7,7 @@ use crate::simulate::Prepared;
 use crate::simulate::Spread;
 use needle_sim::{ClosedRun, Perturbation, Run};
 use planner_core::execute::risk::{risk_by_obstacle, Execution, ObstacleRisk};
-use planner_core::steer::SteerConfig;
+use planner_core::steer::NoiseModel;
 use planner_core::{FormOutcome, Scenario};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -186,11 +186,17 @@ pub struct SteeredPlan {
 }
 
 impl SteeredPlan {
-    /// The plan `prepared` of `scenario`, its risk predicted steered under `model`.
-    pub fn of(scenario: &Scenario, prepared: &Prepared, model: &Perturbation) -> SteeredPlan {
+    /// The plan `prepared` of `scenario`, its risk predicted steered (by a controller told
+    /// `noise`) under `model`.
+    pub fn of(
+        scenario: &Scenario,
+        prepared: &Prepared,
+        model: &Perturbation,
+        noise: NoiseModel,
+    ) -> SteeredPlan {
         let outcome = &prepared.outcome;
         let mut by_obstacle = [ObstacleRisk::default(); planner_core::MAX_OBSTACLES];
-        let steered = Execution::Steered(SteerConfig::DEFAULT.noise);
+        let steered = Execution::Steered(noise);
         let risk = risk_by_obstacle(
             scenario,
             &prepared.schedule,
@@ -364,6 +370,12 @@ pub struct BenchmarkReport {
     pub unplanned: Vec<Unplanned>,
     /// The perturbation every world drew from.
     pub perturbation: Perturbation,
+    /// The world's effects beyond it (all off: today's world).
+    pub world: needle_sim::WorldEffects,
+    /// The tracker's faults of the closed loop.
+    pub faults: needle_sim::TrackerFaults,
+    /// What the closed loop was told.
+    pub controller: planner_core::steer::SteerConfig,
     /// The generator of the scenarios.
     pub generator: super::Generator,
 }
@@ -373,7 +385,7 @@ impl BenchmarkReport {
     pub fn new(
         generated: usize,
         generator: super::Generator,
-        perturbation: Perturbation,
+        world: &super::BenchWorld,
         rows: Vec<ScenarioRow>,
         unplanned: Vec<Unplanned>,
     ) -> BenchmarkReport {
@@ -423,7 +435,10 @@ impl BenchmarkReport {
             by_form,
             scenarios: rows,
             unplanned,
-            perturbation,
+            perturbation: world.perturbation,
+            world: world.effects,
+            faults: world.faults,
+            controller: world.config,
         }
     }
 }

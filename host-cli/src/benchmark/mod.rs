@@ -7,6 +7,9 @@
 
 mod figures;
 mod table;
+mod world;
+
+pub use world::BenchWorld;
 
 pub use figures::{
     BenchmarkReport, ClosedFigures, OpenFigures, Pool, PredictedFigures, ScenarioRow, Totals,
@@ -22,9 +25,8 @@ use crate::simulate::at_least_one;
 use crate::simulate::setup::{Keep, Setup};
 use crate::simulate::PlanBound;
 use anyhow::{Context, Result};
-use needle_sim::{Perturbation, TrackerFaults};
+use needle_sim::Perturbation;
 use planner_core::execute::risk::{execution_risk, Execution};
-use planner_core::steer::SteerConfig;
 use planner_core::Scenario;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -49,9 +51,22 @@ pub struct BenchmarkArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Change one perturbation, KEY=VALUE (repeatable; see docs/execution.md).
+    /// Change one perturbation or world effect, KEY=VALUE (repeatable; over `--world`; see
+    /// docs/execution.md).
     #[arg(long = "perturb", value_name = "KEY=VALUE")]
     pub perturb: Vec<String>,
+    /// The world every run is made in: `default` (today's) or `clinical` (docs/execution.md,
+    /// "The clinical world"), as `needle simulate --world`.
+    #[arg(long, value_name = "NAME")]
+    pub world: Option<String>,
+    /// A tracker fault of the closed loop, KEY=VALUE (repeatable; over `--world`'s), as
+    /// `needle simulate --fault`.
+    #[arg(long = "fault", value_name = "KEY=VALUE")]
+    pub faults: Vec<String>,
+    /// Tell the closed-loop controller one `[steering]` key, KEY=VALUE (repeatable): it steers
+    /// with it, and a steered bound predicts its spread with it.
+    #[arg(long = "steer", value_name = "KEY=VALUE")]
+    pub steer: Vec<String>,
     /// Also write each generated scenario to DIR/unseen-SEED.toml (a file `needle plan` reads).
     #[arg(long, value_name = "DIR")]
     pub write_scenarios: Option<PathBuf>,
@@ -136,11 +151,7 @@ pub fn world_seed(scenario_seed: u64) -> u64 {
 
 /// Runs `needle benchmark`.
 pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
-    let mut p = Perturbation::default();
-    for kv in &a.perturb {
-        p.apply(kv).context("--perturb")?;
-    }
-    p.validate().context("--perturb")?;
+    let world = BenchWorld::of(a.world.as_deref(), &a.perturb, &a.faults, &a.steer)?;
     if let Some(dir) = &a.write_scenarios {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
@@ -156,7 +167,7 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
         let started = Instant::now();
         let spheres = scenario.obstacles.len();
         let head = format!("scenario {}/{} (seed {seed})", i + 1, a.scenarios);
-        match measure(scenario, &p, a, seed, threads) {
+        match measure(scenario, &world, a, seed, threads) {
             Ok(row) => {
                 let secs = started.elapsed().as_secs_f64();
                 eprintln!("{head}: {}, {secs:.1} s", row.progress());
@@ -173,7 +184,7 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
             }
         }
     }
-    let report = BenchmarkReport::new(a.scenarios, a.generator, p, rows, unplanned);
+    let report = BenchmarkReport::new(a.scenarios, a.generator, &world, rows, unplanned);
     let text = if a.json {
         serde_json::to_string(&report)? + "\n"
     } else {
@@ -200,7 +211,7 @@ fn write_scenario(dir: &Path, generator: Generator, seed: u64, scenario: &Scenar
 /// closed loop, and keeps the figures of each run (not their paths).
 fn measure(
     scenario: Scenario,
-    p: &Perturbation,
+    world: &BenchWorld,
     a: &BenchmarkArgs,
     seed: u64,
     threads: usize,
@@ -226,14 +237,16 @@ fn measure(
             .unwrap_or(f64::NAN)
     });
     let mut steered = scenario.clone();
-    let setup = Setup::bounded(
+    let p = world.perturbation;
+    let mut setup = Setup::bounded(
         scenario,
-        *p,
-        TrackerFaults::default(),
+        p,
+        world.faults,
         a.runs,
         world_seed(seed),
         bound.as_ref(),
     )?;
+    setup.effects = world.effects;
     let risk = execution_risk(&setup.scenario, &setup.prepared.schedule, &model);
     let predicted = PredictedFigures {
         collision_probability: f64::from(risk.collision_probability),
@@ -251,20 +264,16 @@ fn measure(
             .map(|max_collision_probability| PlanBound {
                 model,
                 max_collision_probability,
-                execution: Execution::Steered(SteerConfig::DEFAULT.noise),
+                execution: Execution::Steered(world.config.noise),
             });
         let seed = world_seed(seed);
         // A scenario refused for steering keeps its open-loop runs.
-        match Setup::bounded(
-            steered,
-            *p,
-            TrackerFaults::default(),
-            a.runs,
-            seed,
-            bound.as_ref(),
-        ) {
-            Ok(setup) => {
-                let plan = SteeredPlan::of(&setup.scenario, &setup.prepared, &model);
+        match Setup::bounded(steered, p, world.faults, a.runs, seed, bound.as_ref()) {
+            Ok(mut setup) => {
+                setup.effects = world.effects;
+                setup.config = world.config;
+                let plan =
+                    SteeredPlan::of(&setup.scenario, &setup.prepared, &model, world.config.noise);
                 (setup.closed_loop(&keep, threads, || {})?, Ok(Some(plan)))
             }
             Err(e) => (Vec::new(), Err(format!("{e:#}"))),
@@ -298,6 +307,9 @@ mod tests {
             threads: None,
             json: false,
             perturb: Vec::new(),
+            world: None,
+            faults: Vec::new(),
+            steer: Vec::new(),
             write_scenarios: None,
             max_collision_probability: None,
             closed_loop_max_collision_probability: None,
@@ -313,7 +325,7 @@ mod tests {
     /// the target in every run (both over the same worlds).
     #[test]
     fn the_curvature_reserve_gives_the_closed_loop_its_reach() {
-        let p = Perturbation::default();
+        let p = BenchWorld::of(None, &[], &[], &[]).unwrap();
         let args = |curvature_reserve| BenchmarkArgs {
             curvature_reserve,
             ..args(1, 111, 20)
@@ -343,7 +355,7 @@ mod tests {
     /// 1 % bound the plan keeps it, and the same worlds steered along it hit nothing.
     #[test]
     fn a_steered_bound_keeps_the_closed_loop_off_the_spheres() {
-        let p = Perturbation::default();
+        let p = BenchWorld::of(None, &[], &[], &[]).unwrap();
         let free = measure(unseen_scenario(201), &p, &args(1, 201, 10), 201, 2).unwrap();
         let bounded_args = BenchmarkArgs {
             closed_loop_max_collision_probability: Some(0.01),
@@ -365,12 +377,47 @@ mod tests {
         assert_eq!(free.open_loop.hits, bounded.open_loop.hits);
     }
 
+    /// `--world`, `--fault` and `--steer` reach every run: the clinical world's layers and
+    /// pushed target move the open loop's ends; the steered bound is predicted with what the
+    /// controller is told (a registration error it keeps clear of moves the plan), and
+    /// the report says the world, the faults and the told controller.
+    #[test]
+    fn the_world_and_the_told_controller_reach_every_run() {
+        let bounded = BenchmarkArgs {
+            closed_loop_max_collision_probability: Some(0.01),
+            ..args(1, 204, 4)
+        };
+        let today = BenchWorld::of(None, &[], &[], &[]).unwrap();
+        let told = ["registration_mm=0.6".to_string()];
+        let clinical = BenchWorld::of(Some("clinical"), &[], &[], &told).unwrap();
+        let a = measure(planted_scenario(204), &today, &bounded, 204, 2).unwrap();
+        let b = measure(planted_scenario(204), &clinical, &bounded, 204, 2).unwrap();
+        assert_ne!(a.open_loop.mean_target_error, b.open_loop.mean_target_error);
+        let plan = |r: &ScenarioRow| {
+            let p = r.closed_loop_plan.clone().unwrap();
+            (p.plan_length, p.plan_clearance)
+        };
+        assert_ne!(
+            plan(&a),
+            plan(&b),
+            "the told registration moves the steered plan"
+        );
+        let report = BenchmarkReport::new(1, Generator::Planted, &clinical, vec![b], vec![]);
+        let json: serde_json::Value = serde_json::to_value(&report).unwrap();
+        assert_eq!(json["world"]["tracker_dof"], 5);
+        assert_eq!(json["faults"]["dropout_mm"], 2.0);
+        let told = json["controller"]["noise"]["registration_mm"]
+            .as_f64()
+            .unwrap();
+        assert!((told - 0.6).abs() < 1e-6);
+    }
+
     #[test]
     fn a_scenario_that_cannot_be_planned_is_counted_with_its_reason() {
         let mut s = unseen_scenario(101);
         // The first sphere blocks the straight line, the one path a single line can take.
         s.options.forms.insert(parse_form("L").unwrap());
-        let p = Perturbation::default();
+        let p = BenchWorld::of(None, &[], &[], &[]).unwrap();
         let args = args(2, 101, 2);
         let reason = format!("{:#}", measure(s.clone(), &p, &args, 101, 1).unwrap_err());
         assert!(
@@ -384,7 +431,7 @@ mod tests {
             spheres: s.obstacles.len(),
             reason: reason.clone(),
         };
-        let report = BenchmarkReport::new(2, Generator::Unseen, p, vec![planned], vec![lost]);
+        let report = BenchmarkReport::new(2, Generator::Unseen, &p, vec![planned], vec![lost]);
         assert_eq!((report.totals.planned, report.totals.unplanned), (1, 1));
         assert_eq!(report.totals.runs, 2);
         let table = table::to_table(&args, &report);

@@ -114,6 +114,20 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         a.seed,
         a.runs
     );
+    out.push_str(&crate::simulate::table::world_line(&r.world));
+    if !a.faults.is_empty() || !a.steer.is_empty() {
+        let told: Vec<&str> = a
+            .faults
+            .iter()
+            .chain(&a.steer)
+            .map(String::as_str)
+            .collect();
+        let _ = writeln!(
+            out,
+            "faults and steering (over the world's): {}",
+            told.join(" ")
+        );
+    }
     let groups = format!("{:<50} |{:^31} |{:^39}", "", "open loop", "closed loop");
     let _ = writeln!(out, "{}", groups.trim_end());
     let _ = writeln!(

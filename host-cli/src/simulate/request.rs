@@ -140,7 +140,7 @@ impl Asked {
 
 /// Applies one `KEY=VALUE` of `--perturb`: a world effect's key to the effects, any other to
 /// the perturbation (an unknown key is refused naming both lists).
-fn change_world(
+pub(crate) fn change_world(
     perturbation: &mut needle_sim::Perturbation,
     effects: &mut WorldEffects,
     kv: &str,
