@@ -102,9 +102,8 @@ fn length_costs(out: &mut String, bound: f32, r: &BenchmarkReport) {
     }
 }
 
-/// The benchmark's table.
-pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
-    let mut out = String::new();
+/// The table's first lines: the family, the world and what the controller was told.
+fn heading(out: &mut String, a: &BenchmarkArgs, r: &BenchmarkReport) {
     let last = a.seed.wrapping_add((a.scenarios as u64).saturating_sub(1));
     let _ = writeln!(
         out,
@@ -128,6 +127,12 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
             told.join(" ")
         );
     }
+}
+
+/// The benchmark's table.
+pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
+    let mut out = String::new();
+    heading(&mut out, a, r);
     let groups = format!("{:<50} |{:^31} |{:^39}", "", "open loop", "closed loop");
     let _ = writeln!(out, "{}", groups.trim_end());
     let _ = writeln!(
