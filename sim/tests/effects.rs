@@ -256,7 +256,10 @@ fn the_clinical_registration_is_half_a_millimetre_rms_in_three_dimensions() {
     let rms = (moved / f64::from(draws)).sqrt();
     let rms_target = (at_target / f64::from(draws)).sqrt();
     assert!((rms - 0.5).abs() < 0.02, "translation RMS {rms} mm");
-    assert!(rms_target > rms && rms_target < 0.6, "at the target {rms_target} mm");
+    assert!(
+        rms_target > rms && rms_target < 0.6,
+        "at the target {rms_target} mm"
+    );
 }
 
 /// A field bias moves the measured tip by a smooth error of about its size, never the path.
