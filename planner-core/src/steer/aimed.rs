@@ -1,9 +1,10 @@
-//! The steering's last resort: the duty-cycled arc aimed through the target, when no form's
-//! continuation reaches it.
+//! The steering's last resorts, when no form's continuation reaches the target at the plan's
+//! share of the curvature: the turn spent first at the needle's full (estimated) curvature and a
+//! spun line to the target, then the duty-cycled arc aimed through it.
 
 use super::replan::{sound, wrapped_deg, ReplanInput, Replanned};
 use super::turns::{dead_banded, widened_to_band};
-use crate::execute::schedule::duty_continuation;
+use crate::execute::schedule::{duty_continuation, duty_step, Steps};
 
 /// The duty-cycled arc from the tip through the target: the bevel turned towards it, then one
 /// push at the curvature that passes through it (a circle tangent to the heading through a
@@ -27,6 +28,28 @@ pub(super) fn aimed_duty(input: &ReplanInput, spent: &(u32, u32)) -> Option<Repl
     } else {
         local.z
     };
+    aimed_tries(input, local, spent, |bevel_deg| {
+        duty_continuation(
+            &input.scenario.driver,
+            bevel_deg,
+            length,
+            duty,
+            input.twist_deg,
+        )
+        .ok()
+        .map(|(steps, peak)| (steps, peak, length))
+    })
+}
+
+/// The bevel aimed at the target (at `local` in the tip's axes), rounded to the dead band's
+/// steps (none, or the band): the continuation `build` makes from each (its steps, peak twist
+/// and length), the first that passes the check.
+fn aimed_tries(
+    input: &ReplanInput,
+    local: crate::model::kinematics::V3,
+    spent: &(u32, u32),
+    build: impl Fn(f32) -> Option<(Steps, f32, f32)>,
+) -> Option<Replanned> {
     let aim = wrapped_deg(crate::fmath::atan2(-local.x, local.y));
     let banded = dead_banded(aim, input.dead_band_deg);
     let widened = widened_to_band(aim, input.dead_band_deg);
@@ -37,15 +60,61 @@ pub(super) fn aimed_duty(input: &ReplanInput, spent: &(u32, u32)) -> Option<Repl
         &bevels[..]
     };
     tries.iter().find_map(|&bevel_deg| {
-        let (steps, peak) = duty_continuation(
-            &input.scenario.driver,
-            bevel_deg,
-            length,
-            duty,
-            input.twist_deg,
-        )
-        .ok()?;
+        let (steps, peak, length) = build(bevel_deg)?;
         sound(input, steps, peak, length, spent)
+    })
+}
+
+/// The turn spent first: the bevel turned towards the target, an arc pushed at the full
+/// estimated curvature until the needle heads at the target, then a spun line to it (a
+/// duty-cycled push at duty 0), if the check passes.
+///
+/// Why before [`aimed_duty`]: the constant arc through the target needs the least curvature
+/// only if the tissue ahead bends as the estimate says. Layered tissue changes the curvature at
+/// every boundary (Majewicz et al. 2012: radii tens of percent apart), and the estimate learns a
+/// softer layer only after bending in it; an arc left for the end then asks for more than the
+/// needle has (duty 0.99 over the last 30 mm, and the target still missed). A turn made now
+/// leaves a line, which needs no curvature, and whatever a later layer changes is corrected from
+/// farther away. Only when the reserve is spent (the plan's share no longer reaches): the
+/// default world, whose plans keep their share, is steered as before.
+#[inline(never)]
+pub(super) fn front_loaded(input: &ReplanInput, spent: &(u32, u32)) -> Option<Replanned> {
+    let local = input.tip.r.transpose() * (input.target - input.tip.p);
+    let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
+    let (ahead, r) = (local.z, input.radius);
+    // Out of reach of the full curvature, or nothing to turn.
+    if !(ahead > 0.0 && side > 0.0 && 2.0 * side * r <= side * side + ahead * ahead) {
+        return None;
+    }
+    // The line from the arc's end heads at the target where s cos φ − a sin φ + r (1 − cos φ)
+    // is zero: s at φ = 0, at most 0 at the turn of the arc through the target, 2·atan2(s, a);
+    // bisection, 24 halvings (the angle to 1e-7 rad).
+    let gap = |phi: f32| {
+        let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
+        side * cos - ahead * sin + r * (1.0 - cos)
+    };
+    let (mut lo, mut hi) = (0.0f32, 2.0 * crate::fmath::atan2(side, ahead));
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if gap(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let phi = 0.5 * (lo + hi);
+    let arc = r * phi;
+    let (across, along) = (
+        side - r * (1.0 - libm::cosf(phi)),
+        ahead - r * libm::sinf(phi),
+    );
+    let line = crate::fmath::sqrt(across * across + along * along);
+    let driver = &input.scenario.driver;
+    aimed_tries(input, local, spent, |bevel_deg| {
+        let (mut steps, peak) =
+            duty_continuation(driver, bevel_deg, arc, 1.0, input.twist_deg).ok()?;
+        steps.push(duty_step(driver, line, 0.0)).ok()?;
+        Some((steps, peak, arc + line))
     })
 }
 
@@ -107,5 +176,57 @@ mod tests {
             ..input
         };
         assert!(aimed_duty(&far_side, &(0, 0)).is_none());
+    }
+
+    /// The same tip and target: the turn spent first is a short arc at the full curvature and a
+    /// spun line, and it ends on the target as exactly as the constant arc does.
+    #[test]
+    fn the_turn_spent_first_is_a_full_arc_then_a_line_to_the_target() {
+        let mut scenario = Scenario::paper();
+        scenario.options.workspace = Workspace::Space;
+        scenario.obstacles.clear();
+        let tip = Frame {
+            p: V3::new(0.0, 0.0, 50.0),
+            r: nalgebra::Matrix3::identity(),
+        };
+        let input = ReplanInput {
+            scenario: &scenario,
+            tip,
+            target: V3::new(2.0, 0.0, 80.0),
+            radius: scenario.needle.curvature_radius,
+            twist_deg: 0.0,
+            iterations: 10,
+            margin: 0.3,
+            inserted_mm: 50.0,
+            dead_band_deg: 2.0,
+            arc_duty: 0.8,
+            spend_reserve: true,
+        };
+        let found = front_loaded(&input, &(0, 0)).expect("a continuation");
+        assert!(
+            found.prediction.target_error < 1e-3,
+            "{:?}",
+            found.prediction
+        );
+        let ops: std::vec::Vec<Op> = found.steps.iter().map(|s| s.op).collect();
+        let [Op::Rotate { .. }, Op::InsertDuty {
+            length_mm: arc,
+            duty: full,
+        }, Op::InsertDuty {
+            length_mm: line,
+            duty: none,
+        }] = ops[..]
+        else {
+            panic!("{ops:?}")
+        };
+        assert_eq!((full, none), (1.0, 0.0));
+        // The constant arc would bend over all 30 mm; this one turns in the first few.
+        assert!(arc < 12.0 && line > 18.0, "{arc} {line}");
+        // Beyond the needle's curvature: none.
+        let far_side = ReplanInput {
+            target: V3::new(20.0, 0.0, 60.0),
+            ..input
+        };
+        assert!(front_loaded(&far_side, &(0, 0)).is_none());
     }
 }

@@ -251,6 +251,11 @@ pub(super) fn sound(
 pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
     let mut spent = (0u32, 0u32);
     let found = forms_from(input, remaining, &mut spent)
+        .or_else(|| {
+            (input.arc_duty < 1.0 && input.spend_reserve)
+                .then(|| super::aimed::front_loaded(input, &spent))
+                .flatten()
+        })
         .or_else(|| super::aimed::aimed_duty(input, &spent))
         .or_else(|| {
             (input.arc_duty < 1.0 && input.spend_reserve)
