@@ -19,14 +19,14 @@ pub const MAX_EXTENT_MM: f32 = 1000.0;
 /// refused rather than planned.
 pub const CURVATURE_RADIUS_RANGE_MM: (f32, f32) = (5.0, MAX_EXTENT_MM);
 
-/// Obstacles a scenario can hold on the host: enough for the sphere cover of a segmented
-/// organ and its neighbours.
+/// Obstacles a scenario can hold on the host: the sphere cover of an organ and its neighbours.
 pub const HOST_MAX_OBSTACLES: usize = 512;
 
-/// Obstacles a scenario can hold on the device: what fits the stm32f4's RAM beside the planner's
-/// stack. The wire's device-side bound (a plan request with more is answered
-/// [`PlanError::TooManyObstacles`], on the board and in hil-sim alike).
-pub const DEVICE_MAX_OBSTACLES: usize = 256;
+/// Obstacles a scenario can hold on the device, the wire's device-side bound (a plan request with
+/// more is answered [`PlanError::TooManyObstacles`], on the board and in hil-sim alike). Not yet
+/// 256: the firmware plans 256 spheres like the host, but its plan's buffers then need 111 KiB of
+/// RAM against a budget of 48 KiB (docs/firmware.md).
+pub const DEVICE_MAX_OBSTACLES: usize = 32;
 
 /// Obstacles a scenario can hold on this build ([`DEVICE_MAX_OBSTACLES`] on a bare-metal
 /// target, [`HOST_MAX_OBSTACLES`] elsewhere).
