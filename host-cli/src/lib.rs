@@ -9,5 +9,6 @@ pub mod device;
 pub mod lab;
 pub mod random;
 pub mod report;
+pub mod scale;
 pub mod scenario;
 pub mod simulate;

@@ -44,6 +44,15 @@ impl<T: Transport> Client<T> {
         chance: Option<ChanceRequest>,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<PlanResult, LinkError> {
+        let given = scenario.obstacles.len();
+        if given > planner_core::wire::WIRE_MAX_OBSTACLES {
+            // More than a request can carry: the answer the device gives any request over its
+            // capacity, without sending what it could not receive.
+            return Ok(Err(planner_core::PlanError::TooManyObstacles {
+                given: given.min(usize::from(u16::MAX)) as u16,
+                capacity: planner_core::DEVICE_MAX_OBSTACLES as u16,
+            }));
+        }
         let mut buf = vec![0u8; MAX_PLAN_REQUEST];
         let request = PlanRequest {
             chance,

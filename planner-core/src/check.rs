@@ -117,10 +117,11 @@ pub fn check(
             clearance = clearance.min(d.distance - ob.radius);
         }
         min_clearance = min_clearance.min(clearance);
-        inverse_sum += if clearance > 0.0 {
-            1.0 / clearance
-        } else {
-            f32::INFINITY
+        inverse_sum += match scenario.options.risk_within_mm {
+            _ if !(clearance > 0.0) => f32::INFINITY,
+            None => 1.0 / clearance,
+            Some(r) if clearance < r => 1.0 / clearance - 1.0 / r,
+            Some(_) => 0.0,
         };
     }
     let risk = match scenario.options.risk {

@@ -52,6 +52,8 @@ pub enum Field {
     MaxCollisionProbability,
     /// `planner.curvature_reserve`
     CurvatureReserve,
+    /// `planner.risk_within_mm`
+    RiskWithin,
 }
 
 impl Field {
@@ -85,6 +87,7 @@ impl Field {
             Field::CurvatureReserve => {
                 "0 to 0.5 (the share of the needle's curvature kept in hand)"
             }
+            Field::RiskWithin => "at least planner.min_clearance + 0.01 mm, at most 1000 mm",
         }
     }
 }
@@ -115,6 +118,7 @@ impl core::fmt::Display for Field {
             Field::NeedleLength => f.write_str("needle.length"),
             Field::MaxCollisionProbability => f.write_str("planner.max_collision_probability"),
             Field::CurvatureReserve => f.write_str("planner.curvature_reserve"),
+            Field::RiskWithin => f.write_str("planner.risk_within_mm"),
         }
     }
 }

@@ -42,6 +42,8 @@ pub mod wire;
 pub use error::{Field, PlanError};
 pub use execute::ScheduledPlan;
 pub use model::form::{Form, FormSet, SegmentKind, FORM_COUNT, MAX_CONTROL_DEGREE};
-pub use model::scenario::{Scenario, MAX_CURVATURE_RESERVE, MAX_OBSTACLES};
+pub use model::scenario::{
+    Scenario, DEVICE_MAX_OBSTACLES, HOST_MAX_OBSTACLES, MAX_CURVATURE_RESERVE, MAX_OBSTACLES,
+};
 pub use report::{FormOutcome, Insertion, PlanReport, SegmentPlan, SolveStatus};
 pub use session::{plan, plan_scheduled, PlanSession};

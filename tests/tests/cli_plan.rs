@@ -139,7 +139,8 @@ fn fails_with(text: &str, needle_text: &str) {
 #[test]
 fn bad_scenarios_exit_non_zero_with_the_reason() {
     let mut many = String::new();
-    for i in 0..40 {
+    // The paper's three and 510 more: one over the host's capacity (counted before any is read).
+    for i in 0..planner_core::HOST_MAX_OBSTACLES - 2 {
         writeln!(
             many,
             "[[obstacles]]\ncenter = [0.0, {}, 200.0]\nradius = 1.0",
@@ -149,7 +150,7 @@ fn bad_scenarios_exit_non_zero_with_the_reason() {
     }
     fails_with(
         &paper_with(&many),
-        "43 obstacles given but the planner holds at most 32",
+        "513 obstacles given but the planner holds at most 512",
     );
     fails_with(
         &paper_with("[[obstacles]]\ncenter = [0.0, 0.0, 88.0]\nradius = 5.0"),

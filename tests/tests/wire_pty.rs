@@ -81,7 +81,7 @@ fn info_and_ping_over_tcp() {
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["protocol"], planner_core::wire::PROTOCOL_VERSION);
     assert_eq!(v["name"], "hil-sim");
-    assert_eq!(v["max_obstacles"], planner_core::MAX_OBSTACLES);
+    assert_eq!(v["max_obstacles"], planner_core::DEVICE_MAX_OBSTACLES);
     assert_eq!(v["max_control_degree"], planner_core::MAX_CONTROL_DEGREE);
     let (ok, out, err) = run_needle(&["ping", "--tcp", &sim.address, "--count", "3"]);
     assert!(ok, "{err}");

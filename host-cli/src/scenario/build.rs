@@ -122,6 +122,7 @@ impl ScenarioFile {
                 curvature_reserve: p
                     .curvature_reserve
                     .unwrap_or_else(|| self.default_curvature_reserve()),
+                risk_within_mm: p.risk_within_mm,
             },
             driver: {
                 let d = self.driver.clone().unwrap_or_default();

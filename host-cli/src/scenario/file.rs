@@ -178,6 +178,8 @@ pub struct PlannerFile {
     pub min_clearance: Option<f32>,
     /// Share of the needle's curvature the plan leaves unused for steering, 0 to 0.5.
     pub curvature_reserve: Option<f32>,
+    /// Reach of the risk term (mm): farther obstacles add nothing to D (off by default).
+    pub risk_within_mm: Option<f32>,
     /// Bound on the predicted probability that the executed plan enters an obstacle (off by
     /// default).
     pub max_collision_probability: Option<f32>,

@@ -71,6 +71,9 @@ pub fn scenario_toml(scenario: &Scenario, name: &str, header: &str) -> String {
     if p.curvature_reserve > 0.0 {
         let _ = writeln!(out, "curvature_reserve = {}", num(p.curvature_reserve));
     }
+    if let Some(r) = p.risk_within_mm {
+        let _ = writeln!(out, "risk_within_mm = {}", num(r));
+    }
     let _ = writeln!(out);
     let d = &s.driver;
     let _ = writeln!(out, "[driver]");

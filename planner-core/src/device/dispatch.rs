@@ -7,7 +7,7 @@ use crate::wire::{
     DeviceInfo, Fault, FrameError, Header, ReplyBody, Request, RequestBody, MAX_CHUNK,
     MAX_PLAN_REQUEST, PROTOCOL_VERSION,
 };
-use crate::{FORM_COUNT, MAX_CONTROL_DEGREE, MAX_OBSTACLES};
+use crate::{DEVICE_MAX_OBSTACLES, FORM_COUNT, MAX_CONTROL_DEGREE};
 
 impl Core {
     /// Answers one received frame (or reports why it cannot be used). Never inlined: its
@@ -110,7 +110,7 @@ impl Core {
             name: truncated(identity.name),
             firmware: truncated(identity.firmware),
             build: truncated(identity.build),
-            max_obstacles: MAX_OBSTACLES as u16,
+            max_obstacles: DEVICE_MAX_OBSTACLES as u16,
             max_control_degree: MAX_CONTROL_DEGREE as u8,
             form_count: FORM_COUNT as u8,
             max_chunk: MAX_CHUNK as u16,

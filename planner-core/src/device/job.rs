@@ -83,6 +83,14 @@ impl Planner {
 /// assert_eq!(format!("{:?}", answer.planned), format!("{here:?}"));
 /// ```
 pub fn plan_as_device(scenario: &Scenario, chance: Option<ChanceRequest>) -> PlanResult {
+    // What the request's decoding refuses on the device (the host's scenario may hold more).
+    let given = scenario.obstacles.len();
+    if given > crate::DEVICE_MAX_OBSTACLES {
+        return Err(PlanError::TooManyObstacles {
+            given: given as u16,
+            capacity: crate::DEVICE_MAX_OBSTACLES as u16,
+        });
+    }
     let mut planner = Planner::new(scenario.clone(), chance)?;
     while planner.step()?.is_some() {}
     planner.result()

@@ -2,6 +2,7 @@
 //! clearance between a path and an obstacle (the same geometry in a plane, which only the seeds
 //! use, is `search::in_plane_geometry`).
 
+pub mod broad;
 pub mod clearance;
 pub mod form;
 pub mod kinematics;

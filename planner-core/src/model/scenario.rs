@@ -19,11 +19,28 @@ pub const MAX_EXTENT_MM: f32 = 1000.0;
 /// refused rather than planned.
 pub const CURVATURE_RADIUS_RANGE_MM: (f32, f32) = (5.0, MAX_EXTENT_MM);
 
-/// Obstacles a scenario can hold.
-pub const MAX_OBSTACLES: usize = 32;
+/// Obstacles a scenario can hold on the host: the sphere cover of an organ and its neighbours.
+pub const HOST_MAX_OBSTACLES: usize = 512;
+
+/// Obstacles a scenario can hold on the device, the wire's device-side bound (a plan request with
+/// more is answered [`PlanError::TooManyObstacles`], on the board and in hil-sim alike). Not yet
+/// 256: the firmware plans 256 spheres like the host, but its plan's buffers then need 111 KiB of
+/// RAM against a budget of 48 KiB (docs/firmware.md).
+pub const DEVICE_MAX_OBSTACLES: usize = 32;
+
+/// Obstacles a scenario can hold on this build ([`DEVICE_MAX_OBSTACLES`] on a bare-metal
+/// target, [`HOST_MAX_OBSTACLES`] elsewhere).
+pub const MAX_OBSTACLES: usize = if cfg!(target_os = "none") {
+    DEVICE_MAX_OBSTACLES
+} else {
+    HOST_MAX_OBSTACLES
+};
 
 /// Fixed-capacity obstacle list.
 pub type Obstacles = heapless::Vec<Obstacle, MAX_OBSTACLES>;
+
+/// How far `planner.risk_within_mm` must lie beyond `planner.min_clearance` (mm).
+pub const MIN_RISK_REACH_MM: f32 = 0.01;
 
 /// The needle's mechanics.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -151,6 +168,10 @@ pub struct PlannerOptions {
     /// (a plan at the needle's full curvature has a target the controller cannot reach when the
     /// tissue bends a little less). 0, the default, plans at the full curvature.
     pub curvature_reserve: f32,
+    /// Reach of the risk term (mm): an obstacle adds 1/d − 1/r to D while its clearance d is
+    /// under r and nothing beyond (continuous at r), and only such obstacles take clearance rows.
+    /// `None`, the default, weighs every obstacle by 1/d wherever it is.
+    pub risk_within_mm: Option<f32>,
 }
 
 impl Default for PlannerOptions {
@@ -162,11 +183,43 @@ impl Default for PlannerOptions {
             risk: RiskMeasure::Mean,
             min_clearance: 0.0,
             curvature_reserve: 0.0,
+            risk_within_mm: None,
         }
     }
 }
 
 impl PlannerOptions {
+    /// Checks the options' numbers and relations (part of [`Scenario::validate`]).
+    pub fn validate(&self) -> Result<(), PlanError> {
+        finite(Field::MinClearance, &[self.min_clearance])?;
+        if self.min_clearance < 0.0 {
+            return Err(PlanError::OutOfRange(Field::MinClearance));
+        }
+        finite(Field::CurvatureReserve, &[self.curvature_reserve])?;
+        if !(0.0..=MAX_CURVATURE_RESERVE).contains(&self.curvature_reserve) {
+            return Err(PlanError::OutOfRange(Field::CurvatureReserve));
+        }
+        if let Some(r) = self.risk_within_mm {
+            finite(Field::RiskWithin, &[r])?;
+            // Clear of the optimiser's clearance floor (the minimum plus at most 1e-3 mm of
+            // rounding margin): an obstacle the path touches must always be measured.
+            if !(r >= self.min_clearance + MIN_RISK_REACH_MM && r <= MAX_EXTENT_MM) {
+                return Err(PlanError::OutOfRange(Field::RiskWithin));
+            }
+        }
+        if self.max_control_degree == 0 || usize::from(self.max_control_degree) > MAX_CONTROL_DEGREE
+        {
+            return Err(PlanError::ControlDegreeOutOfRange {
+                requested: self.max_control_degree,
+                max: MAX_CONTROL_DEGREE as u8,
+            });
+        }
+        if self.selected_forms().is_empty() {
+            return Err(PlanError::NoForms);
+        }
+        Ok(())
+    }
+
     /// The forms this request tries: the explicit list cut to the degree limit, or all up to it.
     pub fn selected_forms(&self) -> FormSet {
         let by_degree = FormSet::up_to_degree(usize::from(self.max_control_degree));
@@ -377,23 +430,7 @@ impl Scenario {
             }
         }
         let o = &self.options;
-        finite(Field::MinClearance, &[o.min_clearance])?;
-        if o.min_clearance < 0.0 {
-            return Err(PlanError::OutOfRange(Field::MinClearance));
-        }
-        finite(Field::CurvatureReserve, &[o.curvature_reserve])?;
-        if !(0.0..=MAX_CURVATURE_RESERVE).contains(&o.curvature_reserve) {
-            return Err(PlanError::OutOfRange(Field::CurvatureReserve));
-        }
-        if o.max_control_degree == 0 || usize::from(o.max_control_degree) > MAX_CONTROL_DEGREE {
-            return Err(PlanError::ControlDegreeOutOfRange {
-                requested: o.max_control_degree,
-                max: MAX_CONTROL_DEGREE as u8,
-            });
-        }
-        if o.selected_forms().is_empty() {
-            return Err(PlanError::NoForms);
-        }
+        o.validate()?;
         if o.workspace == Workspace::PlaneYz {
             if e.direction[0] != 0.0 {
                 return Err(PlanError::NotInPlane(Field::EntryDirection));

@@ -3,6 +3,8 @@
 
 pub(crate) mod basins;
 pub(crate) mod linalg;
+#[cfg(test)]
+mod near_tests;
 pub(crate) mod objective;
 pub(crate) mod problem;
 pub(crate) mod qp;

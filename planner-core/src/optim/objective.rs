@@ -1,10 +1,23 @@
 //! The objective F = a1 L + a2 D + a4 N and the clearances of one form's problem at a point, and
 //! their exact first derivatives (every parameter moves the downstream path as a rigid screw).
+//!
+//! D is exact over every obstacle (within `planner.risk_within_mm` when the scenario sets it).
+//! What the optimiser keeps per obstacle at a point, clearance and gradient rows, is kept for the
+//! *near set* only: the [`MAX_NEAR`] obstacles with the smallest clearance (of those within the
+//! reach), held in index order. A scenario of at most [`MAX_NEAR`] obstacles without a reach has
+//! them all, slot i holding obstacle i, so its plans are those of a planner without slots. With
+//! more, the QP's clearance rows, the model Hessian, the escape from a near miss and the KKT
+//! residual see the near set (the obstacles a step can reach first); D and its gradient still
+//! sum every obstacle.
 
 use super::problem::{v3, Problem, Vars, MAX_VARS};
+use crate::model::broad::Set;
 use crate::model::clearance::{closest_drawn, Closest, Nearest};
 use crate::model::kinematics::{PathGeometry, V3};
-use crate::model::scenario::{RiskMeasure, MAX_OBSTACLES};
+use crate::model::scenario::RiskMeasure;
+
+/// Obstacles the optimiser weighs in rows and gradients at one point (the near set).
+pub const MAX_NEAR: usize = 32;
 
 /// The objective and the clearances at one point (no derivatives: what seeds and line searches
 /// need).
@@ -16,12 +29,19 @@ pub struct Value {
     pub geo: PathGeometry,
     /// a1 L + a2 D + a4 N (H left out: it is zero wherever the optimiser may go).
     pub objective: f32,
-    /// Clearance d_i to each obstacle (mm).
-    pub clearance: [f32; MAX_OBSTACLES],
-    /// The segment nearest to each obstacle.
-    pub nearest_segment: [u8; MAX_OBSTACLES],
-    /// Smallest clearance.
+    /// Slots of the near set in use.
+    pub near_count: usize,
+    /// The obstacle in each slot, increasing.
+    pub near: [u16; MAX_NEAR],
+    /// Clearance d of each slot's obstacle (mm).
+    pub clearance: [f32; MAX_NEAR],
+    /// The segment nearest to each slot's obstacle.
+    pub nearest_segment: [u8; MAX_NEAR],
+    /// Smallest clearance (of the obstacles within the reach: infinite when none is).
     pub min_clearance: f32,
+    /// The obstacles whose clearance was measured (every one without a reach; with one, those
+    /// the broad phase found): the derivatives go over the same.
+    pub measured: Set,
 }
 
 impl Value {
@@ -31,6 +51,50 @@ impl Value {
             && self.objective.is_finite()
             && p.tilt_margin(&self.x) >= 0.0
     }
+
+    /// The slot of obstacle `o`, if it is in the near set.
+    pub fn slot_of(&self, o: usize) -> Option<usize> {
+        let near = self.near.get(..self.near_count)?;
+        near.binary_search(&(o as u16)).ok()
+    }
+}
+
+/// The slots of a near set: count, obstacle, clearance and nearest segment of each.
+type Slots<'a> = (
+    &'a mut usize,
+    &'a mut [u16; MAX_NEAR],
+    &'a mut [f32; MAX_NEAR],
+    &'a mut [u8; MAX_NEAR],
+);
+
+/// Offers obstacle `o` at clearance `d` (nearest segment `seg`) to the near set `slots`;
+/// obstacles come in increasing index order. A full set gives up its farthest (the last of
+/// equals) for a nearer one.
+fn offer(slots: Slots, o: usize, d: f32, seg: u8) {
+    let (count, near, clearance, nearest_segment) = slots;
+    let mut at = *count;
+    if at >= MAX_NEAR {
+        let mut worst = 0;
+        for s in 1..MAX_NEAR {
+            if clearance[s] >= clearance[worst] {
+                worst = s;
+            }
+        }
+        if !(d < clearance[worst]) {
+            return;
+        }
+        for s in worst..MAX_NEAR - 1 {
+            near[s] = near[s + 1];
+            clearance[s] = clearance[s + 1];
+            nearest_segment[s] = nearest_segment[s + 1];
+        }
+        at = MAX_NEAR - 1;
+    } else {
+        *count += 1;
+    }
+    near[at] = o as u16;
+    clearance[at] = d;
+    nearest_segment[at] = seg;
 }
 
 /// First derivatives at a point (what an accepted SQP iterate needs).
@@ -42,8 +106,8 @@ pub struct Derivatives {
     pub jac: [Vars; 3],
     /// Gradient of the objective.
     pub grad: Vars,
-    /// Gradient of each clearance.
-    pub clearance_grad: [Vars; MAX_OBSTACLES],
+    /// Gradient of the clearance of each slot of the point's near set.
+    pub clearance_grad: [Vars; MAX_NEAR],
 }
 
 impl Problem<'_> {
@@ -56,89 +120,107 @@ impl Problem<'_> {
     /// first one the path touches (the value is then inadmissible and only `min_clearance` is
     /// meaningful): a sweep over many seeds needs no more.
     pub fn value_or_blocked(&self, x: &Vars, stop_when_blocked: bool) -> Value {
-        let mut clearance = [f32::INFINITY; MAX_OBSTACLES];
-        let mut nearest_segment = [0u8; MAX_OBSTACLES];
-        let geo = self.geometry(x);
-        let (objective, min_clearance) = self.objective_of(
-            &geo,
-            stop_when_blocked,
-            &mut clearance,
-            &mut nearest_segment,
-        );
-        Value {
+        let mut v = Value {
             x: *x,
-            geo,
-            objective,
-            clearance,
-            nearest_segment,
-            min_clearance,
-        }
+            geo: self.geometry(x),
+            objective: 0.0,
+            near_count: 0,
+            near: [0; MAX_NEAR],
+            clearance: [f32::INFINITY; MAX_NEAR],
+            nearest_segment: [0; MAX_NEAR],
+            min_clearance: f32::INFINITY,
+            measured: Set::default(),
+        };
+        self.objective_of(&mut v, stop_when_blocked);
+        v
     }
 
     /// [`Problem::value`] written into `out` when `out.geo` already holds the path of `x` (a
     /// line search reuses one buffer, and the restoration has just drawn the path: on the
-    /// device, moving a `Value` costs more than many of the operations that make it). The
-    /// clearances of obstacles past the scenario's are left as they were.
+    /// device, moving a `Value` costs more than many of the operations that make it). The slots
+    /// past the near set's are left as they were.
     pub fn value_of_drawn(&self, x: &Vars, out: &mut Value) {
         out.x = *x;
-        let (objective, min_clearance) = self.objective_of(
-            &out.geo,
-            false,
-            &mut out.clearance,
-            &mut out.nearest_segment,
-        );
-        out.objective = objective;
-        out.min_clearance = min_clearance;
+        out.near_count = 0;
+        self.objective_of(out, false);
     }
 
-    /// The objective and smallest clearance of the path `geo`, every clearance recorded.
-    fn objective_of(
-        &self,
-        geo: &PathGeometry,
-        stop_when_blocked: bool,
-        clearance: &mut [f32; MAX_OBSTACLES],
-        nearest_segment: &mut [u8; MAX_OBSTACLES],
-    ) -> (f32, f32) {
-        let (risk, min_clearance) = self.scan(geo, stop_when_blocked, |o, d, seg| {
-            clearance[o] = d;
-            nearest_segment[o] = seg;
-        });
+    /// The objective, the smallest clearance and the near set of the path `v.geo`.
+    fn objective_of(&self, v: &mut Value, stop_when_blocked: bool) {
+        v.measured = self.candidates(&v.geo);
+        let (risk, min_clearance) =
+            self.scan(&v.geo, &v.measured, stop_when_blocked, |o, d, seg| {
+                let slots = (
+                    &mut v.near_count,
+                    &mut v.near,
+                    &mut v.clearance,
+                    &mut v.nearest_segment,
+                );
+                offer(slots, o, d, seg);
+            });
         let w = &self.scenario.weights;
         let risk_term = if w.risk == 0.0 { 0.0 } else { w.risk * risk };
-        let objective =
-            w.length * geo.total_length() + risk_term + w.control * self.form.len() as f32;
-        (objective, min_clearance)
+        v.objective =
+            w.length * v.geo.total_length() + risk_term + w.control * self.form.len() as f32;
+        v.min_clearance = min_clearance;
     }
 
-    /// Clearance of every obstacle (`record(obstacle, clearance, nearest segment)`); returns D
-    /// (infinite once an obstacle is within the clearance floor) and the smallest clearance.
+    /// The obstacles whose clearance a scan of `geo` measures: those the broad phase finds within
+    /// the reach, or every one without a reach.
+    pub(crate) fn candidates(&self, geo: &PathGeometry) -> Set {
+        match (&self.reach, &self.broad) {
+            (Some(r), Some(b)) => b.near_path(&self.scenario.obstacles, geo, r.within),
+            _ => Set::all(self.scenario.obstacles.len()),
+        }
+    }
+
+    /// Clearance and nearest segment of obstacle `o` from the path `geo`.
+    fn clearance_of(&self, geo: &PathGeometry, o: usize) -> Option<(f32, u8)> {
+        let ob = self.scenario.obstacles.get(o)?;
+        let c = v3(ob.center);
+        let mut best = f32::INFINITY;
+        let mut nearest = 0u8;
+        for seg in 0..self.form.len() {
+            let cl = self.closest_on(geo, seg, &c);
+            if cl.distance < best {
+                best = cl.distance;
+                nearest = seg as u8;
+            }
+        }
+        Some((best - ob.radius, nearest))
+    }
+
+    /// Clearance of every obstacle of `candidates` within the reach (`record(obstacle,
+    /// clearance, nearest segment)`, in index order); returns D (infinite once an obstacle is within the clearance
+    /// floor) and the smallest clearance.
     fn scan(
         &self,
         geo: &PathGeometry,
+        candidates: &Set,
         stop_when_blocked: bool,
         mut record: impl FnMut(usize, f32, u8),
     ) -> (f32, f32) {
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
         let mut blocked = false;
-        for (o, ob) in self.scenario.obstacles.iter().enumerate() {
-            let c = v3(ob.center);
-            let mut best = f32::INFINITY;
-            let mut nearest = 0u8;
-            for seg in 0..self.form.len() {
-                let cl = self.closest_on(geo, seg, &c);
-                if cl.distance < best {
-                    best = cl.distance;
-                    nearest = seg as u8;
+        for o in candidates.iter() {
+            let Some((d, nearest)) = self.clearance_of(geo, o) else {
+                continue;
+            };
+            if let Some(r) = &self.reach {
+                if !(d < r.within) {
+                    continue;
                 }
             }
-            let d = best - ob.radius;
             record(o, d, nearest);
             if d < min_clearance {
                 min_clearance = d;
             }
             if d > self.min_clearance {
-                inv_sum += 1.0 / d;
+                inv_sum += match &self.reach {
+                    Some(r) => 1.0 / d - r.inverse,
+                    None => 1.0 / d,
+                };
             } else {
                 blocked = true;
                 if stop_when_blocked {
@@ -181,7 +263,7 @@ impl Problem<'_> {
             residual: [0.0; 3],
             jac: [[0.0; MAX_VARS]; 3],
             grad: [0.0; MAX_VARS],
-            clearance_grad: [[0.0; MAX_VARS]; MAX_OBSTACLES],
+            clearance_grad: [[0.0; MAX_VARS]; MAX_NEAR],
         };
         self.derivatives_into(v, &mut out);
         out
@@ -189,7 +271,8 @@ impl Problem<'_> {
 
     /// [`Problem::derivatives`] written into `out` (an SQP iteration reuses one buffer: on the
     /// device, moving these kilobytes costs more than computing them). Rows of `clearance_grad`
-    /// beyond the scenario's obstacles are left as they were.
+    /// past the near set's are left as they were. D's gradient sums every obstacle within the
+    /// reach in index order; one outside the near set has its row worked out on the way.
     pub fn derivatives_into(&self, v: &Value, out: &mut Derivatives) {
         let geo = &v.geo;
         let screws = self.screws(&v.x, geo);
@@ -199,25 +282,44 @@ impl Problem<'_> {
         let grad = &mut out.grad;
         *grad = [0.0; MAX_VARS];
         let risk_scale = w.risk * self.risk_scale();
-        for (o, ob) in self.scenario.obstacles.iter().enumerate() {
+        let mut slot = 0;
+        let mut spare = [0.0f32; MAX_VARS];
+        for o in v.measured.iter() {
+            let in_slot = slot < v.near_count && usize::from(v.near[slot]) == o;
+            let (d, seg, row) = if in_slot {
+                slot += 1;
+                let s = slot - 1;
+                let seg = usize::from(v.nearest_segment[s]);
+                (v.clearance[s], seg, &mut clearance_grad[s])
+            } else {
+                // Past the near set: only D's gradient needs it.
+                let Some((d, seg)) = self.clearance_of(geo, o) else {
+                    continue;
+                };
+                if self.reach.as_ref().is_some_and(|r| !(d < r.within)) || risk_scale == 0.0 {
+                    continue;
+                }
+                (d, usize::from(seg), &mut spare)
+            };
+            let Some(ob) = self.scenario.obstacles.get(o) else {
+                continue;
+            };
             let c = v3(ob.center);
-            let seg = usize::from(v.nearest_segment[o]);
             let cl = self.closest_on(geo, seg, &c);
-            clearance_grad[o] = [0.0; MAX_VARS];
+            *row = [0.0; MAX_VARS];
             if cl.distance > 0.0 {
                 let normal = (cl.point - c) / cl.distance;
                 let at_end = cl.where_ == Nearest::End;
                 for k in 0..self.n {
                     if self.moves(k, seg, at_end) {
-                        clearance_grad[o][k] = normal.dot(&screws[k].velocity(&cl.point));
+                        row[k] = normal.dot(&screws[k].velocity(&cl.point));
                     }
                 }
             }
-            let d = v.clearance[o];
             if d > 0.0 && risk_scale != 0.0 {
                 let s = -risk_scale / (d * d);
                 for k in 0..self.n {
-                    grad[k] += s * clearance_grad[o][k];
+                    grad[k] += s * row[k];
                 }
             }
         }

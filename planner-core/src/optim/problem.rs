@@ -6,6 +6,7 @@
 //! and in 3-D the bevel rotation before each arc. In plane mode each arc's side is fixed by the
 //! problem ([`Problem::plane`]), so bevel rotations are constants of 0 or pi.
 
+use crate::model::broad::Broad;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{
     entry_basis, insertion_frame, rotate, Frame, PathGeometry, Screw, V3,
@@ -61,8 +62,22 @@ pub struct Problem<'a> {
     /// 1 um, but never finer than f32 resolves at these coordinates (worked out once: every
     /// restoration needs it).
     pub equality_tolerance: f32,
+    /// The reach of the risk term (`planner.risk_within_mm`), if the scenario sets one.
+    pub reach: Option<Reach>,
+    /// The broad phase over the obstacles (with a reach only: without one every obstacle is
+    /// measured for D anyway).
+    pub broad: Option<Broad>,
     entry: V3,
     target: V3,
+}
+
+/// The reach r of the risk term: an obstacle adds 1/d − 1/r while d < r.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// r (mm).
+    pub within: f32,
+    /// 1/r.
+    pub inverse: f32,
 }
 
 pub(super) fn v3(a: [f32; 3]) -> V3 {
@@ -157,6 +172,14 @@ impl<'a> Problem<'a> {
             equality_tolerance: (scenario.target.tolerance * 0.01)
                 .min(1e-3)
                 .max(scenario.resolution()),
+            reach: scenario.options.risk_within_mm.map(|r| Reach {
+                within: r,
+                inverse: 1.0 / r,
+            }),
+            broad: scenario
+                .options
+                .risk_within_mm
+                .map(|_| Broad::new(&scenario.obstacles)),
             entry,
             target: v3(scenario.target.position),
         }

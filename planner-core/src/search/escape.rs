@@ -32,20 +32,20 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
         return None;
     }
     let n = p.n;
-    let obstacles = p.scenario.obstacles.len();
     let mut cur = p.value(&x);
     *evals += 1;
     for _ in 0..MAX_STEPS {
         if cur.admissible(p) {
             return Some(cur);
         }
-        let depth = violation(p, &cur.clearance[..obstacles]);
+        // Over the near set: the obstacles cut into are the nearest ones.
+        let depth = violation(p, &cur.clearance[..cur.near_count]);
         let d = p.derivatives(&cur);
         // Least squares on the violated clearances: H = sum g gᵀ (+ a small ridge), g = sum r g.
         let mut h = [[0.0f32; MAX_VARS]; MAX_VARS];
         let mut grad = [0.0f32; MAX_VARS];
         let goal = p.min_clearance + MARGIN;
-        for o in 0..obstacles {
+        for o in 0..cur.near_count {
             let r = cur.clearance[o] - goal;
             if r >= 0.0 {
                 continue;
@@ -79,7 +79,7 @@ pub fn escape(p: &Problem, x0: &Vars, evals: &mut u32) -> Option<Value> {
             if restore(p, &mut xt, evals) {
                 let v = p.value(&xt);
                 *evals += 1;
-                if violation(p, &v.clearance[..obstacles]) < depth && p.tilt_margin(&xt) >= 0.0 {
+                if violation(p, &v.clearance[..v.near_count]) < depth && p.tilt_margin(&xt) >= 0.0 {
                     next = Some(v);
                     break;
                 }

@@ -187,8 +187,11 @@ pub(super) struct SweepPlane {
     pub(super) tilt_bound_headings: heapless::Vec<f32, 2>,
     /// Components of the nominal insertion axis along the chord, `m` and the normal.
     pub(super) axis: (f32, f32, f32),
-    /// Each obstacle's centre in plane coordinates and its squared height over the plane.
-    pub(super) obstacles: [(f32, f32, f32); MAX_OBSTACLES],
+    /// Each obstacle's centre in plane coordinates, its squared height over the plane and its
+    /// radius, in index order; with a reach (`planner.risk_within_mm`), only the obstacles
+    /// within it of the plane: any other is farther than the reach from every path in the plane,
+    /// adds nothing to D and touches none (the plane's broad phase).
+    pub(super) obstacles: heapless::Vec<[f32; 4], MAX_OBSTACLES>,
 }
 
 impl SweepPlane {
@@ -219,15 +222,23 @@ impl SweepPlane {
                 let _ = tilt_bound_headings.extend_from_slice(&[phi - w, phi + w]);
             }
         }
-        let mut obstacles = [(0.0, 0.0, 0.0); MAX_OBSTACLES];
-        for (o, ob) in obstacles.iter_mut().zip(&p.scenario.obstacles) {
+        let mut obstacles = heapless::Vec::new();
+        for ob in &p.scenario.obstacles {
             let c = V3::new(
                 ob.center[0] - e[0],
                 ob.center[1] - e[1],
                 ob.center[2] - e[2],
             );
             let h = c.dot(&normal);
-            *o = (c.dot(&chord), c.dot(&m), h * h);
+            let h2 = h * h;
+            // The clearance of a path in the plane is sqrt(in-plane² + h2) − radius, never less
+            // than this (f32's sqrt and subtraction are monotonic).
+            let least = crate::fmath::sqrt(h2) - ob.radius;
+            if p.reach.as_ref().is_some_and(|r| least >= r.within) {
+                continue;
+            }
+            // As many as the scenario's obstacles.
+            let _ = obstacles.push([c.dot(&chord), c.dot(&m), h2, ob.radius]);
         }
         SweepPlane {
             chord,
@@ -276,14 +287,22 @@ impl SweepPlane {
         let mut min_clearance = f32::INFINITY;
         let mut inv_sum = 0.0f32;
         let mut blocked = false;
-        for (&(x, y, h2), ob) in self.obstacles.iter().zip(&p.scenario.obstacles) {
+        let far = self.beyond_reach(p, lengths);
+        for &[x, y, h2, radius] in &self.obstacles {
+            if far.is_some_and(|f| f.holds(x, y, h2, radius)) {
+                continue;
+            }
             let nearest = drawn.iter().fold(f32::INFINITY, |m, d| {
                 crate::fmath::min(m, d.distance_squared((x, y)))
             });
-            let d = crate::fmath::sqrt(nearest + h2) - ob.radius;
+            let d = crate::fmath::sqrt(nearest + h2) - radius;
             min_clearance = crate::fmath::min(min_clearance, d);
             if d > p.min_clearance {
-                inv_sum += 1.0 / d;
+                inv_sum += match &p.reach {
+                    None => 1.0 / d,
+                    Some(r) if d < r.within => 1.0 / d - r.inverse,
+                    Some(_) => 0.0,
+                };
             } else if d > p.min_clearance - NEAR_MISS {
                 blocked = true;
             } else {
@@ -294,6 +313,25 @@ impl SweepPlane {
             return (f32::INFINITY, min_clearance);
         }
         (inv_sum * p.risk_scale(), min_clearance)
+    }
+
+    /// With a reach, the test that an obstacle lies beyond it from every path of total length
+    /// `lengths` from the entry to the target: such a path lies in the ellipse with those foci
+    /// (the sum of its distances to them is at most its length), so in the ellipse's box.
+    fn beyond_reach(&self, p: &Problem, lengths: &[f32; MAX_CONTROL_DEGREE]) -> Option<Far> {
+        let r = p.reach.as_ref()?;
+        let total: f32 = lengths.iter().sum();
+        let half = 0.5 * total;
+        let (dist, half_dist) = (self.dist, 0.5 * self.dist);
+        // Well above the rounding of the drawn path and of the clearances (f32, coordinates up
+        // to 1000 mm): what is skipped would have measured beyond the reach.
+        let slack = 1e-2 + 1e-4 * total;
+        Some(Far {
+            centre: half_dist,
+            half_length: half,
+            half_width: 0.5 * crate::fmath::sqrt((total * total - dist * dist).max(0.0)),
+            reach: r.within + slack,
+        })
     }
 
     /// Problem variables of a planar path; `None` when it leaves the tilt cone or a bound.
@@ -347,5 +385,26 @@ impl SweepPlane {
             }
         }
         Some(x)
+    }
+}
+
+/// The box (in plane coordinates) that holds every path of one length from the entry to the
+/// target, widened by the reach.
+#[derive(Clone, Copy)]
+struct Far {
+    centre: f32,
+    half_length: f32,
+    half_width: f32,
+    reach: f32,
+}
+
+impl Far {
+    /// Whether the obstacle at (x, y), its squared height `h2` over the plane and of radius
+    /// `radius`, lies beyond the reach from all of the box.
+    fn holds(&self, x: f32, y: f32, h2: f32, radius: f32) -> bool {
+        let gx = (libm::fabsf(x - self.centre) - self.half_length).max(0.0);
+        let gy = (libm::fabsf(y) - self.half_width).max(0.0);
+        let within = radius + self.reach;
+        gx * gx + gy * gy + h2 >= within * within
     }
 }

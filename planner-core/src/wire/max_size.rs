@@ -96,7 +96,8 @@ impl MaxSize for Driver {
     const MAX_SIZE: usize = 4 * f32::MAX_SIZE;
 }
 impl MaxSize for PlannerOptions {
-    const MAX_SIZE: usize = u8::MAX_SIZE + FormSet::MAX_SIZE + 1 + 1 + 2 * f32::MAX_SIZE;
+    const MAX_SIZE: usize =
+        u8::MAX_SIZE + FormSet::MAX_SIZE + 1 + 1 + 2 * f32::MAX_SIZE + Option::<f32>::MAX_SIZE;
 }
 impl MaxSize for Field {
     // Variant tag, then at most one u16 (an obstacle index).

@@ -3,15 +3,16 @@
 //! ([`PlanError::TooManyObstacles`]) instead of an undecodable request.
 
 use crate::error::PlanError;
-use crate::model::scenario::{Obstacle, Obstacles, MAX_OBSTACLES};
+use crate::model::scenario::{Obstacle, Obstacles, DEVICE_MAX_OBSTACLES};
 use core::fmt;
 use serde::de::{SeqAccess, Visitor};
 use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-/// Obstacles the wire format can carry in one plan request: twice what the planner holds, so a
-/// scenario somewhat over capacity still arrives and is answered with a count.
-pub const WIRE_MAX_OBSTACLES: usize = 2 * MAX_OBSTACLES;
+/// Obstacles the wire format can carry in one plan request: twice what the device holds (and so
+/// every scenario the host holds), so a scenario over the device's capacity still arrives and is
+/// answered with a count. The same on every build: the format must not depend on who decodes it.
+pub const WIRE_MAX_OBSTACLES: usize = 2 * DEVICE_MAX_OBSTACLES;
 
 /// Obstacles as sent: the ones that fit, and how many were sent in all.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -34,12 +35,13 @@ impl WireObstacles {
         self.given
     }
 
-    /// The obstacles, or the typed error for a list over the planner's capacity.
+    /// The obstacles, or the typed error for a list over the device's capacity (also where a
+    /// host decodes the request, as hil-sim does: it must refuse what the board refuses).
     pub fn into_obstacles(self) -> Result<Obstacles, PlanError> {
-        if usize::from(self.given) > MAX_OBSTACLES {
+        if usize::from(self.given) > DEVICE_MAX_OBSTACLES {
             Err(PlanError::TooManyObstacles {
                 given: self.given,
-                capacity: MAX_OBSTACLES as u16,
+                capacity: DEVICE_MAX_OBSTACLES as u16,
             })
         } else {
             Ok(self.kept)

@@ -11,7 +11,7 @@ use crate::{Field, PlanError};
 use serde::Serialize;
 
 fn encoded_len<T: Serialize>(v: &T) -> usize {
-    let mut buf = [0u8; 4096];
+    let mut buf = [0u8; 16384];
     postcard::to_slice(v, &mut buf).expect("fits").len()
 }
 
@@ -147,6 +147,7 @@ fn bounds_are_exact_for_worst_case_values() {
 
     let mut s = Scenario::paper();
     s.options.forms = FormSet(u32::MAX);
+    s.options.risk_within_mm = Some(20.0);
     let mut req = PlanRequest::new(&s);
     let mut big = heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::new();
     while big
@@ -156,7 +157,7 @@ fn bounds_are_exact_for_worst_case_values() {
         })
         .is_ok()
     {}
-    // The wire list serialises as a plain sequence, so a full 64-element Vec stands in for it.
+    // The wire list serialises as a plain sequence, so a full Vec stands in for it.
     let full = (
         &req.needle,
         &req.entry,
@@ -307,9 +308,10 @@ fn too_many_obstacles_decode_into_a_typed_error() {
     let mut s = Scenario::paper();
     let base = PlanRequest::new(&s);
     let mut many = heapless::Vec::<Obstacle, WIRE_MAX_OBSTACLES>::new();
-    for i in 0..40 {
+    let n = crate::DEVICE_MAX_OBSTACLES + 8;
+    for i in 0..n {
         many.push(Obstacle {
-            center: [0.0, 100.0 + i as f32 * 30.0, 0.0],
+            center: [0.0, 100.0 + (i % 30) as f32 * 30.0, 0.0],
             radius: 1.0,
         })
         .unwrap();
@@ -327,12 +329,13 @@ fn too_many_obstacles_decode_into_a_typed_error() {
     let mut buf = [0u8; MAX_PLAN_REQUEST];
     let bytes = postcard::to_slice(&shaped, &mut buf).unwrap();
     let req: PlanRequest = postcard::from_bytes(bytes).unwrap();
-    assert_eq!(req.obstacles.given(), 40);
+    assert_eq!(usize::from(req.obstacles.given()), n);
+    // Refused at the device's capacity, even where the host's planner would hold them.
     assert_eq!(
         req.into_scenario(),
         Err(PlanError::TooManyObstacles {
-            given: 40,
-            capacity: crate::MAX_OBSTACLES as u16
+            given: n as u16,
+            capacity: crate::DEVICE_MAX_OBSTACLES as u16
         })
     );
     s.obstacles.clear();

@@ -18,14 +18,14 @@ pub(super) fn initial(p: &Problem) -> [Vars; MAX_VARS] {
 const MAX_CONDITION: f32 = 1e4;
 
 /// A Hessian model from scratch: the length term's scale on the diagonal plus the Gauss–Newton
-/// curvature of the risk term, 2 a2 s / d³ ∇d ∇dᵀ per obstacle (s: 1/count for the mean), which
-/// dominates near an obstacle.
+/// curvature of the risk term, 2 a2 s / d³ ∇d ∇dᵀ per obstacle of the near set (s: 1/count for
+/// the mean), which dominates near an obstacle.
 pub(super) fn model_hessian(p: &Problem, cur: &Value, cur_d: &Derivatives) -> [Vars; MAX_VARS] {
     let n = p.n;
     let gamma = p.scenario.weights.length * p.radius + 1.0;
     let mut h = initial(p);
     let risk = p.scenario.weights.risk * p.risk_scale();
-    for o in 0..p.scenario.obstacles.len() {
+    for o in 0..cur.near_count {
         let d = cur.clearance[o];
         if !(d > 0.0) || risk == 0.0 {
             continue;
@@ -44,7 +44,8 @@ pub(super) fn model_hessian(p: &Problem, cur: &Value, cur_d: &Derivatives) -> [V
     h
 }
 
-/// Gradient of the Lagrangian for the nonlinear constraints (end point, clearances, tilt).
+/// Gradient of the Lagrangian for the nonlinear constraints (end point, clearances, tilt);
+/// `clear` holds (slot, multiplier) of the clearance rows in the near set of the point.
 pub(super) fn lagrangian_grad(
     p: &Problem,
     x: &Vars,

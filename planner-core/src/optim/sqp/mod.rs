@@ -199,7 +199,7 @@ fn run(
         ci = 1 - ci;
     }
     let multipliers = if solved_any {
-        Multipliers::of(p, &sol, &rows[ri])
+        Multipliers::of(p, &sol, &rows[ri], &vals[ci])
     } else {
         Multipliers::none()
     };
@@ -307,18 +307,24 @@ fn update_hessian(
     rows: &QpRows,
 ) {
     let n = p.n;
-    let clear: heapless::Vec<(usize, f32), QP_CLEARANCES> = rows.clearances[..rows.n_clear]
-        .iter()
-        .map(|&(o, row)| (o, sol.mult[row]))
-        .collect();
+    // By slot at either point; a row whose obstacle left the near set is left out of both.
+    let mut clear_cur: heapless::Vec<(usize, f32), QP_CLEARANCES> = heapless::Vec::new();
+    let mut clear_next: heapless::Vec<(usize, f32), QP_CLEARANCES> = heapless::Vec::new();
+    for &(o, row) in &rows.clearances[..rows.n_clear] {
+        if let (Some(a), Some(b)) = (cur.slot_of(o), next.slot_of(o)) {
+            // Both within QP_CLEARANCES, the rows' own capacity.
+            let _ = clear_cur.push((a, sol.mult[row]));
+            let _ = clear_next.push((b, sol.mult[row]));
+        }
+    }
     let tilt_mult = if p.has_tilt() {
         sol.mult[rows.tilt]
     } else {
         0.0
     };
-    let g_old = hessian::lagrangian_grad(p, &cur.x, cur_d, &sol.eq_mult, &clear, tilt_mult);
+    let g_old = hessian::lagrangian_grad(p, &cur.x, cur_d, &sol.eq_mult, &clear_cur, tilt_mult);
     p.derivatives_into(next, cur_d);
-    let g_new = hessian::lagrangian_grad(p, &next.x, cur_d, &sol.eq_mult, &clear, tilt_mult);
+    let g_new = hessian::lagrangian_grad(p, &next.x, cur_d, &sol.eq_mult, &clear_next, tilt_mult);
     let mut s = [0.0f32; MAX_VARS];
     let mut y = [0.0f32; MAX_VARS];
     for k in 0..n {

@@ -12,8 +12,7 @@
 //! its own units, clearances in mm). The residual is the larger of the two.
 
 use super::rows::QpRows;
-use crate::model::scenario::MAX_OBSTACLES;
-use crate::optim::objective::{Derivatives, Value};
+use crate::optim::objective::{Derivatives, Value, MAX_NEAR};
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
 use crate::optim::qp::QpSolution;
 
@@ -28,8 +27,9 @@ pub(super) struct Multipliers {
     upper: Vars,
     /// Of the tilt cone.
     tilt: f32,
-    /// Of each obstacle's clearance (zero where the QP held no row).
-    clearance: [f32; MAX_OBSTACLES],
+    /// Of the clearance of each slot of the reported point's near set (zero where the QP held
+    /// no row).
+    clearance: [f32; MAX_NEAR],
 }
 
 impl Multipliers {
@@ -40,12 +40,13 @@ impl Multipliers {
             lower: [0.0; MAX_VARS],
             upper: [0.0; MAX_VARS],
             tilt: 0.0,
-            clearance: [0.0; MAX_OBSTACLES],
+            clearance: [0.0; MAX_NEAR],
         }
     }
 
-    /// The multipliers of `sol`, a QP whose rows are `rows`.
-    pub(super) fn of(p: &Problem, sol: &QpSolution, rows: &QpRows) -> Self {
+    /// The multipliers of `sol`, a QP whose rows are `rows`, for the point `at` (a clearance
+    /// row of an obstacle outside its near set is left out).
+    pub(super) fn of(p: &Problem, sol: &QpSolution, rows: &QpRows, at: &Value) -> Self {
         let mut m = Multipliers::none();
         m.end = sol.eq_mult;
         for k in 0..p.n {
@@ -56,7 +57,9 @@ impl Multipliers {
             m.tilt = sol.mult[rows.tilt];
         }
         for &(o, row) in &rows.clearances[..rows.n_clear] {
-            m.clearance[o] = sol.mult[row];
+            if let Some(slot) = at.slot_of(o) {
+                m.clearance[slot] = sol.mult[row];
+            }
         }
         m
     }
@@ -140,7 +143,7 @@ pub(super) fn residual_at(p: &Problem, at: &Value, d: &Derivatives, m: &Multipli
     if p.has_tilt() {
         r.inequality(&p.tilt_margin_grad(x), m.tilt, p.tilt_margin(x));
     }
-    for o in 0..p.scenario.obstacles.len() {
+    for o in 0..at.near_count.min(MAX_NEAR) {
         r.inequality(
             &d.clearance_grad[o],
             m.clearance[o],

@@ -1,8 +1,7 @@
 //! The QP of one SQP step: which rows it holds and how they are built.
 
 use super::{QP_CLEARANCES, TRUST};
-use crate::model::scenario::MAX_OBSTACLES;
-use crate::optim::objective::{Derivatives, Value};
+use crate::optim::objective::{Derivatives, Value, MAX_NEAR};
 use crate::optim::problem::{Problem, Vars};
 use crate::optim::qp::Qp;
 
@@ -11,7 +10,8 @@ pub(super) struct QpRows {
     /// Row of the first variable's lower bound: variable k's lower and upper bounds (each within
     /// the trust box) are rows `bounds + 2k` and `bounds + 2k + 1`.
     pub bounds: usize,
-    /// (obstacle, row) of each clearance row.
+    /// (obstacle, row) of each clearance row (the obstacle's index, not its slot: the rows
+    /// outlive the near set of the point they were built at).
     pub clearances: [(usize, usize); QP_CLEARANCES],
     /// Clearance rows held.
     pub n_clear: usize,
@@ -53,8 +53,8 @@ pub(super) fn tangent_qp(
         cur_d,
         clear_limit,
         |_| true,
-        |o, row| {
-            rows.clearances[rows.n_clear] = (o, row);
+        |slot, row| {
+            rows.clearances[rows.n_clear] = (usize::from(cur.near[slot]), row);
             rows.n_clear += 1;
         },
     );
@@ -77,8 +77,9 @@ pub(crate) fn push_step_limits(qp: &mut Qp, p: &Problem, x: &Vars, d: &Derivativ
     tilt
 }
 
-/// Pushes the linearised clearances (kept at the floor) of up to `limit` obstacles for which
-/// `eligible` holds, nearest first; `pushed(obstacle, row)` is told each row.
+/// Pushes the linearised clearances (kept at the floor) of up to `limit` obstacles of the near
+/// set of `cur` whose slot `eligible` holds for, nearest first (the first slot of equals);
+/// `pushed(slot, row)` is told each row.
 pub(crate) fn push_nearest_clearances(
     qp: &mut Qp,
     p: &Problem,
@@ -88,8 +89,8 @@ pub(crate) fn push_nearest_clearances(
     eligible: impl Fn(usize) -> bool,
     mut pushed: impl FnMut(usize, usize),
 ) {
-    let obstacles = p.scenario.obstacles.len();
-    let mut taken = [false; MAX_OBSTACLES];
+    let obstacles = cur.near_count.min(MAX_NEAR);
+    let mut taken = [false; MAX_NEAR];
     for _ in 0..limit.min(obstacles) {
         let mut best: Option<usize> = None;
         for o in 0..obstacles {
