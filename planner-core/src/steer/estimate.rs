@@ -9,6 +9,7 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
+use super::lost::{Rejected, LOST_CONSISTENCY};
 use super::target::{TargetFilter, TargetFix, PUSH_ZONE_MM};
 use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
@@ -87,6 +88,8 @@ pub struct Estimate {
     /// How far the fixes without a roll have moved the roll since it was last brought back to
     /// the commanded one (radians about the heading).
     roll_offset: f32,
+    /// The position fixes rejected in a row ([`Estimate::lost_offset`]).
+    rejected: Rejected,
 }
 
 impl Estimate {
@@ -115,6 +118,7 @@ impl Estimate {
             consistency: 1.0,
             roll_unmeasured: false,
             roll_offset: 0.0,
+            rejected: Rejected::NONE,
         }
     }
 
@@ -254,10 +258,23 @@ impl Estimate {
             h[(k, k)] = 1.0;
         }
         let Some(d2) = self.fuse_rows(&h, y, [r; 3]) else {
+            self.rejected.rejected(y.norm());
             return false;
         };
+        self.rejected = Rejected::NONE;
         self.consistency += CONSISTENCY_WEIGHT * (d2 / 3.0 - self.consistency);
         true
+    }
+
+    /// How far the tip may be from the estimate when the tracker keeps disagreeing with it
+    /// (mm; 0 while fixes are fused, or while the fused ones agree with the model): see
+    /// [`Rejected::offset`].
+    pub fn lost_offset(&self) -> f32 {
+        if self.consistency > LOST_CONSISTENCY {
+            self.rejected.offset()
+        } else {
+            0.0
+        }
     }
 
     /// Fuses a measured heading and (when the sensor gives it) bevel direction; `false` (and no

@@ -31,6 +31,7 @@ mod aimed;
 pub mod apriori;
 mod attempt;
 pub mod estimate;
+mod lost;
 mod noise;
 pub mod replan;
 mod state;
@@ -54,7 +55,10 @@ pub enum StopReason {
     /// The continuation being executed is predicted to come too close to an obstacle and no
     /// replan passes the check.
     NoSafeContinuation,
-    /// No tracker fix was accepted over more than the configured gap of insertion.
+    /// No tracker fix was accepted over more than the configured gap of insertion; or the
+    /// estimate may have lost the tip (a fix rejected while the fused ones are inconsistent,
+    /// `steer::lost`) and the continuation passes an obstacle within the margin plus how far
+    /// that fix put the tip.
     TrackingLost,
     /// The robot's progress is not a number or went backwards: the device cannot know where
     /// the needle is.

@@ -352,6 +352,18 @@ impl Steering {
             predicted_clearance_mm: now.min_clearance,
             evaluations: 0,
         };
+        // The tracker keeps putting the tip elsewhere: the tip may be anywhere within that
+        // offset of the estimate, and a replan on an estimate that has lost the tip is no
+        // safer than the path it replaces. Near an obstacle the run stops, reported, before it
+        // can touch (in the world at twice the controller's assumption the collisions came
+        // here: docs/execution.md, "Twice the world").
+        let lost = self.estimate.lost_offset();
+        if lost > 0.0 && !(now.min_clearance > floor + margin + lost) {
+            reply.command = Command::Stop(StopReason::TrackingLost);
+            self.stopped = Some(StopReason::TrackingLost);
+            self.last_reply = Some(reply.clone());
+            return reply;
+        }
         let ahead: f32 = remaining.iter().map(|s| s.op.inserted_mm()).sum();
         let trigger = self.config.replan_error_mm.max(REPLAN_DEFER_PER_MM * ahead);
         // Without insertion since the last replan (a turn, read), a new one only when the
