@@ -88,3 +88,60 @@ pub fn to_json(name: &str, r: &BenchResult) -> Value {
         })).collect::<Vec<_>>(),
     })
 }
+
+/// Two scenarios planned side by side (alternating, one thread): the far spheres' cost.
+pub struct SideBySide {
+    /// Median plan time with every sphere (ms).
+    pub all_ms: f64,
+    /// Median plan time with the near spheres alone (ms).
+    pub near_ms: f64,
+    /// The best form both plans have.
+    pub best: String,
+}
+
+/// Median of `t` (ms; not empty).
+fn median(mut t: Vec<f64>) -> f64 {
+    t.sort_by(f64::total_cmp);
+    let n = t.len();
+    if n % 2 == 1 {
+        t[n / 2]
+    } else {
+        (t[n / 2 - 1] + t[n / 2]) / 2.0
+    }
+}
+
+/// Plans [`crate::scale::near_and_far`]`(seed, total, near)` and its near spheres alone `runs`
+/// times each, alternating: an error unless the two are the same plan (the far spheres lie
+/// beyond the risk term's reach), else both medians.
+pub fn near_and_far(
+    seed: u64,
+    total: usize,
+    near: usize,
+    runs: usize,
+) -> anyhow::Result<SideBySide> {
+    use crate::scale::{near_and_far, plan_difference, NearFar};
+    anyhow::ensure!(
+        near >= 1 && near <= total && total <= planner_core::MAX_OBSTACLES,
+        "--near-and-far {total},{near}: NEAR from 1 to TOTAL, TOTAL at most {}",
+        planner_core::MAX_OBSTACLES
+    );
+    let NearFar { all, near_alone } = near_and_far(seed, total, near);
+    let (a, b) = (plan(&all)?, plan(&near_alone)?);
+    if let Some(d) = plan_difference(&a, &b) {
+        anyhow::bail!("the plans differ: {d}");
+    }
+    let (mut t_all, mut t_near) = (Vec::new(), Vec::new());
+    for _ in 0..runs.max(1) {
+        for (s, times) in [(&all, &mut t_all), (&near_alone, &mut t_near)] {
+            let t = Instant::now();
+            let r = plan(s)?;
+            times.push(t.elapsed().as_secs_f64() * 1e3);
+            std::hint::black_box(&r);
+        }
+    }
+    Ok(SideBySide {
+        all_ms: median(t_all),
+        near_ms: median(t_near),
+        best: a.best().map_or("none".into(), |o| o.form.to_string()),
+    })
+}

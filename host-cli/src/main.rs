@@ -126,6 +126,14 @@ struct BenchArgs {
     /// Print JSON instead of the table.
     #[arg(long)]
     json: bool,
+    /// Instead of files: TOTAL generated spheres of which NEAR lie within 20 mm of the
+    /// entry-target segment (D summed over the spheres within 20 mm), planned side by side with
+    /// the NEAR alone; the two plans must be the same (docs/anatomy.md, "Hundreds of spheres").
+    #[arg(long, value_name = "TOTAL,NEAR", conflicts_with = "files")]
+    near_and_far: Option<String>,
+    /// The seed of `--near-and-far`'s scenario.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 fn load(args: &PlanArgs) -> Result<Scenario> {
@@ -246,6 +254,9 @@ fn send(args: &SendArgs) -> Result<()> {
 }
 
 fn bench(args: &BenchArgs) -> Result<()> {
+    if let Some(spec) = &args.near_and_far {
+        return bench_near_and_far(args, spec);
+    }
     let files = if args.files.is_empty() {
         vec![PathBuf::from("examples/paper.toml")]
     } else {
@@ -268,6 +279,38 @@ fn bench(args: &BenchArgs) -> Result<()> {
     if args.json {
         writeln!(std::io::stdout(), "{}", serde_json::Value::Array(out))?;
     }
+    Ok(())
+}
+
+/// `needle bench --near-and-far TOTAL,NEAR`.
+fn bench_near_and_far(args: &BenchArgs, spec: &str) -> Result<()> {
+    let parsed = spec
+        .split_once(',')
+        .and_then(|(t, n)| Some((t.trim().parse().ok()?, n.trim().parse().ok()?)));
+    let Some((total, near)) = parsed else {
+        anyhow::bail!("--near-and-far {spec}: expected TOTAL,NEAR (two whole numbers)");
+    };
+    let r = needle_cli::bench::near_and_far(args.seed, total, near, args.runs)?;
+    let ratio = r.all_ms / r.near_ms;
+    let text = if args.json {
+        let v = serde_json::json!({
+            "seed": args.seed, "spheres": total, "near": near, "runs": args.runs.max(1),
+            "best": r.best, "all_ms": r.all_ms, "near_ms": r.near_ms, "ratio": ratio,
+        });
+        format!("{v}\n")
+    } else {
+        format!(
+            "seed {}: {total} spheres, {near} within 20 mm; the same plan (best {})\n\
+             {total} spheres: median {:.2} ms over {} runs\n\
+             {near} alone: median {:.2} ms\nratio {ratio:.3}\n",
+            args.seed,
+            r.best,
+            r.all_ms,
+            args.runs.max(1),
+            r.near_ms
+        )
+    };
+    write!(std::io::stdout(), "{text}")?;
     Ok(())
 }
 

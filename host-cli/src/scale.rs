@@ -1,7 +1,7 @@
 //! Scenarios for the scale bench: many spheres of which a few lie near the entry–target segment,
 //! with `planner.risk = "sum"` and `planner.risk_within_mm`, beside the near ones alone. The two
 //! must plan alike (the far spheres add nothing to D and take no rows); the bench
-//! (`cargo run --release -p needle-cli --example scale_bench`) times them side by side.
+//! (`needle bench --near-and-far 256,32`) times them side by side.
 
 use crate::random::{seeded, Draw};
 use planner_core::model::scenario::{Obstacle, Obstacles, RiskMeasure, Workspace};

@@ -51,3 +51,36 @@ fn a_reach_out_of_range_is_refused_with_its_key() {
         "at least planner.min_clearance + 0.01 mm",
     );
 }
+
+/// `needle bench --near-and-far`: the far spheres leave the plan as it was (checked by the
+/// command, which fails otherwise) and both medians are printed; a bad spec or a total over the
+/// host's capacity is a clear error.
+#[test]
+fn the_bench_times_many_spheres_beside_the_near_ones() {
+    let v = needle_json(&["bench", "--near-and-far", "64,8", "--runs", "1", "--json"]);
+    assert_eq!(
+        (v["spheres"].as_u64(), v["near"].as_u64()),
+        (Some(64), Some(8))
+    );
+    let ratio = v["ratio"].as_f64().unwrap();
+    let (all, near) = (
+        v["all_ms"].as_f64().unwrap(),
+        v["near_ms"].as_f64().unwrap(),
+    );
+    assert!(
+        all > 0.0 && near > 0.0 && (ratio - all / near).abs() < 1e-9,
+        "{v}"
+    );
+    for (spec, says) in [
+        ("64", "expected TOTAL,NEAR"),
+        ("8,64", "NEAR from 1 to TOTAL"),
+        ("513,8", "TOTAL at most 512"),
+    ] {
+        let out = needle_e2e::needle()
+            .args(["bench", "--near-and-far", spec, "--runs", "1"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(says), "{spec}: {err}");
+    }
+}
