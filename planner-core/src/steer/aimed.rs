@@ -125,33 +125,43 @@ mod tests {
     use crate::model::kinematics::{Frame, V3};
     use crate::model::scenario::{Scenario, Workspace};
 
-    /// A tip off its course, 30 mm short of the target and 2 mm to the side of it in a plane
-    /// its bevel does not bend in: the duty-cycled arc turns the bevel and reaches it exactly,
-    /// at a fraction of the needle's curvature.
-    #[test]
-    fn the_aimed_duty_cycled_arc_reaches_a_point_to_the_side() {
+    /// The paper's needle in 3-D, no obstacle.
+    fn open_space() -> Scenario {
         let mut scenario = Scenario::paper();
         scenario.options.workspace = Workspace::Space;
         scenario.obstacles.clear();
-        let tip = Frame {
-            p: V3::new(0.0, 0.0, 50.0),
-            r: nalgebra::Matrix3::identity(),
-        };
-        let target = V3::new(2.0, 0.0, 80.0);
-        let r = scenario.needle.curvature_radius;
-        let input = ReplanInput {
-            scenario: &scenario,
-            tip,
-            target,
-            radius: r,
+        scenario
+    }
+
+    /// A tip at 50 mm heading +z, the target 30 mm ahead and 2 mm to the side, the arcs pushed
+    /// at `arc_duty`.
+    fn off_course(scenario: &Scenario, arc_duty: f32) -> ReplanInput<'_> {
+        ReplanInput {
+            scenario,
+            tip: Frame {
+                p: V3::new(0.0, 0.0, 50.0),
+                r: nalgebra::Matrix3::identity(),
+            },
+            target: V3::new(2.0, 0.0, 80.0),
+            radius: scenario.needle.curvature_radius,
             twist_deg: 0.0,
             iterations: 10,
             margin: 0.3,
             inserted_mm: 50.0,
             dead_band_deg: 2.0,
-            arc_duty: 1.0,
+            arc_duty,
             spend_reserve: true,
-        };
+        }
+    }
+
+    /// A tip off its course, 30 mm short of the target and 2 mm to the side of it in a plane
+    /// its bevel does not bend in: the duty-cycled arc turns the bevel and reaches it exactly,
+    /// at a fraction of the needle's curvature.
+    #[test]
+    fn the_aimed_duty_cycled_arc_reaches_a_point_to_the_side() {
+        let scenario = open_space();
+        let r = scenario.needle.curvature_radius;
+        let input = off_course(&scenario, 1.0);
         let found = aimed_duty(&input, &(0, 0)).expect("a duty-cycled continuation");
         assert!(
             found.prediction.target_error < 1e-3,
@@ -182,26 +192,8 @@ mod tests {
     /// spun line, and it ends on the target as exactly as the constant arc does.
     #[test]
     fn the_turn_spent_first_is_a_full_arc_then_a_line_to_the_target() {
-        let mut scenario = Scenario::paper();
-        scenario.options.workspace = Workspace::Space;
-        scenario.obstacles.clear();
-        let tip = Frame {
-            p: V3::new(0.0, 0.0, 50.0),
-            r: nalgebra::Matrix3::identity(),
-        };
-        let input = ReplanInput {
-            scenario: &scenario,
-            tip,
-            target: V3::new(2.0, 0.0, 80.0),
-            radius: scenario.needle.curvature_radius,
-            twist_deg: 0.0,
-            iterations: 10,
-            margin: 0.3,
-            inserted_mm: 50.0,
-            dead_band_deg: 2.0,
-            arc_duty: 0.8,
-            spend_reserve: true,
-        };
+        let scenario = open_space();
+        let input = off_course(&scenario, 0.8);
         let found = front_loaded(&input, &(0, 0)).expect("a continuation");
         assert!(
             found.prediction.target_error < 1e-3,
