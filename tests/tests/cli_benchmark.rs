@@ -74,11 +74,14 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         keys(&v),
         [
             "by_form",
+            "controller",
+            "faults",
             "generator",
             "perturbation",
             "scenarios",
             "totals",
-            "unplanned"
+            "unplanned",
+            "world"
         ]
     );
     let rows = v["scenarios"].as_array().unwrap();
