@@ -169,3 +169,78 @@ fn a_point_slicer_saves_is_planned_where_slicer_placed_it() {
     assert_eq!(read_in["best"]["length"], typed["best"]["length"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A segmentation Slicer saves (`.seg.nrrd`: LPS, gzip, segments cropped to their extent with
+/// names, label values and layers in the header) is covered where Slicer put it: the lesion, a
+/// voxel ball of radius 6, by one sphere on its centre at most half a voxel's diagonal larger;
+/// every corner of every voxel of the rib, a box, inside the rib's spheres (checked exhaustively).
+#[test]
+fn a_segmentation_slicer_saves_is_covered_where_slicer_put_it() {
+    let dir = scratch("segmentation");
+    let file = dir.join("anatomy.seg.nrrd");
+    slicer(&["segmentation", file.to_str().unwrap()]);
+    let report = needle_json(&[
+        "cover",
+        file.to_str().unwrap(),
+        "--segments",
+        "lesion,rib",
+        "--json",
+    ]);
+    let segment = |name: &str| {
+        report["segments"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["name"] == name)
+            .unwrap_or_else(|| panic!("no segment {name} in {report}"))
+            .clone()
+    };
+    let spheres = |s: &Value| -> Vec<([f64; 3], f64)> {
+        s["spheres"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| {
+                (
+                    triples(&Value::Array(vec![b["center"].clone()]))[0],
+                    b["radius"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    // Voxel (i, j, k) of the script's grid is at RAS (-15 + i, 5 + j, 20 + k).
+    let at =
+        |i: i32, j: i32, k: i32| [f64::from(i) - 15.0, f64::from(j) + 5.0, f64::from(k) + 20.0];
+    let lesion = segment("lesion");
+    assert_eq!(lesion["voxels"], 925);
+    let ball = spheres(&lesion);
+    assert_eq!(ball.len(), 1, "{lesion}");
+    assert!(close(ball[0].0, at(10, 12, 14), 1e-4), "{lesion}");
+    assert!(
+        ball[0].1 >= 6.0 && ball[0].1 <= 6.0 + 3f64.sqrt() / 2.0 + 1e-9,
+        "{lesion}"
+    );
+
+    let rib = segment("rib");
+    assert_eq!(rib["voxels"], 6 * 20 * 9);
+    let cover = spheres(&rib);
+    for i in 20..26 {
+        for j in 5..25 {
+            for k in 3..12 {
+                let c = at(i, j, k);
+                for corner in 0..8 {
+                    let p = [0, 1, 2].map(|a| c[a] + if corner >> a & 1 == 1 { 0.5 } else { -0.5 });
+                    let inside = cover.iter().any(|(o, r)| {
+                        let d2: f64 = (0..3).map(|a| (p[a] - o[a]).powi(2)).sum();
+                        d2.sqrt() <= r + 1e-6
+                    });
+                    assert!(
+                        inside,
+                        "rib voxel ({i}, {j}, {k}) corner {p:?} outside {cover:?}"
+                    );
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
