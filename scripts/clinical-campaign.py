@@ -58,7 +58,7 @@ def row(name, results):
     return {"world": name, "runs": runs, "reached_pct": 100 * reached / max(runs, 1), "collisions": coll,
             "mean": mean, "p95": p95, "max": errs[-1] if errs else float("nan"), "stops": stops}
 
-LAB_STEERING = "\n[steering]\nregistration_mm = 0.42\ntarget_speed_walk = 0.02\n"
+LAB_STEERING = "\n[steering]\nregistration_mm = 0.42\ntarget_speed_walk = 0.02\ncurvature_walk = 0.02\n"
 
 def write_generated(gen, steering=""):
     """The planted family, each scenario planned for steering under a 1 % collision bound (and

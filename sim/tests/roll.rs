@@ -160,9 +160,12 @@ fn arcs(samples: &[(Op, f32, f32)]) -> Vec<(f32, f32)> {
 
 /// A shaft with five times the default torsional play (1 degree per mm, told to the
 /// controller) leaves the roll tens of degrees off after a spun line or a rotation deep in;
-/// with a 5-DOF sensor only the arc that follows can show it. Measured over seeds 1 to 20: 4
-/// arcs start more than 3 degrees off, by 55 degrees on average, and are 17.9 degrees off 3 to 6
-/// mm in (before a turn brought a 5-DOF roll back to the commanded one: 7 arcs, 42 and 8.3).
+/// with a 5-DOF sensor only the arc that follows can show it. Measured over seeds 1 to 40: 6
+/// arcs start more than 3 degrees off; the 3 that start more than 15 degrees off (112, 87 and
+/// 19) are 53, 5 and 6 degrees off 3 to 6 mm in, while those starting 4 to 11 degrees off stay
+/// there (the bend shows no less over a few millimetres). Seeds 1 to 20 alone had 4 arcs, 55
+/// degrees off on average and 17.9 later, before a run that no longer reaches turned its bevel at
+/// the target (`closest_approach`), which leaves fewer arcs wrong.
 #[test]
 fn an_arc_of_a_few_millimetres_reveals_the_roll_to_a_five_dof_filter() {
     let paper = paper();
@@ -179,7 +182,7 @@ fn an_arc_of_a_few_millimetres_reveals_the_roll_to_a_five_dof_filter() {
         faults: &f,
     };
     let mut wrong = Vec::new();
-    for seed in 1..=20 {
+    for seed in 1..=40 {
         let mut ctl = Steering::start(&paper.s, &paper.sched, &config).unwrap();
         let mut samples = Vec::new();
         let observe = |seen: &Seen<'_, Steering>| {
@@ -191,16 +194,14 @@ fn an_arc_of_a_few_millimetres_reveals_the_roll_to_a_five_dof_filter() {
         closed_loop_observed(s, planned, sched, &world, &mut ctl, seed, observe).unwrap();
         wrong.extend(arcs(&samples).into_iter().filter(|a| a.0 > 3.0));
     }
-    let n = wrong.len() as f32;
-    let start = wrong.iter().map(|a| a.0).sum::<f32>() / n;
-    let later = wrong.iter().map(|a| a.1).sum::<f32>() / n;
-    println!(
-        "{} arcs start {start:.2} degrees off, {later:.2} 3 to 6 mm in",
-        wrong.len()
-    );
-    assert!(wrong.len() >= 4, "{wrong:?}");
-    assert!(start > 20.0, "{wrong:?}");
-    assert!(later < 0.4 * start, "{wrong:?}");
+    println!("arcs that start more than 3 degrees off (start, 3 to 6 mm in): {wrong:?}");
+    let far: Vec<_> = wrong.iter().filter(|a| a.0 > 15.0).collect();
+    assert!(far.len() >= 2, "{wrong:?}");
+    assert!(far.iter().all(|a| a.1 < 0.5 * a.0), "{wrong:?}");
+    let n = far.len() as f32;
+    let start = far.iter().map(|a| a.0).sum::<f32>() / n;
+    let later = far.iter().map(|a| a.1).sum::<f32>() / n;
+    assert!(later < 0.4 * start, "{start} {later}");
 }
 
 /// The dead-reckoned roll's error at a reading (degrees), as the world's shaft makes it: after a

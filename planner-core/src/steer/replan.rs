@@ -223,6 +223,17 @@ pub(super) fn sound(
     length: f32,
     spent: &(u32, u32),
 ) -> Option<Replanned> {
+    let miss = super::turns::accepted_miss(input);
+    sound_within(input, (steps, peak, length), miss, spent)
+}
+
+/// [`sound`] with the predicted miss allowed up to `miss` (mm) instead of the tolerance.
+pub(super) fn sound_within(
+    input: &ReplanInput,
+    (steps, peak, length): (Steps, f32, f32),
+    miss: f32,
+    spent: &(u32, u32),
+) -> Option<Replanned> {
     let prediction = predict(
         input.scenario,
         &input.tip,
@@ -231,7 +242,7 @@ pub(super) fn sound(
         input.target,
     );
     let floor = input.scenario.options.min_clearance + input.margin;
-    let sound = prediction.target_error <= super::turns::accepted_miss(input)
+    let sound = prediction.target_error <= miss
         && input.inserted_mm + length <= input.scenario.needle.length
         && prediction.min_clearance > floor
         && peak <= input.scenario.driver.max_twist_deg;

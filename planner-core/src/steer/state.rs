@@ -17,6 +17,10 @@ use crate::model::scenario::Scenario;
 /// counters add the pieces of a push in f32.
 const DONE_SLACK: f32 = 1e-3;
 
+/// A closest approach replaces a continuation that no longer reaches only if it predicts a miss
+/// at most this share of the continuation's: a small gain is not worth the turn.
+const CLOSER_BY: f32 = 0.95;
+
 /// The closed-loop controller of one insertion (see the [module](super) documentation).
 #[derive(Clone, Debug)]
 pub struct Steering {
@@ -388,7 +392,13 @@ impl Steering {
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);
             reply.evaluations = evaluations;
-            match found.or_else(|| self.trimmed(&remaining, &now, floor + margin)) {
+            let found = found
+                .or_else(|| self.trimmed(&remaining, &now, floor + margin))
+                .or_else(|| {
+                    let better = CLOSER_BY * now.target_error;
+                    super::aimed::closest_approach(&input, better, &(evaluations, 0))
+                });
+            match found {
                 Some(r) => {
                     self.stats.replans += 1;
                     reply.replanned = true;
