@@ -252,6 +252,9 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     );
     assert!(s["replans"].as_u64().unwrap() > 12);
     assert_eq!(s["collisions"], 0);
+    // Every run reached: the figures over the runs that reached are those over every run.
+    assert_eq!(s["reached"], 12);
+    assert_eq!(s["reached_target_error"], s["target_error"]);
     let closed = s["target_error"]["mean"].as_f64().unwrap();
     let open = v["open_loop_summary"]["target_error"]["mean"]
         .as_f64()
@@ -282,6 +285,10 @@ fn a_tracker_dropout_longer_than_the_gap_stops_with_tracking_lost() {
         "dropout_mm=50",
     ]);
     assert_eq!(v["summary"]["stops"]["tracking_lost"], 4);
+    // None reached: nothing to figure over the runs that did, while every run's error counts.
+    assert_eq!(v["summary"]["reached"], 0);
+    assert_eq!(v["summary"]["reached_target_error"]["mean"], 0.0);
+    assert!(v["summary"]["target_error"]["mean"].as_f64().unwrap() > 1.0);
     for r in v["runs_detail"].as_array().unwrap() {
         assert_eq!(r["stop_reason"], "tracking_lost");
         assert!(r["steering"]["no_fix"].as_u64().unwrap() >= 10);

@@ -176,7 +176,7 @@ pub fn run_seed(seed: u64, i: usize) -> u64 {
 }
 
 /// Mean, RMS, 95th percentile (nearest rank) and maximum of some values.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Spread {
     /// Mean.
     pub mean: f64,

@@ -27,6 +27,12 @@ pub struct SteeringSummary {
     /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
     /// reading again; the one count that depends on the transport.
     pub repeated: u64,
+    /// Runs that reached the target (no stop).
+    pub reached: usize,
+    /// Target error over the runs that reached (mm; zeros when none): the accuracy of the
+    /// insertions that went through, beside `target_error` over every run, which counts a
+    /// stopped run's distance from where it stopped.
+    pub reached_target_error: super::Spread,
 }
 
 /// The steering figures of `runs`.
@@ -53,5 +59,8 @@ pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
             *s.stops.entry(reason.name()).or_default() += 1;
         }
     }
+    let reached = runs.iter().filter(|r| r.stop_reason.is_none());
+    s.reached = reached.clone().count();
+    s.reached_target_error = super::Spread::of(reached.map(|r| r.run.target_error));
     s
 }

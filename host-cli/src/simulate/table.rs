@@ -152,6 +152,12 @@ pub fn closed_table(
     );
     pair(
         &mut out,
+        "  the runs that reached",
+        &steering.reached_target_error,
+        None,
+    );
+    pair(
+        &mut out,
         "path deviation, run RMS",
         &s.path_rms,
         open.map(|o| &o.path_rms),
@@ -193,7 +199,10 @@ pub fn closed_table(
         .collect();
     let _ = writeln!(
         out,
-        "steering: {} replans, {} replan failures; stops before the target: {}",
+        "steering: {} of {} runs reached the target; {} replans, {} replan failures; stops \
+         before the target: {}",
+        steering.reached,
+        h.runs,
         steering.replans,
         steering.replan_failures,
         stops.join(", ")
