@@ -258,7 +258,8 @@ impl Estimate {
             h[(k, k)] = 1.0;
         }
         let Some(d2) = self.fuse_rows(&h, y, [r; 3]) else {
-            self.rejected.rejected(y.norm());
+            self.rejected
+                .rejected(super::lost::off_the_path(y, self.tip.e3()));
             return false;
         };
         self.rejected = Rejected::NONE;
@@ -266,7 +267,7 @@ impl Estimate {
         true
     }
 
-    /// How far the tip may be from the estimate when the tracker keeps disagreeing with it
+    /// How far the tip may be from the estimate's path when the tracker keeps disagreeing with it
     /// (mm; 0 while fixes are fused, or while the fused ones agree with the model): see
     /// [`Rejected::offset`].
     pub fn lost_offset(&self) -> f32 {
