@@ -36,6 +36,22 @@ pub fn venv_python() -> PathBuf {
     path
 }
 
+/// Runs `tests/python/SCRIPT` with `args` in the venv of [`venv_python`]; its stdout. A script
+/// that fails fails the calling test with its stderr.
+pub fn venv_script<S: AsRef<std::ffi::OsStr>>(script: &str, args: &[S]) -> Vec<u8> {
+    let run = Command::new(venv_python())
+        .arg(workspace().join("tests/python").join(script))
+        .args(args)
+        .output()
+        .expect("the venv's Python runs");
+    assert!(
+        run.status.success(),
+        "{script}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    run.stdout
+}
+
 /// An example scenario file by name (`paper`, `space`).
 pub fn example(name: &str) -> PathBuf {
     workspace().join("examples").join(format!("{name}.toml"))

@@ -5,9 +5,8 @@
 //! larger than the ball.
 
 use needle_e2e::label_files::cover_spheres;
-use needle_e2e::{needle_json, venv_python, workspace};
+use needle_e2e::{needle_json, venv_script};
 use serde_json::Value;
-use std::process::Command;
 
 fn spheres(v: &Value) -> Vec<(i64, [f64; 3], f64)> {
     let mut out = cover_spheres(v);
@@ -23,16 +22,7 @@ fn nibabel_and_pynrrd_maps_give_the_same_spheres() {
     let dir = std::env::temp_dir().join(format!("needle-anatomy-interop-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let run = Command::new(venv_python())
-        .arg(workspace().join("tests/python/label_maps.py"))
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    venv_script("label_maps.py", &[&dir]);
     let covers: Vec<Vec<(i64, [f64; 3], f64)>> = ["map.nii.gz", "map-lps.nrrd", "map-ras.nrrd"]
         .iter()
         .map(|f| {

@@ -6,9 +6,8 @@
 //! cover (checked exhaustively), and a one-sphere cover sits on the box of those corners.
 
 use needle_e2e::label_files::cover_spheres;
-use needle_e2e::{needle_json, venv_python, workspace};
+use needle_e2e::{needle_json, venv_script};
 use serde_json::Value;
-use std::process::Command;
 
 type Sphere = (i64, [f64; 3], f64);
 /// Rows of a 4 x 4 affine.
@@ -102,17 +101,7 @@ fn nibabel_test_data_is_covered_corner_by_corner() {
     let dir = std::env::temp_dir().join(format!("needle-nibabel-data-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let run = Command::new(venv_python())
-        .arg(workspace().join("tests/python/nibabel_data.py"))
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let info: Value = serde_json::from_slice(&run.stdout).unwrap();
+    let info: Value = serde_json::from_slice(&venv_script("nibabel_data.py", &[&dir])).unwrap();
     let scan = &info["anatomical"];
     // Big-endian int16 with a flipped x axis: both must be read as nibabel reads them.
     assert_eq!(scan["dtype"], ">i2");

@@ -4,10 +4,9 @@
 //! obstacles' model and the simulated paths, and sees them where needle put them (RAS); a point
 //! Slicer saves (LPS, its default) is planned to where Slicer placed it.
 
-use needle_e2e::{example, needle_json, venv_python, workspace};
+use needle_e2e::{example, needle_json, venv_script};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn scratch(test: &str) -> PathBuf {
     let dir =
@@ -19,17 +18,7 @@ fn scratch(test: &str) -> PathBuf {
 
 /// Runs `tests/python/slicer_files.py` with `args`; its JSON on stdout.
 fn slicer(args: &[&str]) -> String {
-    let run = Command::new(venv_python())
-        .arg(workspace().join("tests/python/slicer_files.py"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    String::from_utf8(run.stdout).unwrap()
+    String::from_utf8(venv_script("slicer_files.py", args)).unwrap()
 }
 
 /// What Slicer loaded from each file, by file name.
