@@ -75,6 +75,9 @@ struct Core {
     /// [`DeviceService::new`] has no pointer in it (see there).
     identity: Option<DeviceIdentity>,
     job: Job,
+    /// The plan of the request in progress or last finished: its scenario, decoded in place,
+    /// and the search over it. Apart from the job, so that it is built in place, never moved.
+    plan: job::Planner,
     upload: [u8; MAX_PLAN_REQUEST],
     result: [u8; MAX_PLAN_RESULT],
     scratch: [u8; ENCODE_SCRATCH],
@@ -136,6 +139,7 @@ impl DeviceService {
             core: Core {
                 identity,
                 job: Job::Idle,
+                plan: job::Planner::idle(),
                 upload: [0; MAX_PLAN_REQUEST],
                 result: [0; MAX_PLAN_RESULT],
                 scratch: [0; ENCODE_SCRATCH],
