@@ -86,6 +86,8 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
 
     assert_device_plan_equals_host(&qemu.addr, "paper");
     assert_device_plan_equals_host(&qemu.addr, "space");
+    // The device's full capacity: 256 spheres, 32 of them near the path.
+    assert_device_plan_equals_host(&qemu.addr, "spheres256");
 
     let config = ClientConfig {
         timeout: Duration::from_secs(10),

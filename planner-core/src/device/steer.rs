@@ -10,7 +10,7 @@ use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
 /// The insertion being steered, if any.
 // An enum with an explicit tag rather than an `Option`: the option's `None` hid in a niche of the
-// controller as a byte 2, and that one byte put the whole service (8 KiB) in `.data`, copied from
+// controller as a byte 2, and that one byte put the whole service (30 KiB) in `.data`, copied from
 // flash at boot, instead of `.bss` (see `DeviceService::new`).
 // No heap to box the controller in (like `Job`).
 #[allow(clippy::large_enum_variant)]
