@@ -201,8 +201,9 @@ pub fn measure_all(
 /// `needle device-bench` options.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario files (default: examples/paper.toml, space.toml and paper-bounded.toml); a
-    /// file's collision bound, if it sets one, is planned under on the device too.
+    /// Scenario files (default: examples/paper.toml, space.toml, paper-bounded.toml and
+    /// spheres256.toml); a file's collision bound, if it sets one, is planned under on the device
+    /// too.
     files: Vec<PathBuf>,
     /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
     /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`), as a JSON
@@ -249,6 +250,7 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
             root.join("examples/paper.toml"),
             root.join("examples/space.toml"),
             root.join("examples/paper-bounded.toml"),
+            root.join("examples/spheres256.toml"),
         ]
     } else {
         args.files.clone()

@@ -6,7 +6,10 @@
 use crate::error::PlanError;
 use crate::execute::plan_with_schedule::ScheduledPlan;
 use crate::model::form::FormSet;
-use crate::model::scenario::Scenario;
+use crate::model::scenario::{
+    Driver, Entry, Needle, Obstacles, PlannerOptions, RiskMeasure, Scenario, Target, Weights,
+    Workspace,
+};
 use crate::report::{FormOutcome, FormOutcomes, PlanReport};
 use crate::search::solve::solve_form;
 
@@ -20,17 +23,81 @@ pub struct PlanSession {
 impl PlanSession {
     /// Validates the scenario and prepares to plan its selected forms.
     pub fn new(scenario: Scenario) -> Result<Self, PlanError> {
-        scenario.validate()?;
-        Ok(PlanSession {
-            remaining: scenario.options.selected_forms(),
-            scenario,
+        let mut session = PlanSession::idle();
+        session.scenario = scenario;
+        session.restart()?;
+        Ok(session)
+    }
+
+    /// A session with nothing to plan and a scenario of zeros. Every byte is zero, so a device
+    /// whose session lives in a static keeps it in `.bss`, and fills it in place
+    /// ([`PlanSession::scenario_mut`], [`PlanSession::restart`]): a scenario moved in by value
+    /// would pass through the stack, 16 bytes a sphere, more than once.
+    pub(crate) const fn idle() -> PlanSession {
+        let zero = [0.0; 3];
+        PlanSession {
+            scenario: Scenario {
+                needle: Needle {
+                    curvature_radius: 0.0,
+                    max_arc_deg: 0.0,
+                    max_line_length: 0.0,
+                    length: 0.0,
+                },
+                entry: Entry {
+                    position: zero,
+                    direction: zero,
+                    max_tilt_deg: 0.0,
+                },
+                target: Target {
+                    position: zero,
+                    tolerance: 0.0,
+                },
+                obstacles: Obstacles::new(),
+                weights: Weights {
+                    length: 0.0,
+                    risk: 0.0,
+                    penalty: 0.0,
+                    control: 0.0,
+                },
+                options: PlannerOptions {
+                    max_control_degree: 0,
+                    forms: FormSet(0),
+                    workspace: Workspace::Space,
+                    risk: RiskMeasure::Mean,
+                    min_clearance: 0.0,
+                    curvature_reserve: 0.0,
+                    risk_within_mm: None,
+                },
+                driver: Driver {
+                    insert_speed: 0.0,
+                    rotate_speed: 0.0,
+                    spin_rate: 0.0,
+                    max_twist_deg: 0.0,
+                },
+            },
+            remaining: FormSet(0),
             outcomes: FormOutcomes::new(),
-        })
+        }
+    }
+
+    /// Validates the scenario as it now is and prepares to plan its selected forms, forgetting
+    /// what was planned before. On an error nothing is left to plan.
+    pub(crate) fn restart(&mut self) -> Result<(), PlanError> {
+        self.remaining = FormSet(0);
+        self.outcomes.clear();
+        self.scenario.validate()?;
+        self.remaining = self.scenario.options.selected_forms();
+        Ok(())
     }
 
     /// The scenario being planned.
     pub fn scenario(&self) -> &Scenario {
         &self.scenario
+    }
+
+    /// The scenario, to change in place before [`PlanSession::restart`].
+    pub(crate) fn scenario_mut(&mut self) -> &mut Scenario {
+        &mut self.scenario
     }
 
     /// Number of forms this session plans.
@@ -81,6 +148,13 @@ impl PlanSession {
     /// none: what a device answers once [`PlanSession::step`] has returned `None`. Leaving the
     /// solver out keeps its frames off the stack under the device's result encoding.
     pub fn scheduled_so_far(mut self) -> ScheduledPlan {
+        self.take_scheduled()
+    }
+
+    /// [`PlanSession::scheduled_so_far`] leaving the session (and its scenario) in place, with
+    /// no form planned and none left.
+    pub(crate) fn take_scheduled(&mut self) -> ScheduledPlan {
+        self.remaining = FormSet(0);
         let report = self.report_so_far();
         ScheduledPlan::new(&self.scenario, report)
     }

@@ -63,7 +63,7 @@ fn undecodable_frame() -> Vec<u8> {
     frame
 }
 
-/// The paper's scenario as a plan request with 40 obstacles (the planner holds 32).
+/// Waits for the fault answering a malformed frame.
 fn expect_fault(client: &mut Client<Box<dyn needle_link::Transport>>, want: Fault) {
     loop {
         match client.next_reply().expect("link") {
@@ -86,6 +86,8 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
 
     assert_device_plan_equals_host(&qemu.addr, "paper");
     assert_device_plan_equals_host(&qemu.addr, "space");
+    // The device's full capacity: 256 spheres, 32 of them near the path.
+    assert_device_plan_equals_host(&qemu.addr, "spheres256");
 
     let config = ClientConfig {
         timeout: Duration::from_secs(10),
@@ -107,14 +109,15 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
     client.send_raw(&long).unwrap();
     expect_fault(&mut client, Fault::FrameTooLong);
     // A scenario over the planner's capacity: the typed planner error comes back.
+    let over = planner_core::DEVICE_MAX_OBSTACLES + 1;
     let result = client
-        .plan_encoded(&request_with_obstacles(40), &mut |_| {})
+        .plan_encoded(&request_with_obstacles(over), &mut |_| {})
         .expect("the device answers an over-capacity scenario");
     assert_eq!(
         result.err(),
         Some(PlanError::TooManyObstacles {
-            given: 40,
-            capacity: 32
+            given: 257,
+            capacity: 256
         })
     );
     // The same link still plans, and the plan is the host's, bit for bit.

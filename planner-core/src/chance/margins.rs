@@ -10,15 +10,6 @@ use super::upper_quantile;
 /// An obstacle whose probability is below this share of the bound gets no share of it.
 const NEGLIGIBLE_SHARE: f32 = 0.01;
 
-/// `scenario` with each obstacle grown by its margin.
-pub(super) fn grown(scenario: &Scenario, margins: &[f32; MAX_OBSTACLES]) -> Scenario {
-    let mut s = scenario.clone();
-    for (ob, m) in s.obstacles.iter_mut().zip(margins) {
-        ob.radius += m;
-    }
-    s
-}
-
 /// The largest margin obstacle `ob` may take and still leave the entry and the target outside
 /// it (nine tenths of the smaller gap): near the target, the bound may be out of reach.
 fn margin_cap(scenario: &Scenario, i: usize) -> f32 {

@@ -2,7 +2,7 @@
 //! per poll (answering pings and cancels in between), the host runs it to the end, and both get
 //! the same plan bit for bit because it is the same code.
 
-use super::margins::{grown, raise_margins};
+use super::margins::raise_margins;
 use super::{ChancePlan, MAX_ROUNDS};
 use crate::execute::perturbation::Perturbation;
 use crate::execute::risk::{risk_by_obstacle, Execution, ObstacleRisk};
@@ -55,23 +55,69 @@ pub enum ChanceStep {
 /// assert_eq!(format!("{planned:?}"), format!("{whole:?}"));
 /// ```
 pub struct ChanceSearch {
-    /// The scenario with its true obstacles.
-    scenario: Scenario,
-    model: Perturbation,
-    bound: f32,
-    execution: Execution,
+    /// The round being planned. Its scenario is the one given, with each obstacle grown by this
+    /// round's margins while a round is planned and at its true radius otherwise: the obstacles
+    /// are held once, and a device fills them in place.
+    session: PlanSession,
+    /// Each obstacle's true radius, in the scenario's order.
+    radii: [f32; MAX_OBSTACLES],
+    limit: Limit,
     /// This round's margins.
     margins: [f32; MAX_OBSTACLES],
     /// The margins of the last round that found a path: a round whose grown obstacles leave none
     /// backs off half way towards them.
     found: [f32; MAX_OBSTACLES],
     round: u32,
-    /// The round being planned; `None` once the search has ended.
-    session: Option<PlanSession>,
+    /// A round is being planned (false before the start and once the search has ended).
+    planning: bool,
     /// The last round that found a path, and once the search has ended, its result.
-    last: Option<ChancePlan>,
+    last: Held<ChancePlan>,
     /// Why the search could not go on (a grown scenario the planner refused).
-    failed: Option<PlanError>,
+    failed: Held<PlanError>,
+}
+
+/// An `Option` whose empty value is zero bytes: `None` of an `Option<ChancePlan>` lies in a niche
+/// (a `bool` of 2), which would put a device's whole service in `.data`, copied from flash.
+#[repr(u8)]
+enum Held<T> {
+    Empty,
+    Full(T),
+}
+
+impl<T> Held<T> {
+    fn get(&self) -> Option<&T> {
+        match self {
+            Held::Full(t) => Some(t),
+            Held::Empty => None,
+        }
+    }
+
+    fn get_mut(&mut self) -> Option<&mut T> {
+        match self {
+            Held::Full(t) => Some(t),
+            Held::Empty => None,
+        }
+    }
+
+    fn take(&mut self) -> Option<T> {
+        match core::mem::replace(self, Held::Empty) {
+            Held::Full(t) => Some(t),
+            Held::Empty => None,
+        }
+    }
+}
+
+/// What a round's plan is judged by. An enum with its tag first and `Unset` zero, so that a
+/// search in a static is all zero bytes (`.bss`, not an image in flash copied at boot).
+#[derive(Clone, Copy)]
+#[repr(u8)]
+enum Limit {
+    Unset,
+    Set {
+        model: Perturbation,
+        bound: f32,
+        execution: Execution,
+    },
 }
 
 impl ChanceSearch {
@@ -83,48 +129,101 @@ impl ChanceSearch {
         bound: f32,
         execution: Execution,
     ) -> Result<Self, PlanError> {
+        let mut search = ChanceSearch::idle();
+        *search.session.scenario_mut() = scenario;
+        search.start(model, bound, execution)?;
+        Ok(search)
+    }
+
+    /// A search of nothing, all zero bytes: filled in place by [`ChanceSearch::scenario_mut`]
+    /// and [`ChanceSearch::start`].
+    pub(crate) const fn idle() -> ChanceSearch {
+        ChanceSearch {
+            session: PlanSession::idle(),
+            radii: [0.0; MAX_OBSTACLES],
+            limit: Limit::Unset,
+            margins: [0.0; MAX_OBSTACLES],
+            found: [0.0; MAX_OBSTACLES],
+            round: 0,
+            planning: false,
+            last: Held::Empty,
+            failed: Held::Empty,
+        }
+    }
+
+    /// [`ChanceSearch::new`] in place, for the scenario now held: checks the bound and the
+    /// scenario and prepares the first round, forgetting any earlier search.
+    pub(crate) fn start(
+        &mut self,
+        model: Perturbation,
+        bound: f32,
+        execution: Execution,
+    ) -> Result<(), PlanError> {
+        self.planning = false;
+        self.last = Held::Empty;
+        self.failed = Held::Empty;
+        self.round = 1;
+        self.margins.fill(0.0);
+        self.found.fill(0.0);
         if !bound.is_finite() {
             return Err(PlanError::NotFinite(Field::MaxCollisionProbability));
         }
         if !(bound > 0.0 && bound < 1.0) {
             return Err(PlanError::OutOfRange(Field::MaxCollisionProbability));
         }
-        let session = PlanSession::new(scenario.clone())?;
-        Ok(ChanceSearch {
-            scenario,
+        self.limit = Limit::Set {
             model,
             bound,
             execution,
-            margins: [0.0; MAX_OBSTACLES],
-            found: [0.0; MAX_OBSTACLES],
-            round: 1,
-            session: Some(session),
-            last: None,
-            failed: None,
-        })
+        };
+        for (r, ob) in self
+            .radii
+            .iter_mut()
+            .zip(&self.session.scenario().obstacles)
+        {
+            *r = ob.radius;
+        }
+        self.session.restart()?;
+        self.planning = true;
+        Ok(())
     }
 
-    /// The scenario, with its true obstacles.
+    /// The scenario: its obstacles are grown by the round's margins while a round is planned,
+    /// and true once the search has ended.
     pub fn scenario(&self) -> &Scenario {
-        &self.scenario
+        self.session.scenario()
+    }
+
+    /// The scenario, to fill in place before [`ChanceSearch::start`].
+    pub(crate) fn scenario_mut(&mut self) -> &mut Scenario {
+        self.session.scenario_mut()
+    }
+
+    /// The session that plans each round (a device plans without a bound in it too).
+    pub(crate) fn session_mut(&mut self) -> &mut PlanSession {
+        &mut self.session
     }
 
     /// Forms planned in each round.
     pub fn forms_per_round(&self) -> usize {
-        self.session.as_ref().map_or(0, PlanSession::form_count)
+        if self.planning {
+            self.session.form_count()
+        } else {
+            0
+        }
     }
 
     /// Plans one form, or judges a finished round; `Ok(None)` once the search has ended. `Err`
     /// when a round's grown scenario cannot be planned; the search is then over.
     pub fn step(&mut self) -> Result<Option<ChanceStep>, PlanError> {
-        if let Some(e) = self.failed {
-            return Err(e);
+        if let Some(e) = self.failed.get() {
+            return Err(*e);
+        }
+        if !self.planning {
+            return Ok(None);
         }
         let round = self.round;
-        let Some(session) = self.session.as_mut() else {
-            return Ok(None);
-        };
-        if let Some(o) = session.step() {
+        if let Some(o) = self.session.step() {
             let (form, feasible) = (o.form, o.feasible);
             return Ok(Some(ChanceStep::Form {
                 round,
@@ -135,7 +234,7 @@ impl ChanceSearch {
         match self.end_round() {
             Ok(()) => Ok(Some(ChanceStep::RoundEnded { round })),
             Err(e) => {
-                self.failed = Some(e);
+                self.failed = Held::Full(e);
                 Err(e)
             }
         }
@@ -144,8 +243,20 @@ impl ChanceSearch {
     /// Runs what is left and returns the plan the search settled on.
     pub fn finish(mut self) -> Result<ChancePlan, PlanError> {
         while self.step()?.is_some() {}
-        // Every ending sets `last`.
-        self.last.ok_or(PlanError::Unreachable)
+        self.take_plan()
+    }
+
+    /// The plan the search settled on, once [`ChanceSearch::step`] has returned `Ok(None)`
+    /// (planning nothing itself, so that the solver's frames are not under the caller's).
+    pub(crate) fn take_plan(&mut self) -> Result<ChancePlan, PlanError> {
+        if let Some(e) = self.failed.get() {
+            return Err(*e);
+        }
+        // Every ending sets `last`; a search still planning has none to give.
+        match self.planning {
+            true => Err(PlanError::Unreachable),
+            false => self.last.take().ok_or(PlanError::Unreachable),
+        }
     }
 
     /// Judges the finished round's plan: done when it keeps the bound (or no path exists even
@@ -154,22 +265,30 @@ impl ChanceSearch {
     /// form is planned.
     #[inline(never)]
     fn end_round(&mut self) -> Result<(), PlanError> {
-        let Some(session) = self.session.take() else {
-            return Ok(());
+        let Limit::Set {
+            model,
+            bound,
+            execution,
+        } = self.limit
+        else {
+            return Err(PlanError::Unreachable);
         };
-        let planned = session.scheduled_so_far();
+        self.planning = false;
+        // The schedule of the plan as made, around the grown obstacles; judged on the true ones.
+        let planned = self.session.take_scheduled();
+        self.set_radii(false);
         let mut by_obstacle = [ObstacleRisk::default(); MAX_OBSTACLES];
         let risk = match &planned.schedule {
             Some(Ok(s)) => Some(risk_by_obstacle(
-                &self.scenario,
+                self.session.scenario(),
                 s,
-                &self.model,
-                self.execution,
+                &model,
+                execution,
                 &mut by_obstacle,
             )),
             _ => None,
         };
-        let within_bound = risk.is_some_and(|r| r.collision_probability <= self.bound);
+        let within_bound = risk.is_some_and(|r| r.collision_probability <= bound);
         let outcome = ChancePlan {
             planned,
             risk,
@@ -178,12 +297,12 @@ impl ChanceSearch {
             within_bound,
         };
         if within_bound {
-            self.last = Some(outcome);
+            self.last = Held::Full(outcome);
             return Ok(());
         }
         if risk.is_none() {
-            let Some(last) = self.last.as_mut() else {
-                self.last = Some(outcome); // no path even without margins
+            let Some(last) = self.last.get_mut() else {
+                self.last = Held::Full(outcome); // no path even without margins
                 return Ok(());
             };
             last.rounds = self.round;
@@ -196,11 +315,21 @@ impl ChanceSearch {
             return self.next_round();
         }
         self.found = self.margins;
-        self.last = Some(outcome);
-        if !raise_margins(&self.scenario, self.bound, &by_obstacle, &mut self.margins) {
+        self.last = Held::Full(outcome);
+        let scenario = self.session.scenario();
+        if !raise_margins(scenario, bound, &by_obstacle, &mut self.margins) {
             return self.conclude();
         }
         self.next_round()
+    }
+
+    /// Each obstacle at its true radius, or grown by this round's margin (the same sum a copy of
+    /// the scenario grown from the true one would hold).
+    fn set_radii(&mut self, grown: bool) {
+        let obstacles = &mut self.session.scenario_mut().obstacles;
+        for ((ob, r), m) in obstacles.iter_mut().zip(&self.radii).zip(&self.margins) {
+            ob.radius = if grown { *r + *m } else { *r };
+        }
     }
 
     fn next_round(&mut self) -> Result<(), PlanError> {
@@ -208,20 +337,24 @@ impl ChanceSearch {
             return self.conclude();
         }
         self.round += 1;
-        self.session = Some(PlanSession::new(grown(&self.scenario, &self.margins))?);
+        self.set_radii(true);
+        self.session.restart()?;
+        self.planning = true;
         Ok(())
     }
 
     /// Ends the search on the last round that found a path.
     fn conclude(&mut self) -> Result<(), PlanError> {
-        let last = self.last.as_mut().ok_or(PlanError::Unreachable)?;
-        within_bound_by_another_form(
-            &self.scenario,
-            &self.model,
-            self.bound,
-            self.execution,
-            last,
-        );
+        let Limit::Set {
+            model,
+            bound,
+            execution,
+        } = self.limit
+        else {
+            return Err(PlanError::Unreachable);
+        };
+        let last = self.last.get_mut().ok_or(PlanError::Unreachable)?;
+        within_bound_by_another_form(self.session.scenario(), &model, bound, execution, last);
         Ok(())
     }
 }

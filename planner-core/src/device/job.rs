@@ -7,66 +7,85 @@ use crate::chance::{ChanceSearch, ChanceStep};
 use crate::error::PlanError;
 use crate::model::form::Form;
 use crate::model::scenario::Scenario;
-use crate::session::PlanSession;
-use crate::wire::{ChanceRequest, DevicePlan, Fault, PlanRequest, PlanResult, ReplyBody};
+use crate::wire::{
+    ChanceRequest, DevicePlan, Fault, PlanRequest, PlanResult, ReplyBody, RequestError,
+};
 
-/// What a job plans with: every form once, or rounds of every form under a collision bound.
-// Both are large, and the job lives in a static with no heap to box them in.
-#[allow(clippy::large_enum_variant)]
-pub(super) enum Planner {
-    Plain(PlanSession),
-    Bounded(ChanceSearch),
+/// What a job plans with: every form once, or rounds of every form under a collision bound. One
+/// search serves both (a plan without a bound is its session alone), filled in place: the
+/// obstacles are decoded straight into its scenario and held there once.
+pub(super) struct Planner {
+    search: ChanceSearch,
+    bounded: bool,
 }
 
 impl Planner {
-    fn new(scenario: Scenario, chance: Option<ChanceRequest>) -> Result<Planner, PlanError> {
-        Ok(match chance {
-            None => Planner::Plain(PlanSession::new(scenario)?),
-            Some(c) => {
-                Planner::Bounded(ChanceSearch::new(scenario, c.model, c.bound, c.execution)?)
-            }
-        })
+    /// A planner with nothing to plan, all zero bytes.
+    pub(super) const fn idle() -> Planner {
+        Planner {
+            search: ChanceSearch::idle(),
+            bounded: false,
+        }
     }
 
-    fn forms_per_round(&self) -> usize {
-        match self {
-            Planner::Plain(s) => s.form_count(),
-            Planner::Bounded(s) => s.forms_per_round(),
+    /// The scenario last decoded into the planner.
+    pub(super) fn scenario(&self) -> &Scenario {
+        self.search.scenario()
+    }
+
+    /// The scenario to fill in place before [`Planner::start`].
+    pub(super) fn scenario_mut(&mut self) -> &mut Scenario {
+        self.search.scenario_mut()
+    }
+
+    /// Starts planning the scenario now held, under the collision bound `chance` if any.
+    fn start(&mut self, chance: Option<ChanceRequest>) -> Result<(), PlanError> {
+        self.bounded = chance.is_some();
+        match chance {
+            None => self.search.session_mut().restart(),
+            Some(c) => self.search.start(c.model, c.bound, c.execution),
+        }
+    }
+
+    fn forms_per_round(&mut self) -> usize {
+        if self.bounded {
+            self.search.forms_per_round()
+        } else {
+            self.search.session_mut().form_count()
         }
     }
 
     /// Plans one unit: `Ok(Some((round, form, feasible)))` for a form planned, `Ok(Some((round,
     /// None, _)))` for a round judged, `Ok(None)` once nothing is left.
     fn step(&mut self) -> Result<Option<(u32, Option<Form>, bool)>, PlanError> {
-        match self {
-            Planner::Plain(s) => Ok(s.step().map(|o| (1, Some(o.form), o.feasible))),
-            Planner::Bounded(s) => Ok(s.step()?.map(|step| match step {
-                ChanceStep::Form {
-                    round,
-                    form,
-                    feasible,
-                } => (round, Some(form), feasible),
-                ChanceStep::RoundEnded { round } => (round, None, false),
-            })),
+        if !self.bounded {
+            let session = self.search.session_mut();
+            return Ok(session.step().map(|o| (1, Some(o.form), o.feasible)));
         }
+        Ok(self.search.step()?.map(|step| match step {
+            ChanceStep::Form {
+                round,
+                form,
+                feasible,
+            } => (round, Some(form), feasible),
+            ChanceStep::RoundEnded { round } => (round, None, false),
+        }))
     }
 
     /// The finished plan as the device reports it.
-    fn result(self) -> PlanResult {
-        match self {
-            Planner::Plain(session) => Ok(DevicePlan {
-                planned: session.scheduled_so_far(),
+    fn result(&mut self) -> PlanResult {
+        if !self.bounded {
+            return Ok(DevicePlan {
+                planned: self.search.session_mut().take_scheduled(),
                 chance: None,
-            }),
-            Planner::Bounded(search) => {
-                let obstacles = search.scenario().obstacles.len();
-                let planned = search.finish()?;
-                Ok(DevicePlan {
-                    chance: Some(planned.figures(obstacles)),
-                    planned: planned.planned,
-                })
-            }
+            });
         }
+        let planned = self.search.take_plan()?;
+        let obstacles = self.search.scenario().obstacles.len();
+        Ok(DevicePlan {
+            chance: Some(planned.figures(obstacles)),
+            planned: planned.planned,
+        })
     }
 }
 
@@ -91,14 +110,14 @@ pub fn plan_as_device(scenario: &Scenario, chance: Option<ChanceRequest>) -> Pla
             capacity: crate::DEVICE_MAX_OBSTACLES as u16,
         });
     }
-    let mut planner = Planner::new(scenario.clone(), chance)?;
+    let mut planner = Planner::idle();
+    planner.scenario_mut().clone_from(scenario);
+    planner.start(chance)?;
     while planner.step()?.is_some() {}
     planner.result()
 }
 
-/// The request in progress or last finished.
-// The session is large, but the service lives in a static with no heap to box it in.
-#[allow(clippy::large_enum_variant)]
+/// The request in progress or last finished (its planner is [`Core::plan`]).
 pub(super) enum Job {
     Idle,
     Uploading {
@@ -111,7 +130,6 @@ pub(super) enum Job {
         id: u16,
         total_bytes: u16,
         request_crc: u32,
-        planner: Planner,
         round: u8,
         done: u8,
         forms: u8,
@@ -128,28 +146,26 @@ pub(super) enum Job {
 
 impl Core {
     /// Starts planning the uploaded request `id` (or stores the scenario's error as its result).
+    /// The request is decoded into the planner's scenario in place.
     pub(super) fn start_plan(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
-        let total = up.total;
-        let request =
-            match postcard::take_from_bytes::<PlanRequest>(&self.upload[..usize::from(total)]) {
-                Ok((r, [])) => r,
-                _ => {
-                    self.job = Job::Idle;
-                    self.stats.undecodable += 1;
-                    return self.fault(id, Fault::BadScenario, tx);
-                }
-            };
-        match request
-            .into_parts()
-            .and_then(|(scenario, chance)| Planner::new(scenario, chance))
-        {
-            Ok(planner) => {
-                let forms = planner.forms_per_round() as u8;
+        let total = usize::from(up.total);
+        let bytes = self.upload.get(..total).unwrap_or(&[]);
+        let chance = match PlanRequest::decode_into(bytes, self.plan.scenario_mut()) {
+            Ok(chance) => chance,
+            Err(RequestError::Malformed) => {
+                self.job = Job::Idle;
+                self.stats.undecodable += 1;
+                return self.fault(id, Fault::BadScenario, tx);
+            }
+            Err(RequestError::Refused(e)) => return self.store_result(id, up, &Err(e), tx),
+        };
+        match self.plan.start(chance) {
+            Ok(()) => {
+                let forms = self.plan.forms_per_round() as u8;
                 self.job = Job::Planning {
                     id,
-                    total_bytes: total,
+                    total_bytes: up.total,
                     request_crc: up.crc,
-                    planner,
                     round: 1,
                     done: 0,
                     forms,
@@ -170,7 +186,6 @@ impl Core {
             id,
             total_bytes,
             request_crc,
-            planner,
             round,
             done,
             last,
@@ -185,7 +200,7 @@ impl Core {
             total: *total_bytes,
             crc: *request_crc,
         };
-        match planner.step() {
+        match self.plan.step() {
             Ok(Some((r, Some(form), feasible))) => {
                 let r = u8::try_from(r).unwrap_or(u8::MAX);
                 if r != *round {
@@ -205,16 +220,13 @@ impl Core {
     }
 
     /// Picks the best form, builds its schedule and stores the encoded result. Never inlined, so
-    /// its locals (the session moved out of the job, the result) are not on the stack while
-    /// [`Core::step`] plans a form.
+    /// its locals (the result) are not on the stack while [`Core::step`] plans a form.
     #[inline(never)]
     fn finish(&mut self, id: u16, up: Upload, tx: &mut dyn FnMut(&[u8])) {
-        if let Job::Planning { planner, .. } = core::mem::replace(&mut self.job, Job::Idle) {
-            // Called once `step` found no work left.
-            let result = planner.result();
-            self.stats.plans += 1;
-            self.store_result(id, up, &result, tx);
-        }
+        // Called once `step` found no work left.
+        let result = self.plan.result();
+        self.stats.plans += 1;
+        self.store_result(id, up, &result, tx);
     }
 
     fn store_result(

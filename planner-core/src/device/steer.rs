@@ -10,7 +10,7 @@ use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
 /// The insertion being steered, if any.
 // An enum with an explicit tag rather than an `Option`: the option's `None` hid in a niche of the
-// controller as a byte 2, and that one byte put the whole service (8 KiB) in `.data`, copied from
+// controller as a byte 2, and that one byte put the whole service (30 KiB) in `.data`, copied from
 // flash at boot, instead of `.bss` (see `DeviceService::new`).
 // No heap to box the controller in (like `Job`).
 #[allow(clippy::large_enum_variant)]
@@ -23,7 +23,9 @@ pub(super) enum Steered {
 }
 
 impl Core {
-    /// Starts steering plan `id` with `config`.
+    /// Starts steering plan `id` with `config`. Never inlined: the controller it builds (a copy
+    /// of the scenario among its state) is then not on the stack under every frame handled.
+    #[inline(never)]
     pub(super) fn steer_start(
         &mut self,
         id: u16,
@@ -41,10 +43,11 @@ impl Core {
         }
     }
 
-    /// The controller for plan `id`, from the stored request and result. Never inlined: the
-    /// decoded result lives on this frame only.
+    /// The controller for plan `id`, from the stored request (decoded into the planner's
+    /// scenario: the planner has finished) and result. Never inlined: the decoded result lives
+    /// on this frame only.
     #[inline(never)]
-    fn steering_for(&self, id: u16, config: &SteerConfig) -> Result<Steering, Fault> {
+    fn steering_for(&mut self, id: u16, config: &SteerConfig) -> Result<Steering, Fault> {
         let Job::Finished {
             id: plan,
             total_bytes,
@@ -62,10 +65,8 @@ impl Core {
             .get(..usize::from(total_bytes))
             .ok_or(Fault::NoPlan)?;
         let result = self.result.get(..usize::from(len)).ok_or(Fault::NoPlan)?;
-        let scenario = postcard::from_bytes::<PlanRequest>(request)
-            .ok()
-            .and_then(|r| r.into_scenario().ok())
-            .ok_or(Fault::NoPlan)?;
+        PlanRequest::decode_into(request, self.plan.scenario_mut()).map_err(|_| Fault::NoPlan)?;
+        let scenario = self.plan.scenario();
         let planned = postcard::from_bytes::<PlanResult>(result)
             .ok()
             .and_then(|r| r.ok())
@@ -75,7 +76,7 @@ impl Core {
             .schedule
             .and_then(|s| s.ok())
             .ok_or(Fault::NoPlan)?;
-        Steering::start(&scenario, &schedule, config).map_err(|e| match e {
+        Steering::start(scenario, &schedule, config).map_err(|e| match e {
             SteerError::BadConfig => Fault::BadSteerConfig,
             _ => Fault::NoPlan,
         })

@@ -23,10 +23,9 @@ pub const CURVATURE_RADIUS_RANGE_MM: (f32, f32) = (5.0, MAX_EXTENT_MM);
 pub const HOST_MAX_OBSTACLES: usize = 512;
 
 /// Obstacles a scenario can hold on the device, the wire's device-side bound (a plan request with
-/// more is answered [`PlanError::TooManyObstacles`], on the board and in hil-sim alike). Not yet
-/// 256: the firmware plans 256 spheres like the host, but its plan's buffers then need 111 KiB of
-/// RAM against a budget of 48 KiB (docs/firmware.md).
-pub const DEVICE_MAX_OBSTACLES: usize = 32;
+/// more is answered [`PlanError::TooManyObstacles`], on the board and in hil-sim alike). The
+/// firmware holds them once, in place, within 64 KiB of RAM (docs/firmware.md).
+pub const DEVICE_MAX_OBSTACLES: usize = 256;
 
 /// Obstacles a scenario can hold on this build ([`DEVICE_MAX_OBSTACLES`] on a bare-metal
 /// target, [`HOST_MAX_OBSTACLES`] elsewhere).

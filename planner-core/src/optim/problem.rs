@@ -188,8 +188,13 @@ impl<'a> Problem<'a> {
     /// The problem of continuing along `form` from the tip frame `start` (always in 3-D): the
     /// variables are the segments' lengths and the bevel rotation before every arc.
     pub fn continuation(scenario: &'a Scenario, form: Form, start: Frame) -> Problem<'a> {
-        let from_entry = Problem::new(scenario, form, 0);
-        let mut p = from_entry.clone();
+        // Changed in place: a copy of the problem from the entry would hold a second broad
+        // phase (about 10 bytes a sphere) on the stack.
+        let mut p = Problem::new(scenario, form, 0);
+        let mut lengths = [0.0; MAX_CONTROL_DEGREE];
+        for (i, l) in lengths.iter_mut().enumerate().take(form.len()) {
+            *l = p.upper[p.length_var(i)];
+        }
         p.plane = false;
         p.m_eq = 3;
         p.fixed_bevels = [0.0; MAX_CONTROL_DEGREE];
@@ -197,8 +202,8 @@ impl<'a> Problem<'a> {
         p.basis = start.r;
         p.lower = [0.0; MAX_VARS];
         p.upper = [0.0; MAX_VARS];
-        for i in 0..form.len() {
-            p.upper[i] = from_entry.upper[from_entry.length_var(i)];
+        for (u, l) in p.upper.iter_mut().zip(&lengths).take(form.len()) {
+            *u = *l;
         }
         p.n = form.len();
         for _ in 0..form.arc_count() {

@@ -257,7 +257,7 @@ impl FormSearch<'_> {
             }
         }
         sort_by_objective(&mut chosen, |s| s.0);
-        let mut best: Option<(Problem, LocalSolution)> = None;
+        let mut best: Option<(u8, LocalSolution)> = None;
         for sides in 0..groups {
             let sides = sides as u8;
             let seeds = chosen.iter().filter(|s| s.1 == sides).map(|s| &s.2);
@@ -276,10 +276,14 @@ impl FormSearch<'_> {
             for x in starts {
                 keep_lower(&mut group_best, refine(&p, x, &mut known, effort));
             }
-            consider(p, group_best, &mut best);
+            consider(sides, group_best, &mut best);
         }
+        // The best group's problem made again rather than kept: each holds a broad phase over
+        // the spheres, and the device's stack would hold three.
         match best {
-            Some((p, sol)) => report(&p, &sol, effort),
+            Some((sides, sol)) => {
+                report(&Problem::new(self.scenario, self.form, sides), &sol, effort)
+            }
             None => infeasible(self.form, effort),
         }
     }
@@ -450,18 +454,14 @@ fn infeasible(form: Form, effort: &Effort) -> FormOutcome {
     }
 }
 
-/// Keeps the better of `best` and the solution of problem `p`.
-fn consider<'a>(
-    p: Problem<'a>,
-    sol: Option<LocalSolution>,
-    best: &mut Option<(Problem<'a>, LocalSolution)>,
-) {
+/// Keeps the better of `best` and the solution of side assignment `sides`.
+fn consider(sides: u8, sol: Option<LocalSolution>, best: &mut Option<(u8, LocalSolution)>) {
     if let Some(sol) = sol {
         if best
             .as_ref()
             .is_none_or(|(_, b)| sol.eval.objective < b.eval.objective)
         {
-            *best = Some((p, sol));
+            *best = Some((sides, sol));
         }
     }
 }

@@ -9,21 +9,27 @@ use crate::optim::sqp::{solve_within, SolveFailure};
 use crate::report::{SegmentPlan, Segments};
 
 /// Solves `form` from the tip, from `start` (lengths in mm, bevels in degrees before each arc).
+/// `sub` is changed during a clearing solve and put back as it was.
 pub(super) fn attempt(
     input: &ReplanInput,
-    sub: &Scenario,
+    sub: &mut Scenario,
     form: Form,
     start: &[SegmentPlan],
     spent: &mut (u32, u32),
 ) -> Option<Replanned> {
-    let p = Problem::continuation(sub, form, input.tip);
-    let x0 = start_vars(&p, start);
-    let sol = match solved(&p, &x0, input.iterations, spent) {
-        Ok(x) => x,
-        Err(SolveFailure::StartInadmissible) => cleared_first(input, sub, form, &x0, spent)?,
-        Err(_) => return None,
+    let x0 = {
+        let p = Problem::continuation(sub, form, input.tip);
+        let x0 = start_vars(&p, start);
+        match solved(&p, &x0, input.iterations, spent) {
+            Ok(sol) => {
+                let exact = solution_segments(&p, &sol)?;
+                return super::turns::commanded(input, &exact, spent);
+            }
+            Err(SolveFailure::StartInadmissible) => x0,
+            Err(_) => return None,
+        }
     };
-    let exact = solution_segments(&p, &sol)?;
+    let exact = cleared_first(input, sub, form, &x0, spent)?;
     super::turns::commanded(input, &exact, spent)
 }
 
@@ -49,23 +55,28 @@ const CLEARING_RISK_WEIGHT: f32 = 20.0;
 /// from them, then again with the margin from there.
 fn cleared_first(
     input: &ReplanInput,
-    sub: &Scenario,
+    sub: &mut Scenario,
     form: Form,
     x0: &Vars,
     spent: &mut (u32, u32),
-) -> Option<Vars> {
-    let mut relaxed = sub.clone();
-    relaxed.options.min_clearance -= input.margin;
-    relaxed.weights.risk *= CLEARING_RISK_WEIGHT;
+) -> Option<Segments> {
+    // Relaxed in place and put back: a copy of the scenario would take 16 bytes a sphere of the
+    // device's stack.
+    let (floor, risk) = (sub.options.min_clearance, sub.weights.risk);
+    sub.options.min_clearance -= input.margin;
+    sub.weights.risk *= CLEARING_RISK_WEIGHT;
     let away = solved(
-        &Problem::continuation(&relaxed, form, input.tip),
+        &Problem::continuation(sub, form, input.tip),
         x0,
         input.iterations,
         spent,
-    )
-    .ok()?;
+    );
+    sub.options.min_clearance = floor;
+    sub.weights.risk = risk;
+    let away = away.ok()?;
     let p = Problem::continuation(sub, form, input.tip);
-    solved(&p, &away, input.iterations, spent).ok()
+    let sol = solved(&p, &away, input.iterations, spent).ok()?;
+    solution_segments(&p, &sol)
 }
 
 /// The SQP's solution from `x0`, its cost counted in `spent`.
@@ -165,7 +176,7 @@ mod tests {
             arc_duty: 1.0,
             spend_reserve: true,
         };
-        let sub = sub_scenario(&input);
+        let mut sub = sub_scenario(&input);
         let form = form_of(&remaining).unwrap();
         let p = Problem::continuation(&sub, form, tip);
         let mut spent = (0, 0);
@@ -174,7 +185,8 @@ mod tests {
             solved(&p, &x0, 10, &mut spent).err(),
             Some(SolveFailure::StartInadmissible)
         );
-        let found = attempt(&input, &sub, form, &remaining, &mut spent).expect("a continuation");
+        let found =
+            attempt(&input, &mut sub, form, &remaining, &mut spent).expect("a continuation");
         assert!(
             found.prediction.min_clearance > 0.4,
             "{:?}",

@@ -11,7 +11,7 @@ use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
-use crate::model::scenario::{Scenario, Workspace, MAX_OBSTACLES};
+use crate::model::scenario::{Obstacles, Scenario, Workspace, MAX_OBSTACLES};
 use crate::report::{SegmentPlan, Segments};
 
 /// Spacing of the sampled clearance check across a plane scenario's cylinders (mm).
@@ -174,9 +174,24 @@ pub struct Replanned {
 
 /// The sub-problem's scenario: the tip as entry, the estimated target and tissue, in 3-D. A
 /// plane scenario's circles become spheres centred in the tip's plane x = tip.x (the cylinder
-/// they stand for, where the path is); the check then measures the true cylinders.
+/// they stand for, where the path is); the check then measures the true cylinders. Never inlined:
+/// built in its caller's place, not copied there.
+#[inline(never)]
 pub(super) fn sub_scenario(input: &ReplanInput) -> Scenario {
-    let mut s = input.scenario.clone();
+    let from = input.scenario;
+    // Field by field, the obstacles pushed in place: a clone passes the list (16 bytes a sphere)
+    // through temporaries on the device's stack.
+    let mut s = Scenario {
+        needle: from.needle,
+        entry: from.entry,
+        target: from.target,
+        obstacles: Obstacles::new(),
+        weights: from.weights,
+        options: from.options,
+        driver: from.driver,
+    };
+    // Cannot fail: the same capacity.
+    let _ = s.obstacles.extend_from_slice(&from.obstacles);
     let t = input.target;
     s.target.position = [t.x, t.y, t.z];
     s.entry.position = [input.tip.p.x, input.tip.p.y, input.tip.p.z];
@@ -289,7 +304,7 @@ fn forms_from(
     remaining: &[SegmentPlan],
     spent: &mut (u32, u32),
 ) -> Option<Replanned> {
-    let sub = sub_scenario(input);
+    let mut sub = sub_scenario(input);
     // Aim the bevel at the target, across the heading.
     let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let bevel_deg = crate::fmath::atan2(-local.x, local.y).to_degrees();
@@ -305,7 +320,7 @@ fn forms_from(
         let Some(form) = form_of(start) else {
             continue;
         };
-        if let Some(r) = attempt(input, &sub, form, start, spent) {
+        if let Some(r) = attempt(input, &mut sub, form, start, spent) {
             return Some(r);
         }
     }
@@ -347,7 +362,7 @@ fn forms_from(
         let Some(form) = Form::parse(word) else {
             continue;
         };
-        if let Some(r) = attempt(input, &sub, form, &start, spent) {
+        if let Some(r) = attempt(input, &mut sub, form, &start, spent) {
             return Some(r);
         }
     }

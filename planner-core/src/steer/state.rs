@@ -11,7 +11,7 @@ use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
-use crate::model::scenario::Scenario;
+use crate::model::scenario::{Obstacles, Scenario};
 
 /// Progress within a step counts as done this close to its end (mm, degrees): the robot's
 /// counters add the pieces of a push in f32.
@@ -71,8 +71,13 @@ impl Steering {
         }
         let tip = posture_frame(scenario, schedule);
         let estimate = Estimate::new(tip, v3(scenario.target.position), &config.noise);
+        // The scenario field by field, its obstacles pushed in place: a clone passes the list
+        // (16 bytes a sphere) through temporaries on the device's stack.
         let mut s = Steering {
-            scenario: scenario.clone(),
+            scenario: Scenario {
+                obstacles: Obstacles::new(),
+                ..*scenario
+            },
             config: *config,
             estimate,
             steps: Steps::new(),
@@ -90,6 +95,8 @@ impl Steering {
             stopped: None,
             stats: SteerStats::default(),
         };
+        // Cannot fail: the same capacity.
+        let _ = s.scenario.obstacles.extend_from_slice(&scenario.obstacles);
         s.issue(&schedule.steps);
         Ok(s)
     }

@@ -163,12 +163,12 @@ mod tests {
         assert!((start[0].bevel_deg.abs() - 180.0).abs() < 1e-3, "{start:?}");
         // From the line as it is, the solve has no start clear of the margin; turned away, it
         // finds a continuation that keeps it and reaches the target.
-        let sub = sub_scenario(&input);
+        let mut sub = sub_scenario(&input);
         let mut spent = (0, 0);
         let straight = form_of(&remaining).unwrap();
-        assert!(attempt(&input, &sub, straight, &remaining, &mut spent).is_none());
+        assert!(attempt(&input, &mut sub, straight, &remaining, &mut spent).is_none());
         let form = form_of(&start).unwrap();
-        let found = attempt(&input, &sub, form, &start, &mut spent).expect("a continuation");
+        let found = attempt(&input, &mut sub, form, &start, &mut spent).expect("a continuation");
         assert!(
             found.prediction.min_clearance > 0.4,
             "{:?}",

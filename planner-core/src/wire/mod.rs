@@ -24,7 +24,7 @@ pub use messages::{
     PROTOCOL_VERSION,
 };
 pub use obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
-pub use plan::{ChanceRequest, DevicePlan, PlanRequest, PlanResult};
+pub use plan::{ChanceRequest, DevicePlan, PlanRequest, PlanResult, RequestError};
 
 /// Largest encoded [`PlanRequest`]: the device's upload buffer.
 pub const MAX_PLAN_REQUEST: usize = <PlanRequest as MaxSize>::MAX_SIZE;
