@@ -22,6 +22,17 @@ use nalgebra::Matrix3;
 /// Where the spread is evaluated along the path (mm between points at most).
 pub const RISK_SPACING_MM: f32 = 1.0;
 
+/// Standard deviations beyond which [`normal_cdf`] of minus the clearance is 0 in f32 (it is
+/// from 14.9 on).
+const QUIET_SDS: f32 = 16.0;
+
+/// At least the spread of the position along any unit direction (mm): the square root of the
+/// covariance's Frobenius norm, which bounds its largest eigenvalue, with room for rounding
+/// (infinite or NaN when the covariance is).
+fn sd_bound(covariance: &Matrix3<f32>) -> f32 {
+    crate::fmath::sqrt(covariance.norm() * 1.001)
+}
+
 /// The standard normal quantile of 0.95.
 const Z95: f32 = 1.644_853_6;
 
@@ -114,6 +125,20 @@ pub fn risk_by_obstacle(
     execution: Execution,
     by_obstacle: &mut ObstacleRisks,
 ) -> ExecutionRisk {
+    risk_measuring(scenario, schedule, p, execution, by_obstacle, true)
+}
+
+/// [`risk_by_obstacle`]; `cull`: at each point of the path, the spheres too far away for any
+/// chance there, and whose share therefore cannot change, are left after their distance (the
+/// same answer bit for bit as measuring every sphere fully, which `false` does).
+pub(crate) fn risk_measuring(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    execution: Execution,
+    by_obstacle: &mut ObstacleRisks,
+    cull: bool,
+) -> ExecutionRisk {
     let plane = scenario.options.workspace == Workspace::PlaneYz;
     *by_obstacle = [ObstacleRisk {
         probability: 0.0,
@@ -134,6 +159,9 @@ pub fn risk_by_obstacle(
     };
     let visit = |tip: &TipSpread| {
         let steering_margin = kept(tip.depth);
+        // A sphere farther than this has no chance at this point that an f32 holds: only the
+        // nearest clearance so far of a sphere without any chance yet can still change.
+        let quiet = QUIET_SDS * sd_bound(&tip.covariance);
         for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
             let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
             if plane {
@@ -141,12 +169,16 @@ pub fn risk_by_obstacle(
                 away.x = 0.0;
             }
             let distance = away.norm();
+            let clearance = distance - ob.radius - steering_margin;
+            let nearer = w.probability == 0.0 && clearance < w.clearance;
+            if cull && clearance > quiet && clearance > 0.0 && !nearer {
+                continue;
+            }
             let sd = if distance > 0.0 {
                 tip.sd_along(&(away / distance))
             } else {
                 0.0
             };
-            let clearance = distance - ob.radius - steering_margin;
             let chance = if sd > 0.0 {
                 normal_cdf(-clearance / sd)
             } else if clearance > 0.0 {
@@ -209,6 +241,31 @@ fn norm_quantile(b: &V3, cov: &Matrix3<f32>) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The culling rests on this: beyond [`QUIET_SDS`] standard deviations the chance is 0.
+    #[test]
+    fn the_chance_is_zero_beyond_the_quiet_distance() {
+        let mut x = 14.9f32;
+        while x < 1e7 {
+            assert_eq!(normal_cdf(-x).to_bits(), 0, "{x}");
+            x = f32::from_bits(x.to_bits() + 97);
+        }
+        for x in [f32::MAX, f32::INFINITY, QUIET_SDS] {
+            assert_eq!(normal_cdf(-x).to_bits(), 0, "{x}");
+        }
+        assert!(normal_cdf(-14.0) > 0.0);
+        // The bound holds for a covariance of any orientation.
+        let m = Matrix3::new(2.0, 0.5, -0.3, 0.5, 1.0, 0.2, -0.3, 0.2, 0.5);
+        let b = sd_bound(&m);
+        for n in [
+            V3::x(),
+            V3::new(1.0, 1.0, -0.5).normalize(),
+            V3::new(0.3, -2.0, 1.0).normalize(),
+        ] {
+            let sd = crate::fmath::sqrt((n.transpose() * m * n)[0]);
+            assert!(sd <= b, "{sd} {b}");
+        }
+    }
 
     #[test]
     fn the_quantile_of_a_known_distribution() {
