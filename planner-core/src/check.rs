@@ -181,7 +181,10 @@ pub fn clearances(scenario: &Scenario, geo: &PathGeometry) -> (f32, f32) {
     else {
         return clearances_of(scenario, geo, &Set::all(obstacles.len()));
     };
-    if obstacles.len() <= BROAD_FROM {
+    // The distance to a line costs less than a look-up in the tree, and the tree's building
+    // more than a few arcs' distances: a tree for many spheres along a path with an arc.
+    let arcs = (0..geo.form.len()).any(|i| geo.form.kind(i) == SegmentKind::Arc);
+    if obstacles.len() <= BROAD_FROM || !arcs {
         return clearances_of(scenario, geo, &Set::all(obstacles.len()));
     }
     let broad = Broad::new(obstacles);

@@ -130,8 +130,9 @@ pub fn risk_by_obstacle(
 
 /// [`risk_by_obstacle`]; `cull`: at each point of the path, the spheres too far away for any
 /// chance there, and whose share therefore cannot change, are left after their distance (the
-/// same answer bit for bit as measuring every sphere fully, which `false` does).
-pub(crate) fn risk_measuring(
+/// same answer bit for bit as measuring every sphere fully, which `false` does: the reference
+/// the culling is tested and timed against).
+pub fn risk_measuring(
     scenario: &Scenario,
     schedule: &Schedule,
     p: &Perturbation,

@@ -191,31 +191,35 @@ fn the_risk_spread_is_the_same_culled_as_over_every_sphere() {
     assert!(risky > 20, "{risky}");
 }
 
-/// A bug in the tree must not hide a collision: a path straight through one of 256 spheres is
-/// refused by the check, which uses its tree there.
+/// A bug in the tree must not hide a collision: an arc through one of 256 spheres is refused by
+/// the check, which uses its tree there (many spheres, a risk reach, an arc).
 #[test]
 fn a_path_through_a_sphere_is_refused_with_the_tree_in_use() {
     let (mut s, ..) = case(1);
     s.obstacles.truncate(255);
     s.options.workspace = Workspace::Space;
     s.options.risk_within_mm = Some(5.0);
-    s.target.position = [0.0, 0.0, 90.0];
-    // Clear the entry's axis, then put one sphere on it.
-    s.obstacles
-        .retain(|o| o.center[0].abs() + o.center[1].abs() > 20.0);
+    let arc = [SegmentPlan {
+        kind: SegmentKind::Arc,
+        length: 60.0,
+        bevel_deg: 30.0,
+    }];
+    let form = Form::parse("R").unwrap();
+    let geo = rebuild(&s, form, &Insertion::default(), &arc);
+    let on = geo.starts[0].point_at(SegmentKind::Arc, 40.0, geo.radius);
+    // Clear the arc, then put one sphere on it.
+    let near = |o: &Obstacle| {
+        let c = on - crate::model::kinematics::V3::new(o.center[0], o.center[1], o.center[2]);
+        c.norm() < 80.0
+    };
+    s.obstacles.retain(|o| !near(o));
     let _ = s.obstacles.push(Obstacle {
-        center: [0.5, 0.0, 60.0],
+        center: [on.x, on.y, on.z],
         radius: 3.0,
     });
-    assert!(s.obstacles.len() > 32);
-    let line = [SegmentPlan {
-        kind: SegmentKind::Line,
-        length: 90.0,
-        bevel_deg: 0.0,
-    }];
-    let form = Form::parse("L").unwrap();
-    let verdict = crate::check::check(&s, form, &Insertion::default(), &line);
+    assert!(s.obstacles.len() > 32, "{}", s.obstacles.len());
+    let verdict = crate::check::check(&s, form, &Insertion::default(), &arc);
     assert!(!verdict.feasible, "{verdict:?}");
-    assert!((verdict.min_clearance + 2.5).abs() < 1e-3, "{verdict:?}");
+    assert!((verdict.min_clearance + 3.0).abs() < 1e-3, "{verdict:?}");
     assert!(verdict.risk.is_infinite());
 }

@@ -125,7 +125,8 @@ fn nearest(scenario: &Scenario, broad: Option<&Broad>, piece: &Piece, least: f32
         }
         least
     };
-    let Some(broad) = broad else {
+    // The distance to a line costs less than a look-up in the tree.
+    let Some(broad) = broad.filter(|_| piece.kind == SegmentKind::Arc) else {
         return among(&Set::all(obstacles.len()), least);
     };
     let (mut reach, growths) = if least.is_finite() {
