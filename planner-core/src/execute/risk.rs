@@ -10,10 +10,11 @@
 //! the percentile taken by Wilson and Hilferty's cube root.
 
 use super::perturbation::Perturbation;
+use super::risk_kept::{shares, Point, KEEPS, KEPT};
 use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
 use crate::model::kinematics::V3;
-use crate::model::scenario::{Scenario, Workspace};
+use crate::model::scenario::{Obstacle, Scenario, Workspace};
 use crate::steer::apriori::{estimator_profile, propagate_steered_with};
 use crate::steer::estimate::NoiseModel;
 use crate::steer::STEER_MARGIN_SDS;
@@ -24,13 +25,60 @@ pub const RISK_SPACING_MM: f32 = 1.0;
 
 /// Standard deviations beyond which [`normal_cdf`] of minus the clearance is 0 in f32 (it is
 /// from 14.9 on).
-const QUIET_SDS: f32 = 16.0;
+pub const QUIET_SDS: f32 = 16.0;
 
 /// At least the spread of the position along any unit direction (mm): the square root of the
 /// covariance's Frobenius norm, which bounds its largest eigenvalue, with room for rounding
 /// (infinite or NaN when the covariance is).
 fn sd_bound(covariance: &Matrix3<f32>) -> f32 {
     crate::fmath::sqrt(covariance.norm() * 1.001)
+}
+
+/// Offers `w` the share of `ob` at the point `tip`, where the steering keeps `margin`: taken
+/// when its chance is larger, or as large at a smaller clearance. With `quiet`, a point farther
+/// than it (where the chance is 0) is left after its distance unless `w` has no chance yet and
+/// the point is nearer than `w`'s (the same share as without).
+pub(crate) fn take(
+    w: &mut ObstacleRisk,
+    tip: &TipSpread,
+    margin: f32,
+    ob: &Obstacle,
+    plane: bool,
+    quiet: Option<f32>,
+) {
+    let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
+    if plane {
+        // A circle of the plane is a cylinder across it.
+        away.x = 0.0;
+    }
+    let distance = away.norm();
+    let clearance = distance - ob.radius - margin;
+    if let Some(q) = quiet {
+        let nearer = w.probability == 0.0 && clearance < w.clearance;
+        if clearance > q && clearance > 0.0 && !nearer {
+            return;
+        }
+    }
+    let sd = if distance > 0.0 {
+        tip.sd_along(&(away / distance))
+    } else {
+        0.0
+    };
+    let chance = if sd > 0.0 {
+        normal_cdf(-clearance / sd)
+    } else if clearance > 0.0 {
+        0.0
+    } else {
+        1.0
+    };
+    if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
+        *w = ObstacleRisk {
+            probability: chance,
+            clearance,
+            sd,
+            steering_margin: margin,
+        };
+    }
 }
 
 /// The standard normal quantile of 0.95.
@@ -128,10 +176,10 @@ pub fn risk_by_obstacle(
     risk_measuring(scenario, schedule, p, execution, by_obstacle, true)
 }
 
-/// [`risk_by_obstacle`]; `cull`: at each point of the path, the spheres too far away for any
-/// chance there, and whose share therefore cannot change, are left after their distance (the
-/// same answer bit for bit as measuring every sphere fully, which `false` does: the reference
-/// the culling is tested and timed against).
+/// [`risk_by_obstacle`]; `cull`: a sphere is measured in full only where it may have a chance
+/// (within [`QUIET_SDS`] standard deviations of the path), and one with no chance anywhere only
+/// where its nearest approach may lie: the same answer bit for bit as measuring every sphere at
+/// every point, which `false` does (the reference the culling is tested and timed against).
 pub fn risk_measuring(
     scenario: &Scenario,
     schedule: &Schedule,
@@ -140,13 +188,40 @@ pub fn risk_measuring(
     by_obstacle: &mut ObstacleRisks,
     cull: bool,
 ) -> ExecutionRisk {
+    let how = if cull { Culling::Kept } else { Culling::None };
+    risk_culled(scenario, schedule, p, execution, by_obstacle, how)
+}
+
+/// How the spheres far from a point of the walk are left out (each the same answer bit for bit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Culling {
+    /// Every sphere measured at every point.
+    None,
+    /// Measured as the walk goes (as the device does).
+    AsWalked,
+    /// The walk kept, then each sphere measured along the runs of points near it (when the
+    /// walk fits in [`KEPT`], else as it goes).
+    Kept,
+}
+
+/// [`risk_measuring`] culling as `how` says.
+pub fn risk_culled(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    execution: Execution,
+    by_obstacle: &mut ObstacleRisks,
+    how: Culling,
+) -> ExecutionRisk {
+    let cull = how != Culling::None;
     let plane = scenario.options.workspace == Workspace::PlaneYz;
-    *by_obstacle = [ObstacleRisk {
+    let initial = ObstacleRisk {
         probability: 0.0,
         clearance: f32::INFINITY,
         sd: 0.0,
         steering_margin: 0.0,
-    }; crate::MAX_OBSTACLES];
+    };
+    *by_obstacle = [initial; crate::MAX_OBSTACLES];
     // Steered, a path inside the steering's own margin is one it will not follow: that much of
     // the clearance does not count.
     let profile = match execution {
@@ -158,56 +233,48 @@ pub fn risk_measuring(
             .as_ref()
             .map_or(0.0, |e| STEER_MARGIN_SDS * crate::fmath::sqrt(e.at(depth)))
     };
-    let visit = |tip: &TipSpread| {
-        let steering_margin = kept(tip.depth);
-        // A sphere farther than this has no chance at this point that an f32 holds: only the
-        // nearest clearance so far of a sphere without any chance yet can still change.
-        let quiet = QUIET_SDS * sd_bound(&tip.covariance);
-        for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
-            let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
-            if plane {
-                // A circle of the plane is a cylinder across it.
-                away.x = 0.0;
-            }
-            let distance = away.norm();
-            let clearance = distance - ob.radius - steering_margin;
-            let nearer = w.probability == 0.0 && clearance < w.clearance;
-            if cull && clearance > quiet && clearance > 0.0 && !nearer {
-                continue;
-            }
-            let sd = if distance > 0.0 {
-                tip.sd_along(&(away / distance))
-            } else {
-                0.0
-            };
-            let chance = if sd > 0.0 {
-                normal_cdf(-clearance / sd)
-            } else if clearance > 0.0 {
-                0.0
-            } else {
-                1.0
-            };
-            if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
-                *w = ObstacleRisk {
-                    probability: chance,
-                    clearance,
-                    sd,
-                    steering_margin,
-                };
-            }
+    let walk = |visit: &mut dyn FnMut(&TipSpread)| match &profile {
+        None => propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
+        Some(estimator) => {
+            propagate_steered_with(scenario, schedule, p, estimator, RISK_SPACING_MM, visit)
         }
     };
-    let (end, shift) = match &profile {
-        None => (
-            propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
-            p.target_shift_mm * p.target_shift_mm,
-        ),
-        // Steered, the needle follows the displaced target as it is seen: the end strays from
-        // the plan by the displacement, but misses the target by the estimate's error alone.
-        Some(estimator) => (
-            propagate_steered_with(scenario, schedule, p, estimator, RISK_SPACING_MM, visit),
-            -(p.target_shift_mm * p.target_shift_mm),
-        ),
+    // A sphere farther than `quiet` from a point has no chance there that an f32 holds.
+    let quiet = |tip: &TipSpread| QUIET_SDS * sd_bound(&tip.covariance);
+    let mut done = false;
+    let mut end = None;
+    if how == Culling::Kept && KEEPS {
+        let mut points = heapless::Vec::<Point, KEPT>::new();
+        let mut whole = true;
+        let e = walk(&mut |tip| {
+            let point = Point {
+                tip: *tip,
+                margin: kept(tip.depth),
+                quiet: quiet(tip),
+            };
+            whole &= points.push(point).is_ok();
+        });
+        done = whole && shares(scenario, plane, &points, by_obstacle);
+        end = Some(e);
+    }
+    let end = match end {
+        Some(e) if done => e,
+        _ => {
+            // Measured as the walk goes: at each point, a sphere beyond `quiet` is left after its
+            // distance unless it has had no chance yet and comes nearer than before.
+            walk(&mut |tip| {
+                let (margin, q) = (kept(tip.depth), cull.then(|| quiet(tip)));
+                for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
+                    take(w, tip, margin, ob, plane, q);
+                }
+            })
+        }
+    };
+    // Steered, the needle follows the displaced target as it is seen: the end strays from
+    // the plan by the displacement, but misses the target by the estimate's error alone.
+    let shift = match &profile {
+        None => p.target_shift_mm * p.target_shift_mm,
+        Some(_) => -(p.target_shift_mm * p.target_shift_mm),
     };
     let collision_probability = by_obstacle
         .iter()

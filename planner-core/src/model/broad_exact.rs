@@ -5,7 +5,7 @@
 
 use crate::check::{clearances, clearances_of, rebuild};
 use crate::execute::perturbation::Perturbation;
-use crate::execute::risk::{risk_measuring, Execution, ExecutionRisk, ObstacleRisk};
+use crate::execute::risk::{risk_culled, Culling, Execution, ExecutionRisk, ObstacleRisk};
 use crate::execute::schedule::{continuation_steps, Posture, Schedule};
 use crate::model::broad::{Broad, Set};
 use crate::model::form::{Form, SegmentKind};
@@ -179,11 +179,21 @@ fn the_risk_spread_is_the_same_culled_as_over_every_sphere() {
         } else {
             Execution::OpenLoop
         };
-        let culled = risk_measuring(&s, &schedule, &p, execution, &mut by_culled, true);
-        let every = risk_measuring(&s, &schedule, &p, execution, &mut by_every, false);
-        assert_eq!(bits_of_risk(&culled), bits_of_risk(&every), "case {n}");
-        for (o, (a, b)) in by_culled.iter().zip(&by_every).enumerate() {
-            assert_eq!(bits_of_share(a), bits_of_share(b), "case {n} sphere {o}");
+        let every = risk_culled(&s, &schedule, &p, execution, &mut by_every, Culling::None);
+        for how in [Culling::AsWalked, Culling::Kept] {
+            let culled = risk_culled(&s, &schedule, &p, execution, &mut by_culled, how);
+            assert_eq!(
+                bits_of_risk(&culled),
+                bits_of_risk(&every),
+                "case {n} {how:?}"
+            );
+            for (o, (a, b)) in by_culled.iter().zip(&by_every).enumerate() {
+                assert_eq!(
+                    bits_of_share(a),
+                    bits_of_share(b),
+                    "case {n} {how:?} sphere {o}"
+                );
+            }
         }
         risky +=
             usize::from(every.collision_probability > 0.0 && every.collision_probability < 1.0);
