@@ -2,7 +2,7 @@
 //! numbers (insertion angles, segment kinds, lengths and bevel angles), not from the optimiser's
 //! state, and its end point, every clearance and every bound are measured afresh.
 
-use crate::model::broad::{Broad, Set};
+use crate::model::broad::{worth_a_tree, Broad, Set};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind};
 use crate::model::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
@@ -184,7 +184,7 @@ pub fn clearances(scenario: &Scenario, geo: &PathGeometry) -> (f32, f32) {
     // The distance to a line costs less than a look-up in the tree, and the tree's building
     // more than a few arcs' distances: a tree for many spheres along a path with an arc.
     let arcs = (0..geo.form.len()).any(|i| geo.form.kind(i) == SegmentKind::Arc);
-    if obstacles.len() <= BROAD_FROM || !arcs {
+    if !worth_a_tree(obstacles.len()) || !arcs {
         return clearances_of(scenario, geo, &Set::all(obstacles.len()));
     }
     let broad = Broad::new(obstacles);
@@ -201,10 +201,6 @@ pub fn clearances(scenario: &Scenario, geo: &PathGeometry) -> (f32, f32) {
     }
     clearances_of(scenario, geo, &Set::all(obstacles.len()))
 }
-
-/// Spheres up to this many are measured without a broad phase (its tree would cost more than
-/// it saves).
-const BROAD_FROM: usize = 32;
 
 /// Times the check's reach grows fourfold before every sphere is measured.
 const REACH_GROWTHS: usize = 6;

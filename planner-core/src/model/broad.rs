@@ -25,6 +25,16 @@ const MAX_DEPTH: usize = 24;
 /// spheres, at one point on the path each.
 pub const PIECE_MM: f32 = 10.0;
 
+/// Spheres up to this many are measured without a tree outside the optimiser (the check, the
+/// steering's prediction): building one would cost more than it saves.
+pub const BROAD_FROM: usize = 32;
+
+/// Whether `count` spheres are worth a tree outside the optimiser. Never where the capacity is
+/// [`BROAD_FROM`] or less (the device's 32): no tree is then built or compiled in.
+pub fn worth_a_tree(count: usize) -> bool {
+    MAX_OBSTACLES > BROAD_FROM && count > BROAD_FROM
+}
+
 /// Words of a [`Set`].
 const WORDS: usize = MAX_OBSTACLES.div_ceil(32);
 

@@ -8,7 +8,7 @@
 use super::attempt::attempt;
 use crate::execute::nominal::execute_from;
 use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
-use crate::model::broad::{Broad, Set};
+use crate::model::broad::{worth_a_tree, Broad, Set};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
@@ -32,8 +32,8 @@ pub struct Prediction {
 /// Executes `steps` from `tip` with arc radius `radius` and measures the end against `target` and
 /// the clearance to every obstacle, as the simulated tissue counts it: exact to spheres in 3-D;
 /// in a plane scenario to the circles' cylinders across the plane, from points `PLANE_SPACING`
-/// apart less half that spacing (no point of the path is farther from a sample). Beyond
-/// [`BROAD_FROM`] spheres, a tree built here measures only those near the path.
+/// apart less half that spacing (no point of the path is farther from a sample). With many
+/// spheres ([`worth_a_tree`]), a tree built here measures only those near the path.
 pub fn predict(
     scenario: &Scenario,
     tip: &Frame,
@@ -41,7 +41,7 @@ pub fn predict(
     radius: f32,
     target: V3,
 ) -> Prediction {
-    let broad = (scenario.obstacles.len() > BROAD_FROM).then(|| Broad::new(&scenario.obstacles));
+    let broad = worth_a_tree(scenario.obstacles.len()).then(|| Broad::new(&scenario.obstacles));
     predict_with(scenario, broad.as_ref(), tip, steps, radius, target)
 }
 
@@ -92,10 +92,6 @@ pub fn predict_with(
         end,
     }
 }
-
-/// Spheres up to this many are measured without a tree (building it would cost more than it
-/// saves).
-pub const BROAD_FROM: usize = 32;
 
 /// The first reach a segment's nearest sphere is looked for within when none is known yet (mm;
 /// it grows fourfold, [`REACH_GROWTHS`] times, before every sphere is measured).

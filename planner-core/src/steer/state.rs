@@ -1,7 +1,7 @@
 //! The steering controller's state machine: readings in, commands out.
 
 use super::estimate::Estimate;
-use super::replan::{predict_with, replan, segments_of, Prediction, ReplanInput, BROAD_FROM};
+use super::replan::{predict_with, replan, segments_of, Prediction, ReplanInput};
 use super::target::TargetFix;
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
@@ -9,7 +9,7 @@ use super::{
 };
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
-use crate::model::broad::Broad;
+use crate::model::broad::{worth_a_tree, Broad};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::Scenario;
@@ -23,7 +23,7 @@ const DONE_SLACK: f32 = 1e-3;
 pub struct Steering {
     scenario: Scenario,
     /// The tree over the scenario's spheres, built once for the predictions of every reading
-    /// (none up to [`BROAD_FROM`] spheres).
+    /// (none unless [`worth_a_tree`]).
     broad: Option<Broad>,
     config: SteerConfig,
     estimate: Estimate,
@@ -73,7 +73,7 @@ impl Steering {
         let estimate = Estimate::new(tip, v3(scenario.target.position), &config.noise);
         let mut s = Steering {
             scenario: scenario.clone(),
-            broad: (scenario.obstacles.len() > BROAD_FROM).then(|| Broad::new(&scenario.obstacles)),
+            broad: worth_a_tree(scenario.obstacles.len()).then(|| Broad::new(&scenario.obstacles)),
             config: *config,
             estimate,
             steps: Steps::new(),
