@@ -35,6 +35,28 @@ pub fn worth_a_tree(count: usize) -> bool {
     MAX_OBSTACLES > BROAD_FROM && count > BROAD_FROM
 }
 
+/// A tree kept beside other state: room for one where [`worth_a_tree`] can hold, none (no
+/// bytes) on the device's 32.
+pub type KeptTree = heapless::Vec<
+    Broad,
+    {
+        if MAX_OBSTACLES > BROAD_FROM {
+            1
+        } else {
+            0
+        }
+    },
+>;
+
+/// The tree over `obstacles` to keep, if they are [`worth_a_tree`].
+pub fn kept_tree(obstacles: &[Obstacle]) -> KeptTree {
+    let mut kept = KeptTree::new();
+    if worth_a_tree(obstacles.len()) {
+        let _ = kept.push(Broad::new(obstacles));
+    }
+    kept
+}
+
 /// Words of a [`Set`].
 const WORDS: usize = MAX_OBSTACLES.div_ceil(32);
 

@@ -9,7 +9,7 @@ use super::{
 };
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
-use crate::model::broad::{worth_a_tree, Broad};
+use crate::model::broad::{kept_tree, KeptTree};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::Scenario;
@@ -23,8 +23,8 @@ const DONE_SLACK: f32 = 1e-3;
 pub struct Steering {
     scenario: Scenario,
     /// The tree over the scenario's spheres, built once for the predictions of every reading
-    /// (none unless [`worth_a_tree`]).
-    broad: Option<Broad>,
+    /// (none unless [`worth_a_tree`](crate::model::broad::worth_a_tree)).
+    broad: KeptTree,
     config: SteerConfig,
     estimate: Estimate,
     steps: Steps,
@@ -73,7 +73,7 @@ impl Steering {
         let estimate = Estimate::new(tip, v3(scenario.target.position), &config.noise);
         let mut s = Steering {
             scenario: scenario.clone(),
-            broad: worth_a_tree(scenario.obstacles.len()).then(|| Broad::new(&scenario.obstacles)),
+            broad: kept_tree(&scenario.obstacles),
             config: *config,
             estimate,
             steps: Steps::new(),
@@ -179,7 +179,7 @@ impl Steering {
     fn predict(&self, steps: &[Step]) -> Prediction {
         predict_with(
             &self.scenario,
-            self.broad.as_ref(),
+            self.broad.first(),
             &self.estimate.tip,
             steps,
             self.radius(),
