@@ -145,3 +145,128 @@ pub fn near_and_far(
         best: a.best().map_or("none".into(), |o| o.form.to_string()),
     })
 }
+
+/// Median times (µs) of one measure of a plan: with every sphere (culled as the planner does),
+/// with every sphere measured in full (the exhaustive reference), with the near spheres alone.
+#[derive(Clone, Copy, Debug)]
+pub struct Measure {
+    pub culled_us: f64,
+    pub every_us: f64,
+    pub near_us: f64,
+}
+
+/// The check's clearances (each path rebuilt from the plan's numbers, then measured), the
+/// collision-risk spread (open loop, the default perturbation) and the steering's prediction
+/// (the schedule from the posture) of every feasible form of the plan both scenarios share,
+/// timed side by side `runs` times; an error unless the culled and the exhaustive figures agree
+/// bit for bit.
+pub struct Measures {
+    pub check: Measure,
+    pub risk: Measure,
+    pub predict: Measure,
+    /// Feasible forms measured.
+    pub forms: usize,
+}
+
+/// Times `f` on each of the three inputs, alternating; the median of each (µs).
+fn side_by_side<T>(runs: usize, mut f: impl FnMut(usize) -> T) -> [f64; 3] {
+    let mut t: [Vec<f64>; 3] = Default::default();
+    for _ in 0..runs.max(1) {
+        for (k, times) in t.iter_mut().enumerate() {
+            let start = Instant::now();
+            std::hint::black_box(f(k));
+            times.push(start.elapsed().as_secs_f64() * 1e6);
+        }
+    }
+    t.map(median)
+}
+
+/// [`Measures`] of `near_and_far(seed, total, near)`'s plan.
+pub fn measures(seed: u64, total: usize, near: usize, runs: usize) -> anyhow::Result<Measures> {
+    use planner_core::check::{clearances, clearances_of, rebuild};
+    use planner_core::execute::{nominal::posture_frame, perturbation::Perturbation};
+    use planner_core::execute::{risk::risk_measuring, risk::Execution, schedule::schedule};
+    use planner_core::model::broad::{Broad, Set};
+    use planner_core::steer::replan::predict_with;
+    let crate::scale::NearFar { all, near_alone } = crate::scale::near_and_far(seed, total, near);
+    let report = plan(&all)?;
+    let mut forms = Vec::new();
+    for o in report.forms.iter().filter(|o| o.feasible) {
+        forms.push((o, schedule(&all, o)?));
+    }
+    let scenarios = [&all, &all, &near_alone];
+    let every = Set::all(all.obstacles.len());
+    let check_of = |k: usize| {
+        let mut bits = Vec::new();
+        for (o, _) in &forms {
+            let geo = rebuild(scenarios[k], o.form, &o.insertion, &o.segments);
+            let (least, sum) = if k == 1 {
+                clearances_of(&all, &geo, &every)
+            } else {
+                clearances(scenarios[k], &geo)
+            };
+            bits.push((least.to_bits(), sum.to_bits()));
+        }
+        bits
+    };
+    anyhow::ensure!(check_of(0) == check_of(1), "the culled clearances differ");
+    let [c, e, n] = side_by_side(runs, check_of);
+    let check = Measure {
+        culled_us: c,
+        every_us: e,
+        near_us: n,
+    };
+    let p = Perturbation::default();
+    let mut by = [Default::default(); planner_core::MAX_OBSTACLES];
+    let mut risk_of = |k: usize| {
+        let mut bits = Vec::new();
+        for (_, s) in &forms {
+            let r = risk_measuring(scenarios[k], s, &p, Execution::OpenLoop, &mut by, k != 1);
+            bits.push((
+                r.collision_probability.to_bits(),
+                r.target_error_p95.to_bits(),
+            ));
+        }
+        bits
+    };
+    anyhow::ensure!(risk_of(0) == risk_of(1), "the culled risk differs");
+    let [c, e, n] = side_by_side(runs, risk_of);
+    let risk = Measure {
+        culled_us: c,
+        every_us: e,
+        near_us: n,
+    };
+    let radius = all.needle.curvature_radius;
+    let t = all.target.position;
+    let target = planner_core::model::kinematics::V3::new(t[0], t[1], t[2]);
+    let trees = [
+        Broad::new(&all.obstacles),
+        Broad::new(&near_alone.obstacles),
+    ];
+    let predict_of = |k: usize| {
+        let tree = [Some(&trees[0]), None, Some(&trees[1])][k];
+        let mut bits = Vec::new();
+        for (_, s) in &forms {
+            let tip = posture_frame(&all, s);
+            let p = predict_with(scenarios[k], tree, &tip, &s.steps, radius, target);
+            bits.push(p.min_clearance.to_bits());
+        }
+        bits
+    };
+    anyhow::ensure!(
+        predict_of(0) == predict_of(1),
+        "the culled prediction differs"
+    );
+    let [c, e, n] = side_by_side(runs, predict_of);
+    let predict = Measure {
+        culled_us: c,
+        every_us: e,
+        near_us: n,
+    };
+    Ok(Measures {
+        check,
+        risk,
+        predict,
+        forms: forms.len(),
+    })
+}

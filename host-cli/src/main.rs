@@ -291,24 +291,42 @@ fn bench_near_and_far(args: &BenchArgs, spec: &str) -> Result<()> {
         anyhow::bail!("--near-and-far {spec}: expected TOTAL,NEAR (two whole numbers)");
     };
     let r = needle_cli::bench::near_and_far(args.seed, total, near, args.runs)?;
+    let m = needle_cli::bench::measures(args.seed, total, near, args.runs)?;
     let ratio = r.all_ms / r.near_ms;
+    let rows = [("check", m.check), ("risk", m.risk), ("predict", m.predict)];
     let text = if args.json {
-        let v = serde_json::json!({
+        let mut v = serde_json::json!({
             "seed": args.seed, "spheres": total, "near": near, "runs": args.runs.max(1),
             "best": r.best, "all_ms": r.all_ms, "near_ms": r.near_ms, "ratio": ratio,
+            "measured_forms": m.forms,
         });
+        for (name, x) in rows {
+            v[format!("{name}_us")] = serde_json::json!({
+                "culled": x.culled_us, "every": x.every_us, "near": x.near_us,
+            });
+        }
         format!("{v}\n")
     } else {
-        format!(
+        let mut t = format!(
             "seed {}: {total} spheres, {near} within 20 mm; the same plan (best {})\n\
              {total} spheres: median {:.2} ms over {} runs\n\
-             {near} alone: median {:.2} ms\nratio {ratio:.3}\n",
+             {near} alone: median {:.2} ms\nratio {ratio:.3}\n\
+             every feasible form ({}) measured, median us: {total} culled, {total} every sphere, \
+             {near} alone\n",
             args.seed,
             r.best,
             r.all_ms,
             args.runs.max(1),
-            r.near_ms
-        )
+            r.near_ms,
+            m.forms
+        );
+        for (name, x) in rows {
+            t.push_str(&format!(
+                "{name:<8} {:>9.1} {:>9.1} {:>9.1}\n",
+                x.culled_us, x.every_us, x.near_us
+            ));
+        }
+        t
     };
     write!(std::io::stdout(), "{text}")?;
     Ok(())

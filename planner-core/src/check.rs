@@ -2,6 +2,7 @@
 //! numbers (insertion angles, segment kinds, lengths and bevel angles), not from the optimiser's
 //! state, and its end point, every clearance and every bound are measured afresh.
 
+use crate::model::broad::{worth_a_tree, Broad, Set};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind};
 use crate::model::kinematics::{entry_basis, insertion_frame, PathGeometry, V3};
@@ -107,23 +108,7 @@ pub fn check(
     let t = scenario.target.position;
     let target = V3::new(t[0], t[1], t[2]);
     let target_error = (geo.end() - target).norm();
-    let mut min_clearance = f32::INFINITY;
-    let mut inverse_sum = 0.0f32;
-    for ob in &scenario.obstacles {
-        let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
-        let mut clearance = f32::INFINITY;
-        for i in 0..form.len() {
-            let d = closest(&geo.starts[i], form.kind(i), geo.lengths[i], geo.radius, &c);
-            clearance = clearance.min(d.distance - ob.radius);
-        }
-        min_clearance = min_clearance.min(clearance);
-        inverse_sum += match scenario.options.risk_within_mm {
-            _ if !(clearance > 0.0) => f32::INFINITY,
-            None => 1.0 / clearance,
-            Some(r) if clearance < r => 1.0 / clearance - 1.0 / r,
-            Some(_) => 0.0,
-        };
-    }
+    let (min_clearance, inverse_sum) = clearances(scenario, &geo);
     let risk = match scenario.options.risk {
         RiskMeasure::Mean if !scenario.obstacles.is_empty() => {
             inverse_sum / scenario.obstacles.len() as f32
@@ -180,6 +165,70 @@ pub fn check(
         within_bounds,
         feasible,
     }
+}
+
+/// The smallest clearance of `geo` to any sphere and the sum of the spheres' inverse clearances
+/// (as the risk degree counts them). With `risk_within_mm`, the spheres farther than it add
+/// nothing, so only those a broad phase of the check's own (never the optimiser's) finds near
+/// the path are measured, the reach growing until the nearest lies within it: the same numbers
+/// as measuring every sphere.
+pub fn clearances(scenario: &Scenario, geo: &PathGeometry) -> (f32, f32) {
+    let obstacles = &scenario.obstacles;
+    let Some(within) = scenario
+        .options
+        .risk_within_mm
+        .filter(|r| *r > 0.0 && r.is_finite())
+    else {
+        return clearances_of(scenario, geo, &Set::all(obstacles.len()));
+    };
+    // The distance to a line costs less than a look-up in the tree, and the tree's building
+    // more than a few arcs' distances: a tree for many spheres along a path with an arc.
+    let arcs = (0..geo.form.len()).any(|i| geo.form.kind(i) == SegmentKind::Arc);
+    if !worth_a_tree(obstacles.len()) || !arcs {
+        return clearances_of(scenario, geo, &Set::all(obstacles.len()));
+    }
+    let broad = Broad::new(obstacles);
+    let mut reach = within;
+    for _ in 0..REACH_GROWTHS {
+        let near = broad.near_path(obstacles, geo, reach);
+        let (least, sum) = clearances_of(scenario, geo, &near);
+        // A sphere left out is at least `reach` away: it neither adds to the sum (`reach` is
+        // at least `within`) nor comes nearer than the nearest found within the reach.
+        if least < reach {
+            return (least, sum);
+        }
+        reach *= 4.0;
+    }
+    clearances_of(scenario, geo, &Set::all(obstacles.len()))
+}
+
+/// Times the check's reach grows fourfold before every sphere is measured.
+const REACH_GROWTHS: usize = 6;
+
+/// [`clearances`] over the spheres of `set`, in index order.
+pub fn clearances_of(scenario: &Scenario, geo: &PathGeometry, set: &Set) -> (f32, f32) {
+    let mut min_clearance = f32::INFINITY;
+    let mut inverse_sum = 0.0f32;
+    for o in set.iter() {
+        let Some(ob) = scenario.obstacles.get(o) else {
+            continue;
+        };
+        let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
+        let mut clearance = f32::INFINITY;
+        for i in 0..geo.form.len() {
+            let kind = geo.form.kind(i);
+            let d = closest(&geo.starts[i], kind, geo.lengths[i], geo.radius, &c);
+            clearance = clearance.min(d.distance - ob.radius);
+        }
+        min_clearance = min_clearance.min(clearance);
+        inverse_sum += match scenario.options.risk_within_mm {
+            _ if !(clearance > 0.0) => f32::INFINITY,
+            None => 1.0 / clearance,
+            Some(r) if clearance < r => 1.0 / clearance - 1.0 / r,
+            Some(_) => 0.0,
+        };
+    }
+    (min_clearance, inverse_sum)
 }
 
 /// Calls `visit` with points along `geo` from the entry to the end, no more than `spacing` apart.

@@ -53,8 +53,10 @@ fn a_reach_out_of_range_is_refused_with_its_key() {
 }
 
 /// `needle bench --near-and-far`: the far spheres leave the plan as it was (checked by the
-/// command, which fails otherwise) and both medians are printed; a bad spec or a total over the
-/// host's capacity is a clear error.
+/// command, which fails otherwise) and both medians are printed, with the check's, the risk
+/// spread's and the prediction's times culled, over every sphere and for the near alone (the
+/// command fails unless culled and exhaustive agree); a bad spec or a total over the host's
+/// capacity is a clear error.
 #[test]
 fn the_bench_times_many_spheres_beside_the_near_ones() {
     let v = needle_json(&["bench", "--near-and-far", "64,8", "--runs", "1", "--json"]);
@@ -71,6 +73,12 @@ fn the_bench_times_many_spheres_beside_the_near_ones() {
         all > 0.0 && near > 0.0 && (ratio - all / near).abs() < 1e-9,
         "{v}"
     );
+    assert!(v["measured_forms"].as_u64().unwrap() >= 1, "{v}");
+    for key in ["check_us", "risk_us", "predict_us"] {
+        for part in ["culled", "every", "near"] {
+            assert!(v[key][part].as_f64().unwrap() > 0.0, "{key}.{part}: {v}");
+        }
+    }
     for (spec, says) in [
         ("64", "expected TOTAL,NEAR"),
         ("8,64", "NEAR from 1 to TOTAL"),

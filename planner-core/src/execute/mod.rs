@@ -7,6 +7,7 @@ pub mod nominal;
 pub mod perturbation;
 pub mod plan_with_schedule;
 pub mod risk;
+mod risk_kept;
 pub mod schedule;
 pub mod spread;
 

@@ -10,10 +10,11 @@
 //! the percentile taken by Wilson and Hilferty's cube root.
 
 use super::perturbation::Perturbation;
+use super::risk_kept::{shares, Point, KEEPS, KEPT};
 use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
 use crate::model::kinematics::V3;
-use crate::model::scenario::{Scenario, Workspace};
+use crate::model::scenario::{Obstacle, Scenario, Workspace};
 use crate::steer::apriori::{estimator_profile, propagate_steered_with};
 use crate::steer::estimate::NoiseModel;
 use crate::steer::STEER_MARGIN_SDS;
@@ -21,6 +22,64 @@ use nalgebra::Matrix3;
 
 /// Where the spread is evaluated along the path (mm between points at most).
 pub const RISK_SPACING_MM: f32 = 1.0;
+
+/// Standard deviations beyond which [`normal_cdf`] of minus the clearance is 0 in f32 (it is
+/// from 14.9 on).
+pub const QUIET_SDS: f32 = 16.0;
+
+/// At least the spread of the position along any unit direction (mm): the square root of the
+/// covariance's Frobenius norm, which bounds its largest eigenvalue, with room for rounding
+/// (infinite or NaN when the covariance is).
+fn sd_bound(covariance: &Matrix3<f32>) -> f32 {
+    crate::fmath::sqrt(covariance.norm() * 1.001)
+}
+
+/// Offers `w` the share of `ob` at the point `tip`, where the steering keeps `margin`: taken
+/// when its chance is larger, or as large at a smaller clearance. With `quiet`, a point farther
+/// than it (where the chance is 0) is left after its distance unless `w` has no chance yet and
+/// the point is nearer than `w`'s (the same share as without).
+pub(crate) fn take(
+    w: &mut ObstacleRisk,
+    tip: &TipSpread,
+    margin: f32,
+    ob: &Obstacle,
+    plane: bool,
+    quiet: Option<f32>,
+) {
+    let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
+    if plane {
+        // A circle of the plane is a cylinder across it.
+        away.x = 0.0;
+    }
+    let distance = away.norm();
+    let clearance = distance - ob.radius - margin;
+    if let Some(q) = quiet {
+        let nearer = w.probability == 0.0 && clearance < w.clearance;
+        if clearance > q && clearance > 0.0 && !nearer {
+            return;
+        }
+    }
+    let sd = if distance > 0.0 {
+        tip.sd_along(&(away / distance))
+    } else {
+        0.0
+    };
+    let chance = if sd > 0.0 {
+        normal_cdf(-clearance / sd)
+    } else if clearance > 0.0 {
+        0.0
+    } else {
+        1.0
+    };
+    if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
+        *w = ObstacleRisk {
+            probability: chance,
+            clearance,
+            sd,
+            steering_margin: margin,
+        };
+    }
+}
 
 /// The standard normal quantile of 0.95.
 const Z95: f32 = 1.644_853_6;
@@ -114,13 +173,55 @@ pub fn risk_by_obstacle(
     execution: Execution,
     by_obstacle: &mut ObstacleRisks,
 ) -> ExecutionRisk {
+    risk_measuring(scenario, schedule, p, execution, by_obstacle, true)
+}
+
+/// [`risk_by_obstacle`]; `cull`: a sphere is measured in full only where it may have a chance
+/// (within [`QUIET_SDS`] standard deviations of the path), and one with no chance anywhere only
+/// where its nearest approach may lie: the same answer bit for bit as measuring every sphere at
+/// every point, which `false` does (the reference the culling is tested and timed against).
+pub fn risk_measuring(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    execution: Execution,
+    by_obstacle: &mut ObstacleRisks,
+    cull: bool,
+) -> ExecutionRisk {
+    let how = if cull { Culling::Kept } else { Culling::None };
+    risk_culled(scenario, schedule, p, execution, by_obstacle, how)
+}
+
+/// How the spheres far from a point of the walk are left out (each the same answer bit for bit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Culling {
+    /// Every sphere measured at every point.
+    None,
+    /// Measured as the walk goes (as the device does).
+    AsWalked,
+    /// The walk kept, then each sphere measured along the runs of points near it (when the
+    /// walk fits in [`KEPT`], else as it goes).
+    Kept,
+}
+
+/// [`risk_measuring`] culling as `how` says.
+pub fn risk_culled(
+    scenario: &Scenario,
+    schedule: &Schedule,
+    p: &Perturbation,
+    execution: Execution,
+    by_obstacle: &mut ObstacleRisks,
+    how: Culling,
+) -> ExecutionRisk {
+    let cull = how != Culling::None;
     let plane = scenario.options.workspace == Workspace::PlaneYz;
-    *by_obstacle = [ObstacleRisk {
+    let initial = ObstacleRisk {
         probability: 0.0,
         clearance: f32::INFINITY,
         sd: 0.0,
         steering_margin: 0.0,
-    }; crate::MAX_OBSTACLES];
+    };
+    *by_obstacle = [initial; crate::MAX_OBSTACLES];
     // Steered, a path inside the steering's own margin is one it will not follow: that much of
     // the clearance does not count.
     let profile = match execution {
@@ -132,49 +233,48 @@ pub fn risk_by_obstacle(
             .as_ref()
             .map_or(0.0, |e| STEER_MARGIN_SDS * crate::fmath::sqrt(e.at(depth)))
     };
-    let visit = |tip: &TipSpread| {
-        let steering_margin = kept(tip.depth);
-        for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
-            let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
-            if plane {
-                // A circle of the plane is a cylinder across it.
-                away.x = 0.0;
-            }
-            let distance = away.norm();
-            let sd = if distance > 0.0 {
-                tip.sd_along(&(away / distance))
-            } else {
-                0.0
-            };
-            let clearance = distance - ob.radius - steering_margin;
-            let chance = if sd > 0.0 {
-                normal_cdf(-clearance / sd)
-            } else if clearance > 0.0 {
-                0.0
-            } else {
-                1.0
-            };
-            if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
-                *w = ObstacleRisk {
-                    probability: chance,
-                    clearance,
-                    sd,
-                    steering_margin,
-                };
-            }
+    let walk = |visit: &mut dyn FnMut(&TipSpread)| match &profile {
+        None => propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
+        Some(estimator) => {
+            propagate_steered_with(scenario, schedule, p, estimator, RISK_SPACING_MM, visit)
         }
     };
-    let (end, shift) = match &profile {
-        None => (
-            propagate(scenario, schedule, p, RISK_SPACING_MM, visit),
-            p.target_shift_mm * p.target_shift_mm,
-        ),
-        // Steered, the needle follows the displaced target as it is seen: the end strays from
-        // the plan by the displacement, but misses the target by the estimate's error alone.
-        Some(estimator) => (
-            propagate_steered_with(scenario, schedule, p, estimator, RISK_SPACING_MM, visit),
-            -(p.target_shift_mm * p.target_shift_mm),
-        ),
+    // A sphere farther than `quiet` from a point has no chance there that an f32 holds.
+    let quiet = |tip: &TipSpread| QUIET_SDS * sd_bound(&tip.covariance);
+    let mut done = false;
+    let mut end = None;
+    if how == Culling::Kept && KEEPS {
+        let mut points = heapless::Vec::<Point, KEPT>::new();
+        let mut whole = true;
+        let e = walk(&mut |tip| {
+            let point = Point {
+                tip: *tip,
+                margin: kept(tip.depth),
+                quiet: quiet(tip),
+            };
+            whole &= points.push(point).is_ok();
+        });
+        done = whole && shares(scenario, plane, &points, by_obstacle);
+        end = Some(e);
+    }
+    let end = match end {
+        Some(e) if done => e,
+        _ => {
+            // Measured as the walk goes: at each point, a sphere beyond `quiet` is left after its
+            // distance unless it has had no chance yet and comes nearer than before.
+            walk(&mut |tip| {
+                let (margin, q) = (kept(tip.depth), cull.then(|| quiet(tip)));
+                for (w, ob) in by_obstacle.iter_mut().zip(&scenario.obstacles) {
+                    take(w, tip, margin, ob, plane, q);
+                }
+            })
+        }
+    };
+    // Steered, the needle follows the displaced target as it is seen: the end strays from
+    // the plan by the displacement, but misses the target by the estimate's error alone.
+    let shift = match &profile {
+        None => p.target_shift_mm * p.target_shift_mm,
+        Some(_) => -(p.target_shift_mm * p.target_shift_mm),
     };
     let collision_probability = by_obstacle
         .iter()
@@ -209,6 +309,31 @@ fn norm_quantile(b: &V3, cov: &Matrix3<f32>) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The culling rests on this: beyond [`QUIET_SDS`] standard deviations the chance is 0.
+    #[test]
+    fn the_chance_is_zero_beyond_the_quiet_distance() {
+        let mut x = 14.9f32;
+        while x < 1e7 {
+            assert_eq!(normal_cdf(-x).to_bits(), 0, "{x}");
+            x = f32::from_bits(x.to_bits() + 97);
+        }
+        for x in [f32::MAX, f32::INFINITY, QUIET_SDS] {
+            assert_eq!(normal_cdf(-x).to_bits(), 0, "{x}");
+        }
+        assert!(normal_cdf(-14.0) > 0.0);
+        // The bound holds for a covariance of any orientation.
+        let m = Matrix3::new(2.0, 0.5, -0.3, 0.5, 1.0, 0.2, -0.3, 0.2, 0.5);
+        let b = sd_bound(&m);
+        for n in [
+            V3::x(),
+            V3::new(1.0, 1.0, -0.5).normalize(),
+            V3::new(0.3, -2.0, 1.0).normalize(),
+        ] {
+            let sd = crate::fmath::sqrt((n.transpose() * m * n)[0]);
+            assert!(sd <= b, "{sd} {b}");
+        }
+    }
 
     #[test]
     fn the_quantile_of_a_known_distribution() {

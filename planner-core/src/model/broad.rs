@@ -7,7 +7,8 @@
 //! caller measures each returned sphere exactly and visits them in index order. So a plan does
 //! not depend on the tree, only the work does.
 
-use crate::model::kinematics::{PathGeometry, V3};
+use crate::model::form::SegmentKind;
+use crate::model::kinematics::{Frame, PathGeometry, V3};
 use crate::model::scenario::{Obstacle, MAX_OBSTACLES};
 
 /// Spheres in one leaf: a leaf's spheres are tested one by one.
@@ -23,6 +24,35 @@ const MAX_DEPTH: usize = 24;
 /// Longest piece of a segment one query covers (mm): shorter pieces make tighter bounding
 /// spheres, at one point on the path each.
 pub const PIECE_MM: f32 = 10.0;
+
+/// Spheres up to this many are measured without a tree outside the optimiser (the check, the
+/// steering's prediction): building one would cost more than it saves.
+pub const BROAD_FROM: usize = 32;
+
+/// Whether trees outside the optimiser are built at all: on the host, not on the device. Why not
+/// the device: with 256 spheres the check's tree on the stack and the controller's in `Steering`
+/// took its RAM from 55.4 to 72.5 KiB (the budget is 60) and a steering reading from 0.90 to 1.08
+/// M instructions (the budget is 1 M), building a tree per re-planned continuation.
+const TREES_OUTSIDE_THE_OPTIMISER: bool = MAX_OBSTACLES > BROAD_FROM && !cfg!(target_os = "none");
+
+/// Whether `count` spheres are worth a tree outside the optimiser. Never on the device (see
+/// [`TREES_OUTSIDE_THE_OPTIMISER`]): no tree is then built or compiled in there.
+pub fn worth_a_tree(count: usize) -> bool {
+    TREES_OUTSIDE_THE_OPTIMISER && count > BROAD_FROM
+}
+
+/// A tree kept beside other state: room for one where [`worth_a_tree`] can hold, none (no
+/// bytes) on the device.
+pub type KeptTree = heapless::Vec<Broad, { TREES_OUTSIDE_THE_OPTIMISER as usize }>;
+
+/// The tree over `obstacles` to keep, if they are [`worth_a_tree`].
+pub fn kept_tree(obstacles: &[Obstacle]) -> KeptTree {
+    let mut kept = KeptTree::new();
+    if worth_a_tree(obstacles.len()) {
+        let _ = kept.push(Broad::new(obstacles));
+    }
+    kept
+}
 
 /// Words of a [`Set`].
 const WORDS: usize = MAX_OBSTACLES.div_ceil(32);
@@ -126,7 +156,12 @@ impl Broad {
             built: false,
             count,
         };
-        b.built = b.build(obstacles);
+        // The boxes bound spheres of finite centres and radii not below zero; any other sphere
+        // (an unvalidated scenario) makes every query return every sphere.
+        let sound = obstacles.iter().take(count).all(|o| {
+            o.radius >= 0.0 && o.radius.is_finite() && o.center.iter().all(|c| c.is_finite())
+        });
+        b.built = sound && b.build(obstacles);
         b
     }
 
@@ -191,6 +226,12 @@ impl Broad {
             return;
         }
         let h = r + reach;
+        // A point or reach the comparisons below cannot order (NaN, infinite) would skip
+        // spheres an exhaustive measure counts: every sphere is a candidate then.
+        if !(h.is_finite() && q.iter().all(|x| x.is_finite())) {
+            *out = Set::all(self.count);
+            return;
+        }
         let mut stack = [0u16; MAX_DEPTH];
         let mut depth = 1;
         while depth > 0 {
@@ -235,19 +276,48 @@ impl Broad {
     pub fn near_path(&self, obstacles: &[Obstacle], geo: &PathGeometry, reach: f32) -> Set {
         let mut out = Set::default();
         for i in 0..geo.form.len() {
-            let len = geo.lengths[i];
-            let pieces = libm::ceilf(len / PIECE_MM).clamp(1.0, 1e4) as u32;
-            let piece = len / pieces as f32;
-            for k in 0..pieces {
-                let t = piece * (k as f32 + 0.5);
-                let q = geo.starts[i].point_at(geo.form.kind(i), t, geo.radius);
-                // The rounding of the point and of the exact distances later compared with
-                // `reach` (f32 at coordinates up to 1000 mm).
-                let slack = 1e-3 + 1e-5 * (reach + piece);
-                self.query(obstacles, &q, 0.5 * piece + slack, reach, &mut out);
-            }
+            let kind = geo.form.kind(i);
+            self.near_segment(
+                obstacles,
+                &geo.starts[i],
+                kind,
+                geo.lengths[i],
+                geo.radius,
+                reach,
+                &mut out,
+            );
         }
         out
+    }
+
+    /// Adds to `out` the spheres whose surface may come within `reach` of the segment of `kind`
+    /// and `length` from `start` (arcs of `radius`), with a margin for rounding.
+    #[allow(clippy::too_many_arguments)]
+    pub fn near_segment(
+        &self,
+        obstacles: &[Obstacle],
+        start: &Frame,
+        kind: SegmentKind,
+        len: f32,
+        radius: f32,
+        reach: f32,
+        out: &mut Set,
+    ) {
+        // A length the pieces below cannot cover is measured against every sphere.
+        if !(len >= 0.0 && len.is_finite()) {
+            *out = Set::all(self.count);
+            return;
+        }
+        let pieces = libm::ceilf(len / PIECE_MM).clamp(1.0, 1e4) as u32;
+        let piece = len / pieces as f32;
+        for k in 0..pieces {
+            let t = piece * (k as f32 + 0.5);
+            let q = start.point_at(kind, t, radius);
+            // The rounding of the point and of the exact distances later compared with
+            // `reach` (f32 at coordinates up to 1000 mm).
+            let slack = 1e-3 + 1e-5 * (reach + piece);
+            self.query(obstacles, &q, 0.5 * piece + slack, reach, out);
+        }
     }
 }
 

@@ -3,6 +3,8 @@
 //! use, is `search::in_plane_geometry`).
 
 pub mod broad;
+#[cfg(test)]
+mod broad_exact;
 pub mod clearance;
 pub mod form;
 pub mod kinematics;

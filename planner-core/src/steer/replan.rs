@@ -8,6 +8,7 @@
 use super::attempt::attempt;
 use crate::execute::nominal::execute_from;
 use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
+use crate::model::broad::{worth_a_tree, Broad, Set};
 use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
@@ -31,9 +32,24 @@ pub struct Prediction {
 /// Executes `steps` from `tip` with arc radius `radius` and measures the end against `target` and
 /// the clearance to every obstacle, as the simulated tissue counts it: exact to spheres in 3-D;
 /// in a plane scenario to the circles' cylinders across the plane, from points `PLANE_SPACING`
-/// apart less half that spacing (no point of the path is farther from a sample).
+/// apart less half that spacing (no point of the path is farther from a sample). With many
+/// spheres ([`worth_a_tree`]), a tree built here measures only those near the path.
 pub fn predict(
     scenario: &Scenario,
+    tip: &Frame,
+    steps: &[Step],
+    radius: f32,
+    target: V3,
+) -> Prediction {
+    let broad = worth_a_tree(scenario.obstacles.len()).then(|| Broad::new(&scenario.obstacles));
+    predict_with(scenario, broad.as_ref(), tip, steps, radius, target)
+}
+
+/// [`predict`] with the tree over the scenario's spheres (`None`: every sphere is measured),
+/// for a caller that predicts many times in one scenario: the same answer bit for bit.
+pub fn predict_with(
+    scenario: &Scenario,
+    broad: Option<&Broad>,
     tip: &Frame,
     steps: &[Step],
     radius: f32,
@@ -60,11 +76,13 @@ pub fn predict(
                 min_clearance = crate::fmath::min(min_clearance, d);
             }
         } else if !plane {
-            for ob in &scenario.obstacles {
-                let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
-                let d = closest(start, kind, length, radius, &c).distance - ob.radius;
-                min_clearance = crate::fmath::min(min_clearance, d);
-            }
+            let segment = Piece {
+                start,
+                kind,
+                length,
+                radius,
+            };
+            min_clearance = nearest(scenario, broad, &segment, min_clearance);
         }
     });
     let miss = end.p - target;
@@ -73,6 +91,59 @@ pub fn predict(
         min_clearance,
         end,
     }
+}
+
+/// The first reach a segment's nearest sphere is looked for within when none is known yet (mm;
+/// it grows fourfold, [`REACH_GROWTHS`] times, before every sphere is measured).
+const FIRST_REACH_MM: f32 = 8.0;
+
+/// Times the reach grows.
+const REACH_GROWTHS: usize = 6;
+
+/// One segment of a predicted path.
+struct Piece<'a> {
+    start: &'a Frame,
+    kind: SegmentKind,
+    length: f32,
+    radius: f32,
+}
+
+/// The smaller of `least` and the clearance of `piece` to the nearest sphere. With a tree, only
+/// the spheres it finds within the reach are measured: `least` itself once it is known (a
+/// sphere farther than it cannot lower it), else a reach that grows until a sphere lies within.
+fn nearest(scenario: &Scenario, broad: Option<&Broad>, piece: &Piece, least: f32) -> f32 {
+    let obstacles = &scenario.obstacles;
+    let among = |set: &Set, mut least: f32| {
+        for ob in set.iter().filter_map(|o| obstacles.get(o)) {
+            let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
+            let d = closest(piece.start, piece.kind, piece.length, piece.radius, &c);
+            least = crate::fmath::min(least, d.distance - ob.radius);
+        }
+        least
+    };
+    // The distance to a line costs less than a look-up in the tree.
+    let Some(broad) = broad.filter(|_| piece.kind == SegmentKind::Arc) else {
+        return among(&Set::all(obstacles.len()), least);
+    };
+    let (mut reach, growths) = if least.is_finite() {
+        (least.max(0.0), 1)
+    } else {
+        (FIRST_REACH_MM, REACH_GROWTHS)
+    };
+    for _ in 0..growths {
+        let mut near = Set::default();
+        let p = piece;
+        broad.near_segment(
+            obstacles, p.start, p.kind, p.length, p.radius, reach, &mut near,
+        );
+        let found = among(&near, least);
+        // Every sphere left out is at least `reach` away.
+        if found < reach || least.is_finite() {
+            return found;
+        }
+        reach *= 4.0;
+    }
+    among(&Set::all(obstacles.len()), least)
 }
 
 /// The segments the remaining `steps` drive: each rotation becomes the bevel before the next

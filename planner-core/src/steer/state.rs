@@ -1,7 +1,7 @@
 //! The steering controller's state machine: readings in, commands out.
 
 use super::estimate::Estimate;
-use super::replan::{predict, replan, segments_of, Prediction, ReplanInput};
+use super::replan::{predict_with, replan, segments_of, Prediction, ReplanInput};
 use super::target::TargetFix;
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
@@ -9,6 +9,7 @@ use super::{
 };
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
+use crate::model::broad::{kept_tree, KeptTree};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::{Obstacles, Scenario};
@@ -25,6 +26,9 @@ const CLOSER_BY: f32 = 0.95;
 #[derive(Clone, Debug)]
 pub struct Steering {
     scenario: Scenario,
+    /// The tree over the scenario's spheres, built once for the predictions of every reading
+    /// (none unless [`worth_a_tree`](crate::model::broad::worth_a_tree)).
+    broad: KeptTree,
     config: SteerConfig,
     estimate: Estimate,
     steps: Steps,
@@ -78,6 +82,7 @@ impl Steering {
                 obstacles: Obstacles::new(),
                 ..*scenario
             },
+            broad: kept_tree(&scenario.obstacles),
             config: *config,
             estimate,
             steps: Steps::new(),
@@ -183,8 +188,9 @@ impl Steering {
     }
 
     fn predict(&self, steps: &[Step]) -> Prediction {
-        predict(
+        predict_with(
             &self.scenario,
+            self.broad.first(),
             &self.estimate.tip,
             steps,
             self.radius(),
