@@ -169,6 +169,22 @@ pub struct Measures {
 }
 
 /// Times `f` on each of the three inputs, alternating; the median of each (µs).
+/// `f` of 0 (culled), 1 (every sphere) and 2 (the near alone), timed side by side, after
+/// checking that the culled and the full answers are the same bits.
+fn culled_and_full<T: PartialEq>(
+    what: &str,
+    runs: usize,
+    mut f: impl FnMut(usize) -> T,
+) -> anyhow::Result<Measure> {
+    anyhow::ensure!(f(0) == f(1), "the culled {what} differs");
+    let [culled_us, every_us, near_us] = side_by_side(runs, f);
+    Ok(Measure {
+        culled_us,
+        every_us,
+        near_us,
+    })
+}
+
 fn side_by_side<T>(runs: usize, mut f: impl FnMut(usize) -> T) -> [f64; 3] {
     let mut t: [Vec<f64>; 3] = Default::default();
     for _ in 0..runs.max(1) {
@@ -209,16 +225,10 @@ pub fn measures(seed: u64, total: usize, near: usize, runs: usize) -> anyhow::Re
         }
         bits
     };
-    anyhow::ensure!(check_of(0) == check_of(1), "the culled clearances differ");
-    let [c, e, n] = side_by_side(runs, check_of);
-    let check = Measure {
-        culled_us: c,
-        every_us: e,
-        near_us: n,
-    };
+    let check = culled_and_full("clearances", runs, check_of)?;
     let p = Perturbation::default();
     let mut by = [Default::default(); planner_core::MAX_OBSTACLES];
-    let mut risk_of = |k: usize| {
+    let risk_of = |k: usize| {
         let mut bits = Vec::new();
         for (_, s) in &forms {
             let r = risk_measuring(scenarios[k], s, &p, Execution::OpenLoop, &mut by, k != 1);
@@ -229,13 +239,7 @@ pub fn measures(seed: u64, total: usize, near: usize, runs: usize) -> anyhow::Re
         }
         bits
     };
-    anyhow::ensure!(risk_of(0) == risk_of(1), "the culled risk differs");
-    let [c, e, n] = side_by_side(runs, risk_of);
-    let risk = Measure {
-        culled_us: c,
-        every_us: e,
-        near_us: n,
-    };
+    let risk = culled_and_full("risk", runs, risk_of)?;
     let radius = all.needle.curvature_radius;
     let t = all.target.position;
     let target = planner_core::model::kinematics::V3::new(t[0], t[1], t[2]);
@@ -253,16 +257,7 @@ pub fn measures(seed: u64, total: usize, near: usize, runs: usize) -> anyhow::Re
         }
         bits
     };
-    anyhow::ensure!(
-        predict_of(0) == predict_of(1),
-        "the culled prediction differs"
-    );
-    let [c, e, n] = side_by_side(runs, predict_of);
-    let predict = Measure {
-        culled_us: c,
-        every_us: e,
-        near_us: n,
-    };
+    let predict = culled_and_full("prediction", runs, predict_of)?;
     Ok(Measures {
         check,
         risk,

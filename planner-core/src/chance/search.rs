@@ -120,6 +120,20 @@ enum Limit {
     },
 }
 
+impl Limit {
+    /// The model, bound and execution set, or `Unreachable` before they are.
+    fn set(&self) -> Result<(Perturbation, f32, Execution), PlanError> {
+        match *self {
+            Limit::Set {
+                model,
+                bound,
+                execution,
+            } => Ok((model, bound, execution)),
+            Limit::Unset => Err(PlanError::Unreachable),
+        }
+    }
+}
+
 impl ChanceSearch {
     /// Checks the bound (in (0, 1)) and the scenario, and prepares the first round: the
     /// scenario as it is.
@@ -265,14 +279,7 @@ impl ChanceSearch {
     /// form is planned.
     #[inline(never)]
     fn end_round(&mut self) -> Result<(), PlanError> {
-        let Limit::Set {
-            model,
-            bound,
-            execution,
-        } = self.limit
-        else {
-            return Err(PlanError::Unreachable);
-        };
+        let (model, bound, execution) = self.limit.set()?;
         self.planning = false;
         // The schedule of the plan as made, around the grown obstacles; judged on the true ones.
         let planned = self.session.take_scheduled();
@@ -345,14 +352,7 @@ impl ChanceSearch {
 
     /// Ends the search on the last round that found a path.
     fn conclude(&mut self) -> Result<(), PlanError> {
-        let Limit::Set {
-            model,
-            bound,
-            execution,
-        } = self.limit
-        else {
-            return Err(PlanError::Unreachable);
-        };
+        let (model, bound, execution) = self.limit.set()?;
         let last = self.last.get_mut().ok_or(PlanError::Unreachable)?;
         within_bound_by_another_form(self.session.scenario(), &model, bound, execution, last);
         Ok(())
