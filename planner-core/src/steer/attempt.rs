@@ -175,6 +175,7 @@ mod tests {
             dead_band_deg: 0.0,
             arc_duty: 1.0,
             spend_reserve: true,
+            turn_early: false,
         };
         let mut sub = sub_scenario(&input);
         let form = form_of(&remaining).unwrap();

@@ -401,6 +401,7 @@ impl Steering {
                 dead_band_deg: self.config.rotation_dead_band_deg,
                 arc_duty: self.scenario.arc_duty(),
                 spend_reserve: urgent || now.target_error > trigger,
+                turn_early: self.config.noise.curvature_walk > 0.0,
             };
             let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = replan(&input, &segments);

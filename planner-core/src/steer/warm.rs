@@ -156,6 +156,7 @@ mod tests {
             dead_band_deg: 2.0,
             arc_duty: 1.0,
             spend_reserve: true,
+            turn_early: false,
         };
         let start = turned_away(&input, &remaining).expect("a start turned away");
         assert_eq!(start.len(), 3);
