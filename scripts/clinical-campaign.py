@@ -6,7 +6,9 @@ clinical world, on the two examples as they are and as a lab sets them up (examp
 a 1 % collision bound for the closed loop, and the tracker's hidden error told to the steering),
 and on 20 planted scenarios (seeds 201..220, written by `needle benchmark --generator planted
 --write-scenarios`, each planned for steering under a 1 % collision bound; then the same with the
-examples' `[steering]` added). Prints one JSON line per row, then the markdown table; writes OUTDIR/table.json.
+examples' `[steering]` added, and the unseen family 301..320 so). Each row also counts the runs
+within the tissue's reach (`summary.within_reach`: the world's full curvature turned at the target
+from the entry comes within the reach tolerance) and the share of those reached. Prints one JSON line per row, then the markdown table; writes OUTDIR/table.json.
 
 usage: scripts/clinical-campaign.py NEEDLE OUTDIR RUNS_PER_EXAMPLE RUNS_PER_GENERATED
 (the docs' figures: target/release/needle /tmp/clinical 1000 50; run from the repository root)"""
@@ -40,7 +42,7 @@ def run(path, runs, args):
     return d, None
 
 def row(name, results):
-    errs, reached, coll, runs, stops = [], 0, 0, 0, {}
+    errs, reached, coll, runs, stops, reached_errs = [], 0, 0, 0, {}, []
     for d in results:
         for r in d["runs_detail"]:
             runs += 1
@@ -48,23 +50,30 @@ def row(name, results):
                 stops[r["stop_reason"]] = stops.get(r["stop_reason"], 0) + 1
             else:
                 reached += 1
+                reached_errs.append(r["target_error"])
             coll += 1 if r.get("collided") or (r.get("min_clearance", 1) < 0) else 0
             errs.append(r["target_error"])
         # collisions from the summary are authoritative
     coll = sum(d["summary"]["collisions"] for d in results)
+    within = sum(d["summary"]["within_reach"] for d in results)
+    reached_within = sum(d["summary"]["reached_within_reach"] for d in results)
     errs.sort()
+    reached_errs.sort()
     p95 = errs[int(0.95 * (len(errs) - 1))] if errs else float("nan")
     mean = statistics.fmean(errs) if errs else float("nan")
     return {"world": name, "runs": runs, "reached_pct": 100 * reached / max(runs, 1), "collisions": coll,
-            "mean": mean, "p95": p95, "max": errs[-1] if errs else float("nan"), "stops": stops}
+            "mean": mean, "p95": p95, "max": errs[-1] if errs else float("nan"), "stops": stops,
+            "within_reach": within, "reached_of_within_pct": 100 * reached_within / max(within, 1),
+            "reached_mean": statistics.fmean(reached_errs) if reached_errs else float("nan"),
+            "reached_p95": reached_errs[int(0.95 * (len(reached_errs) - 1))] if reached_errs else float("nan")}
 
 LAB_STEERING = "\n[steering]\nregistration_mm = 0.42\ntarget_speed_walk = 0.02\ncurvature_walk = 0.02\n"
 
-def write_generated(gen, steering=""):
-    """The planted family, each scenario planned for steering under a 1 % collision bound (and
+def write_generated(gen, steering="", seed=201):
+    """The planted family of `seed`, each scenario planned for steering under a 1 % collision bound (and
     `steering` appended: what the lab tells the closed loop)."""
     os.makedirs(gen, exist_ok=True)
-    subprocess.run([needle, "benchmark", "--generator", "planted", "--scenarios", "20", "--seed", "201",
+    subprocess.run([needle, "benchmark", "--generator", "planted", "--scenarios", "20", "--seed", str(seed),
                     "--runs", "1", "--open-loop-only", "--write-scenarios", gen],
                    check=True, capture_output=True)
     for f in os.listdir(gen):
@@ -78,6 +87,7 @@ def write_generated(gen, steering=""):
 os.makedirs(out, exist_ok=True)
 write_generated(f"{out}/gen")
 write_generated(f"{out}/gen-lab", LAB_STEERING)
+write_generated(f"{out}/gen-lab-301", LAB_STEERING, 301)
 table = []
 for ex in ["examples/paper.toml", "examples/space.toml", "examples/paper-clinical.toml",
            "examples/space-clinical.toml"]:
@@ -105,11 +115,15 @@ def family_rows(family, label):
 
 family_rows("gen", "planted 201-220")
 family_rows("gen-lab", "planted 201-220, lab-set")
+family_rows("gen-lab-301", "planted 301-320 (unseen), lab-set")
 json.dump(table, open(f"{out}/table.json", "w"), indent=1)
 print()
-print("| scenario | world | runs | reached | collisions | mean | p95 | max | stops |")
-print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+print("| scenario | world | runs | reached | within the tissue's reach | reached of those | collisions "
+      "| mean | p95 | max | reached runs: mean / p95 | stops |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 for r in table:
     stops = ", ".join(f"{k} {v}" for k, v in sorted(r["stops"].items())) or "none"
-    print(f"| {r['scenario']} | {r['world']} | {r['runs']} | {r['reached_pct']:.1f} % | {r['collisions']} "
-          f"| {r['mean']:.2f} | {r['p95']:.2f} | {r['max']:.2f} | {stops} |")
+    print(f"| {r['scenario']} | {r['world']} | {r['runs']} | {r['reached_pct']:.1f} % | {r['within_reach']} "
+          f"| {r['reached_of_within_pct']:.1f} % | {r['collisions']} "
+          f"| {r['mean']:.2f} | {r['p95']:.2f} | {r['max']:.2f} | {r['reached_mean']:.2f} / {r['reached_p95']:.2f} "
+          f"| {stops} |")

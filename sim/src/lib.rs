@@ -54,6 +54,7 @@ mod layered;
 mod measure;
 mod pieces;
 pub mod random;
+mod reach;
 mod reading;
 mod roll;
 mod run;
@@ -68,6 +69,7 @@ pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WOR
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };
+pub use reach::nearest_reach;
 pub use reading::Measurement;
 pub use roll::{roll_error_deg, roll_trace, RollSample, RollSummary};
 pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};

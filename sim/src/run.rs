@@ -32,6 +32,10 @@ pub struct Run {
     pub path_rms_in_plane: Option<f32>,
     /// For a plane scenario, the largest in-plane deviation; `None` in 3-D.
     pub path_max_in_plane: Option<f32>,
+    /// The tissue's reach: the nearest a turn at the world's full curvature, from the true entry
+    /// towards where the target ended, comes to it (mm;
+    /// [`World::nearest_reach`](crate::World::nearest_reach)).
+    pub nearest_reach_mm: f32,
     /// The true path entered an obstacle.
     pub collided: bool,
     /// Smallest clearance of the true path (mm).
@@ -184,6 +188,7 @@ pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
         path_max: max,
         path_rms_in_plane: in_plane.then(|| (sum_in / n).sqrt() as f32),
         path_max_in_plane: in_plane.then_some(max_in),
+        nearest_reach_mm: world.nearest_reach(),
         collided: world.min_clearance() < 0.0,
         min_clearance: world.min_clearance(),
         rotations: Rotations::of(world.executed()),

@@ -74,6 +74,7 @@ pub struct World {
     physics: SplitMix64,
     pub(crate) tracker: SplitMix64,
     pub(crate) tip: Frame,
+    start: Frame,
     segment_factor: f32,
     line_drift: [f32; 2],
     last: Last,
@@ -142,6 +143,7 @@ impl World {
             physics,
             tracker: seeded(seed ^ TRACKER_STREAM),
             tip,
+            start: tip,
             segment_factor: 1.0,
             line_drift: [0.0; 2],
             last: Last::Nothing,
@@ -210,6 +212,16 @@ impl World {
     /// The true (displaced) target.
     pub fn true_target(&self) -> V3 {
         self.true_target
+    }
+
+    /// The true tip frame at the entry, before any insertion.
+    pub fn start(&self) -> &Frame {
+        &self.start
+    }
+
+    /// The scenario the world executes.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
     }
 
     /// The true tip path so far, points at most 1 mm apart from the entry.

@@ -33,11 +33,18 @@ pub struct Pool {
     pub closed_hits: usize,
     /// Closed loop: runs made (0 with `--open-loop-only`).
     pub closed_runs: usize,
+    /// Closed loop: runs whose target was within reach of any steering
+    /// ([`crate::simulate::steering::SteeringSummary::within_reach`]).
+    pub within_reach: usize,
+    /// Closed loop: of those, the runs that reached.
+    pub reached_within_reach: usize,
 }
 
 impl Pool {
-    /// The pool of the same worlds run `open` and `closed` loop.
-    pub fn of(open: &[Run], closed: &[ClosedRun]) -> Pool {
+    /// The pool of the same worlds run `open` and `closed` loop, a target within
+    /// `reach_tolerance_mm` counted as reached.
+    pub fn of(open: &[Run], closed: &[ClosedRun], reach_tolerance_mm: f32) -> Pool {
+        let steering = summarise_steering(closed, reach_tolerance_mm);
         Pool {
             runs: open.len(),
             open_errors: open.iter().map(|r| r.target_error).collect(),
@@ -48,8 +55,10 @@ impl Pool {
                 .filter(|r| r.stop_reason.is_none())
                 .map(|r| r.run.target_error)
                 .collect(),
-            stops: summarise_steering(closed).stops,
+            stops: steering.stops,
             closed_hits: closed.iter().filter(|r| r.run.collided).count(),
+            within_reach: steering.within_reach,
+            reached_within_reach: steering.reached_within_reach,
         }
     }
 
@@ -64,6 +73,8 @@ impl Pool {
         }
         self.closed_hits += other.closed_hits;
         self.closed_runs += other.closed_runs;
+        self.within_reach += other.within_reach;
+        self.reached_within_reach += other.reached_within_reach;
     }
 
     /// Only the open-loop runs.
@@ -83,6 +94,8 @@ impl Pool {
             stops: self.stops.clone(),
             closed_hits: self.closed_hits,
             closed_runs: self.closed_runs,
+            within_reach: self.within_reach,
+            reached_within_reach: self.reached_within_reach,
             ..Pool::default()
         }
     }
@@ -121,6 +134,8 @@ impl Pool {
             hits: self.closed_hits,
             mean_target_error: errors.map(|s| s.mean),
             p95_target_error: errors.map(|s| s.p95),
+            within_reach: self.within_reach,
+            reached_within_reach: self.reached_within_reach,
         })
     }
 }
@@ -168,6 +183,11 @@ pub struct ClosedFigures {
     pub mean_target_error: Option<f64>,
     /// 95th percentile (nearest rank) of the same (mm; null when none did).
     pub p95_target_error: Option<f64>,
+    /// Runs whose target was within reach of any steering, and of those the runs that reached
+    /// ([`crate::simulate::steering::SteeringSummary::within_reach`]).
+    pub within_reach: usize,
+    /// Of the runs within reach, those that reached.
+    pub reached_within_reach: usize,
 }
 
 /// The plan a scenario is steered along: made keeping curvature in hand.
@@ -444,39 +464,4 @@ impl BenchmarkReport {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn pool(runs: usize, open: &[f32], arrived: &[f32], stops: usize) -> Pool {
-        Pool {
-            runs,
-            open_errors: open.to_vec(),
-            open_hits: 1,
-            arrived_errors: arrived.to_vec(),
-            stops: BTreeMap::from([("no_safe_continuation", stops)]),
-            closed_hits: 0,
-            closed_runs: runs,
-        }
-    }
-
-    #[test]
-    fn totals_pool_the_runs() {
-        let mut all = pool(2, &[1.0, 3.0], &[0.5], 1);
-        all.merge(&pool(4, &[2.0; 4], &[1.0, 1.0, 1.0, 4.0], 0));
-        let (o, c) = (all.open(), all.closed().unwrap());
-        assert_eq!((all.runs, o.hits), (6, 2));
-        assert_eq!(o.mean_target_error, 2.0);
-        assert!((o.hit_percent - 100.0 / 3.0).abs() < 1e-12);
-        assert_eq!((c.reached, c.stops, c.hits), (5, 1, 0));
-        assert!((c.reached_percent - 500.0 / 6.0).abs() < 1e-12);
-        assert_eq!(c.mean_target_error, Some(1.5));
-        assert_eq!(c.p95_target_error, Some(4.0));
-        let none = pool(3, &[1.0; 3], &[], 3).closed().unwrap();
-        let open_only = Pool {
-            closed_runs: 0,
-            ..pool(3, &[1.0; 3], &[], 0)
-        };
-        assert_eq!(open_only.closed(), None);
-        assert_eq!((none.reached_percent, none.mean_target_error), (0.0, None));
-    }
-}
+mod tests;

@@ -287,7 +287,7 @@ fn measure(
         outcome,
         predicted,
         closed_plan,
-        Pool::of(&open, &closed),
+        Pool::of(&open, &closed, world.config.reach_tolerance_mm),
     ))
 }
 

@@ -196,6 +196,13 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
     if !reasons.is_empty() {
         let _ = writeln!(out, "closed-loop stops: {}", reasons.join(", "));
     }
+    if let Some(c) = &t.closed_loop {
+        let _ = writeln!(
+            out,
+            "closed loop: {} runs within the tissue's reach, {} of them reached",
+            c.within_reach, c.reached_within_reach
+        );
+    }
     let _ = writeln!(
         out,
         "errors in mm (closed loop: of the runs that arrived); hits: runs that entered a sphere; \

@@ -162,7 +162,7 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
             let summary = summarise(closed.iter().map(|c| &c.run));
-            let steering = summarise_steering(closed);
+            let steering = summarise_steering(closed, setup.config.reach_tolerance_mm);
             closed_table(&header, p, &summary, &steering, open.as_ref())
         }
         (None, Some(runs)) => to_table(&header, p, &summarise(runs)),

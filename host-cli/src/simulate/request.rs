@@ -178,7 +178,7 @@ pub fn results_json(setup: &Setup, results: &Results, detail: bool) -> Result<St
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
             let summary = summarise(closed.iter().map(|c| &c.run));
-            let steering = summarise_steering(closed);
+            let steering = summarise_steering(closed, setup.config.reach_tolerance_mm);
             let config = &setup.config;
             let j = closed_json(
                 (p, w),

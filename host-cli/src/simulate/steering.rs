@@ -33,10 +33,16 @@ pub struct SteeringSummary {
     /// insertions that went through, beside `target_error` over every run, which counts a
     /// stopped run's distance from where it stopped.
     pub reached_target_error: super::Spread,
+    /// Runs within the tissue's reach: the world's full curvature, turned at the target from
+    /// the true entry, comes within the reach tolerance of where the target ended
+    /// (`needle_sim::nearest_reach`): what a controller that knew the world could reach.
+    pub within_reach: usize,
+    /// Of the runs within the tissue's reach, those that reached.
+    pub reached_within_reach: usize,
 }
 
-/// The steering figures of `runs`.
-pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
+/// The steering figures of `runs`, a target within `reach_tolerance_mm` counted as reached.
+pub fn summarise_steering(runs: &[ClosedRun], reach_tolerance_mm: f32) -> SteeringSummary {
     let mut s = SteeringSummary::default();
     for reason in [
         StopReason::NoSafeContinuation,
@@ -62,5 +68,10 @@ pub fn summarise_steering(runs: &[ClosedRun]) -> SteeringSummary {
     let reached = runs.iter().filter(|r| r.stop_reason.is_none());
     s.reached = reached.clone().count();
     s.reached_target_error = super::Spread::of(reached.map(|r| r.run.target_error));
+    let within = runs
+        .iter()
+        .filter(|r| r.run.nearest_reach_mm <= reach_tolerance_mm);
+    s.within_reach = within.clone().count();
+    s.reached_within_reach = within.filter(|r| r.stop_reason.is_none()).count();
     s
 }

@@ -209,6 +209,12 @@ pub fn closed_table(
     );
     let _ = writeln!(
         out,
+        "within the tissue's reach: {} of {} runs (its full curvature, turned at the target from \
+         the entry, comes within the reach tolerance); {} of them reached",
+        steering.within_reach, h.runs, steering.reached_within_reach
+    );
+    let _ = writeln!(
+        out,
         "tracker: {} outliers rejected, {} readings without a fix, {} stale, {} repeated",
         steering.outliers, steering.no_fix, steering.stale, steering.repeated
     );

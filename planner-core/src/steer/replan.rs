@@ -228,9 +228,8 @@ pub struct ReplanInput<'a> {
     /// would be missed, or the clearance is at stake); one that only restores the margin keeps
     /// it, and the route.
     pub spend_reserve: bool,
-    /// Whether the tissue ahead may bend less than it has so far (the lab says its curvature
-    /// changes along the insertion): then the turn the target needs is made first, while the
-    /// curvature is there ([`super::aimed::turned_early`]).
+    /// The lab says the tissue's curvature changes along the insertion: the turn the target
+    /// needs is made first, while the curvature is there ([`super::aimed::turned_early`]).
     pub turn_early: bool,
 }
 
@@ -344,13 +343,12 @@ pub(super) fn sound_within(
     })
 }
 
-/// Re-plans from the estimate: in tissue whose curvature changes ahead, the turn made early
-/// first, when it keeps a wider margin; then the remaining segments (warm start), then the same
-/// with a degree of freedom more ([`variants`]), then the short forms RL, LR and RR aimed at the
-/// target, all at the continuation's arc duty; then the turn spent first at the full curvature;
-/// then the duty-cycled arc aimed through the target; then, when the arcs keep curvature in hand,
-/// the short forms at the needle's full curvature. Returns the continuation (if any passes the
-/// check), the evaluations and the iterations spent.
+/// Re-plans from the estimate: told of layers, the turn made early first; then the remaining
+/// segments (warm start), the same with a degree of freedom more ([`variants`]), the short forms
+/// RL, LR and RR aimed at the target, all at the continuation's arc duty; then the turn spent
+/// first; the duty-cycled arc aimed through the target; when the arcs keep curvature in hand,
+/// the short forms at the full curvature. Returns the continuation (if any passes the check),
+/// the evaluations and the iterations spent.
 pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
     let mut spent = (0u32, 0u32);
     let early = (input.turn_early && input.arc_duty < 1.0)
