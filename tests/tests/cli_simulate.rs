@@ -255,6 +255,11 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     // Every run reached: the figures over the runs that reached are those over every run.
     assert_eq!(s["reached"], 12);
     assert_eq!(s["reached_target_error"], s["target_error"]);
+    // Today's world bends as the plan assumes: every target within the tissue's reach.
+    assert_eq!(
+        (&s["within_reach"], &s["reached_within_reach"]),
+        (&12.into(), &12.into())
+    );
     let closed = s["target_error"]["mean"].as_f64().unwrap();
     let open = v["open_loop_summary"]["target_error"]["mean"]
         .as_f64()
@@ -289,7 +294,11 @@ fn a_tracker_dropout_longer_than_the_gap_stops_with_tracking_lost() {
     assert_eq!(v["summary"]["reached"], 0);
     assert_eq!(v["summary"]["reached_target_error"]["mean"], 0.0);
     assert!(v["summary"]["target_error"]["mean"].as_f64().unwrap() > 1.0);
+    // Stopped, yet within the tissue's reach: the reach is the world's, not the run's.
+    assert_eq!(v["summary"]["within_reach"], 4);
+    assert_eq!(v["summary"]["reached_within_reach"], 0);
     for r in v["runs_detail"].as_array().unwrap() {
+        assert!(r["nearest_reach_mm"].as_f64().unwrap() < 1e-3);
         assert_eq!(r["stop_reason"], "tracking_lost");
         assert!(r["steering"]["no_fix"].as_u64().unwrap() >= 10);
     }
