@@ -101,12 +101,18 @@ fn encoded(result: &PlanResult) -> Result<Vec<u8>> {
         .to_vec())
 }
 
+/// The curvature reserve a plan for a steered insertion keeps when its file says nothing of it
+/// (`needle`'s `CLOSED_LOOP_CURVATURE_RESERVE`, in the crate above this one).
+const STEERED_RESERVE: f32 = 0.2;
+
 /// What one run measures besides the plans.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Extras {
     /// Print where the instructions went, by function.
     pub profile: bool,
-    /// Steer one closed-loop insertion per scenario (the per-reading figures).
+    /// Steer one closed-loop insertion per scenario (the per-reading figures), and one more of
+    /// each scenario that keeps no reserve, planned with one as for a steered insertion
+    /// (`NAME-steered`).
     pub steering: bool,
 }
 
@@ -161,6 +167,16 @@ pub fn measure(
         let r = crate::replan_bench::measure(&mut device, &qemu, &s.scenario)
             .with_context(|| format!("steering {} on {}", s.name, board.name))?;
         replan_instructions.push((s.name.clone(), r));
+        // The same scenario planned for a steered insertion: its arcs keep curvature in hand, and
+        // its replans try more forms before they give up (one end reading once took 3 M).
+        if s.scenario.options.curvature_reserve == 0.0 {
+            let mut steered = s.scenario.clone();
+            steered.options.curvature_reserve = STEERED_RESERVE;
+            let name = format!("{}-steered", s.name);
+            let r = crate::replan_bench::measure(&mut device, &qemu, &steered)
+                .with_context(|| format!("steering {name} on {}", board.name))?;
+            replan_instructions.push((name, r));
+        }
     }
     drop(device);
     let len = footprint
