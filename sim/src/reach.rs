@@ -71,16 +71,7 @@ impl World {
         let drawn = self.drawn();
         let base = drawn.curvature_factor / self.scenario().needle.curvature_radius;
         let layers = drawn.effects.as_ref().and_then(|e| e.layers.as_ref());
-        let factor = |s: f32| match layers {
-            Some(l) => l
-                .boundaries_mm
-                .iter()
-                .zip(&l.factors)
-                .rev()
-                .find(|(b, _)| **b <= s)
-                .map_or(1.0, |(_, f)| *f),
-            None => 1.0,
-        };
+        let factor = |s: f32| layers.map_or(1.0, |l| l.factor_at(s));
         nearest_reach(self.start(), self.true_target(), |s| base * factor(s))
     }
 }

@@ -325,6 +325,7 @@ mod tests {
         };
         assert!(closest_approach(&input, 100.0, &(0, 0)).is_none());
     }
+
     /// Told the tissue changes ahead, a replan turns early although the plan's share still
     /// reaches: the full curvature first, then a spun line. Told nothing, it keeps the share.
     #[test]

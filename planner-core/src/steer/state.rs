@@ -410,9 +410,8 @@ impl Steering {
                 spend_reserve: urgent || now.target_error > trigger,
                 turn_early: self.config.noise.curvature_walk > 0.0,
             };
-            let segments = segments_of(&remaining).unwrap_or_default();
             let (found, evaluations, _) = if ahead > ONLY_TRIM_WITHIN_MM {
-                replan(&input, &segments)
+                replan(&input, &segments_of(&remaining).unwrap_or_default())
             } else {
                 (None, 0, 0)
             };

@@ -92,6 +92,19 @@ impl Layers {
         }
     }
 
+    /// The curvature factor of the layer at `depth` mm along the tip's path (1 before the first
+    /// boundary), whatever the tip has punctured so far.
+    pub fn factor_at(&self, depth: f32) -> f32 {
+        let behind = self
+            .boundaries_mm
+            .iter()
+            .take_while(|b| **b <= depth)
+            .count();
+        behind
+            .checked_sub(1)
+            .map_or(1.0, |i| self.factors.get(i).copied().unwrap_or(1.0))
+    }
+
     /// Whether the tip is held at a boundary.
     pub fn stalled(&self) -> bool {
         self.stall_left > 0.0
