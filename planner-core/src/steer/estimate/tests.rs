@@ -1,0 +1,135 @@
+//! The estimate's tests: the filter against known motions and fixes.
+use super::*;
+use crate::model::kinematics::{entry_basis, insertion_frame};
+
+fn start() -> Frame {
+    let basis = entry_basis([0.0, 0.0, 1.0]);
+    insertion_frame(V3::zeros(), &basis, 0.1, -0.05)
+}
+
+#[test]
+fn exact_readings_keep_the_estimate_on_the_path() {
+    let noise = NoiseModel::DEFAULT;
+    let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+    let mut truth = start();
+    for k in 0..60 {
+        let kind = if k < 30 {
+            SegmentKind::Arc
+        } else {
+            SegmentKind::Line
+        };
+        if k == 10 {
+            e.rotated(30.0, 10.0);
+            truth = truth.rolled(30f32.to_radians());
+            assert!(e.fuse_position(truth.p));
+            assert!(e.fuse_orientation(truth.e3(), Some(truth.e2())));
+        }
+        e.advanced(kind, 1.0, 63.7);
+        truth = truth.advanced(kind, 1.0, 63.7);
+        assert!(e.fuse_position(truth.p), "reading {k}");
+        assert!(
+            e.fuse_orientation(truth.e3(), Some(truth.e2())),
+            "reading {k}"
+        );
+        let miss = (e.tip.p - truth.p).norm();
+        assert!(miss < 1e-3, "reading {k}: {miss}");
+        assert!((e.factor - 1.0).abs() < 1e-3, "reading {k}: {}", e.factor);
+    }
+}
+
+#[test]
+fn the_curvature_factor_is_learnt_from_an_arc() {
+    let noise = NoiseModel::DEFAULT;
+    let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+    let mut truth = start();
+    for _ in 0..40 {
+        e.advanced(SegmentKind::Arc, 1.0, 63.7);
+        truth = truth.advanced(SegmentKind::Arc, 1.0, 63.7 / 1.06);
+        assert!(e.fuse_position(truth.p));
+        assert!(e.fuse_orientation(truth.e3(), Some(truth.e2())));
+    }
+    assert!((e.factor - 1.06).abs() < 0.01, "{}", e.factor);
+    let miss = (e.tip.p - truth.p).norm();
+    assert!(miss < 0.05, "{miss}");
+}
+
+/// Standard normal draws from a fixed xorshift stream (Box-Muller): the core has no RNG.
+fn normals(seed: u64) -> impl FnMut() -> f32 {
+    let mut x = seed;
+    let mut uniform = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        ((x >> 40) as f32 + 0.5) / (1u64 << 24) as f32
+    };
+    move || {
+        let (u, v) = (uniform(), uniform());
+        libm::sqrtf(-2.0 * libm::logf(u)) * libm::cosf(core::f32::consts::TAU * v)
+    }
+}
+
+/// The margin's widening over 80 fixes of a straight insertion whose tracker is `scale`
+/// times as noisy as the model says.
+fn widening(scale: f32, seed: u64) -> f32 {
+    let noise = NoiseModel::DEFAULT;
+    let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+    let mut truth = start();
+    let mut n = normals(seed);
+    for _ in 0..80 {
+        e.advanced(SegmentKind::Line, 1.0, 63.7);
+        truth = truth.advanced(SegmentKind::Line, 1.0, 63.7);
+        let sd = scale * noise.position_mm;
+        let z = truth.p + V3::new(n(), n(), n()) * sd;
+        let _ = e.fuse_position(z);
+    }
+    e.margin_sd() / e.position_sd()
+}
+
+#[test]
+fn a_tracker_noisier_than_the_model_widens_the_margin() {
+    for seed in 1..6u64 {
+        let as_told = widening(1.0, seed);
+        let doubled = widening(2.0, seed);
+        assert!(as_told < 1.4, "seed {seed}: {as_told}");
+        assert!(doubled > 2.5, "seed {seed}: {doubled}");
+    }
+}
+
+/// A heading past the gate: the estimate starts 8 degrees off the true heading (its prior says
+/// 0.5), and 5-DOF fixes (no roll) give the true tip exactly along a straight insertion.
+/// Returns the heading's error after `readings` fixes (degrees), and whether each heading fix
+/// was fused.
+fn heading_off_the_gate(readings: usize) -> (f32, [bool; 3]) {
+    let noise = NoiseModel::DEFAULT;
+    let basis = entry_basis([0.0, 0.0, 1.0]);
+    let truth_start = insertion_frame(V3::zeros(), &basis, 0.0, 0.0);
+    let off = insertion_frame(V3::zeros(), &basis, 8f32.to_radians(), 0.0);
+    let mut e = Estimate::new(off, V3::new(0.0, 0.0, 80.0), &noise);
+    let mut truth = truth_start;
+    let mut fused = [false; 3];
+    for k in 0..readings {
+        e.advanced(SegmentKind::Line, 0.5, 63.7);
+        truth = truth.advanced(SegmentKind::Line, 0.5, 63.7);
+        let _ = e.fuse_position(truth.p);
+        let ok = e.fuse_orientation(truth.e3(), None);
+        if let Some(f) = fused.get_mut(k) {
+            *f = ok;
+        }
+    }
+    (e.tip.e3().angle(&truth.e3()).to_degrees(), fused)
+}
+
+#[test]
+fn a_heading_the_fixes_keep_rejecting_is_re_anchored() {
+    let (error, fused) = heading_off_the_gate(12);
+    // The first fix is an outlier, as the gate means it; the second in a row re-anchors.
+    assert_eq!(fused, [false, true, true]);
+    assert!(error < 1.0, "{error}");
+}
+
+#[test]
+fn one_rejected_heading_fix_changes_nothing() {
+    let (error, fused) = heading_off_the_gate(1);
+    assert!(!fused[0]);
+    assert!((error - 8.0).abs() < 0.5, "{error}");
+}
