@@ -65,7 +65,10 @@ pub use closed::{
     Conditions, Controller, Seen, Tracker, TrackerFaults,
 };
 pub use drawn::{Drawn, StepDraw};
-pub use effects::{EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, WORLD_KEYS};
+pub use effects::{
+    EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, TWICE_CLINICAL_FAULT_KEYS,
+    TWICE_CLINICAL_KEYS, WORLD_KEYS,
+};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };

@@ -5,42 +5,23 @@
 
 use needle_sim::{
     closed_loop_in, in_process, Conditions, Perturbation, Planned, TrackerFaults, WorldEffects,
+    TWICE_CLINICAL_FAULT_KEYS, TWICE_CLINICAL_KEYS,
 };
 use planner_core::execute::schedule::schedule;
 use planner_core::steer::{SteerConfig, StopReason};
 use planner_core::{plan, Scenario};
 
-/// The world keys of the campaign's "clinical x2" over `--world clinical`.
-const X2: [&str; 17] = [
-    "tracker_bias_mm=0.6",
-    "registration_error_mm=0.58",
-    "layer_curvature_spread=0.4",
-    "puncture_mm=2",
-    "target_push_mm=4",
-    "tracker_latency_ms=60",
-    "target_imaging_delay_ms=100",
-    "curvature_spread=0.06",
-    "segment_curvature_spread=0.02",
-    "torsion_lag_deg_per_mm=0.4",
-    "line_drift_mm_per_mm=0.04",
-    "insertion_error_mm=0.6",
-    "entry_position_mm=0.4",
-    "entry_direction_deg=1.0",
-    "target_shift_mm=1.0",
-    "tracker_position_mm=1.0",
-    "tracker_heading_deg=1.0",
-];
-
 fn twice_the_world() -> (Perturbation, WorldEffects, TrackerFaults) {
     let (mut effects, mut faults) = WorldEffects::preset("clinical").unwrap();
     let mut p = Perturbation::default();
-    for kv in X2 {
+    for kv in TWICE_CLINICAL_KEYS {
         if p.apply(kv).is_err() {
             effects.apply(kv).unwrap();
         }
     }
-    faults.apply("dropout_rate=0.02").unwrap();
-    faults.apply("dropout_mm=4").unwrap();
+    for kv in TWICE_CLINICAL_FAULT_KEYS {
+        faults.apply(kv).unwrap();
+    }
     (p, effects, faults)
 }
 

@@ -6,27 +6,7 @@
 //! fixes keep rejecting").
 
 use needle_e2e::{needle_json, workspace};
-
-/// The campaign's "clinical x2" keys over `--world clinical`, as flags.
-const X2: [&str; 17] = [
-    "tracker_bias_mm=0.6",
-    "registration_error_mm=0.58",
-    "layer_curvature_spread=0.4",
-    "puncture_mm=2",
-    "target_push_mm=4",
-    "tracker_latency_ms=60",
-    "target_imaging_delay_ms=100",
-    "curvature_spread=0.06",
-    "segment_curvature_spread=0.02",
-    "torsion_lag_deg_per_mm=0.4",
-    "line_drift_mm_per_mm=0.04",
-    "insertion_error_mm=0.6",
-    "entry_position_mm=0.4",
-    "entry_direction_deg=1.0",
-    "target_shift_mm=1.0",
-    "tracker_position_mm=1.0",
-    "tracker_heading_deg=1.0",
-];
+use needle_sim::{TWICE_CLINICAL_FAULT_KEYS, TWICE_CLINICAL_KEYS};
 
 /// The file's 50 runs of the campaign (seeds 1 to 50) at twice the world: the runs that
 /// touched an obstacle, and those that ended neither reached nor in a reported stop.
@@ -44,15 +24,15 @@ fn twice(file: &str) -> (Vec<u64>, usize) {
         "1".into(),
         "--json".into(),
         "--detail".into(),
-        "--fault".into(),
-        "dropout_rate=0.02".into(),
-        "--fault".into(),
-        "dropout_mm=4".into(),
         "--steer".into(),
         "target_speed_walk=0.02".into(),
     ];
-    for kv in X2 {
+    for kv in TWICE_CLINICAL_KEYS {
         args.push("--perturb".into());
+        args.push(kv.into());
+    }
+    for kv in TWICE_CLINICAL_FAULT_KEYS {
+        args.push("--fault".into());
         args.push(kv.into());
     }
     let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -149,6 +149,35 @@ impl Default for WorldEffects {
 /// (a 3-D RMS distance) spread over three axes, 0.5 / √3 rounded.
 pub const CLINICAL_REGISTRATION_PER_AXIS_MM: f32 = 0.29;
 
+/// Twice the clinical world, as `--perturb` keys over `--world clinical`: every spread and
+/// effect of the preset doubled (the tracker's bias and noise, the registration, the layers'
+/// spread and punctures, the push on the target, the latencies, the needle's own spreads). With
+/// [`TWICE_CLINICAL_FAULT_KEYS`] it is the world in which the controller, told only the
+/// defaults, must touch no obstacle and end every run it cannot finish in a reported stop
+/// (docs/execution.md, "Twice the world"; scripts/clinical-campaign.py's "clinical x2" row).
+pub const TWICE_CLINICAL_KEYS: [&str; 17] = [
+    "tracker_bias_mm=0.6",
+    "registration_error_mm=0.58",
+    "layer_curvature_spread=0.4",
+    "puncture_mm=2",
+    "target_push_mm=4",
+    "tracker_latency_ms=60",
+    "target_imaging_delay_ms=100",
+    "curvature_spread=0.06",
+    "segment_curvature_spread=0.02",
+    "torsion_lag_deg_per_mm=0.4",
+    "line_drift_mm_per_mm=0.04",
+    "insertion_error_mm=0.6",
+    "entry_position_mm=0.4",
+    "entry_direction_deg=1.0",
+    "target_shift_mm=1.0",
+    "tracker_position_mm=1.0",
+    "tracker_heading_deg=1.0",
+];
+
+/// The tracker's faults of twice the clinical world, as `--fault` keys: the preset's dropouts,
+/// twice as often and twice as long.
+pub const TWICE_CLINICAL_FAULT_KEYS: [&str; 2] = ["dropout_rate=0.02", "dropout_mm=4"];
 impl WorldEffects {
     /// The clinical world: a 5-DOF sensor, 0.3 mm of field bias per axis and a 0.5 mm
     /// registration error (RMS distance: 0.29 mm per axis), three punctured layers, a target pushed up to 2 mm and imaged at
