@@ -1,9 +1,9 @@
-//! Twice the clinical world on unseen scenarios set up as a lab would (scripts/clinical-campaign.py's
-//! "clinical x2, lab-told" over the family planted 301-320): the two files of that family where
-//! the needle touched a sphere. Both times the estimate's heading had drifted past the gate, so
-//! that every later heading fix was rejected (`Estimate::fuse_heading`); now no run touches, and
-//! every run that cannot finish ends in a reported stop (docs/execution.md, "A heading the
-//! fixes keep rejecting").
+//! Twice the clinical world on unseen scenarios set up as a lab would (the "clinical x2,
+//! lab-told" row of scripts/clinical-campaign.py over the family planted 301-320): the two files
+//! of that family where the needle touched a sphere. Both times the estimate's heading had
+//! drifted past the gate, so that every later heading fix was rejected
+//! (`Estimate::fuse_heading`); now no run touches, and every run that cannot finish ends in a
+//! reported stop (docs/execution.md, "A heading the fixes keep rejecting").
 
 use needle_e2e::{needle_json, workspace};
 use needle_sim::{TWICE_CLINICAL_FAULT_KEYS, TWICE_CLINICAL_KEYS};

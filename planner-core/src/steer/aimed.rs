@@ -99,7 +99,7 @@ fn front_loaded_at(input: &ReplanInput, duty: f32, spent: &(u32, u32)) -> Option
     let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
     let (ahead, r) = (local.z, input.radius / duty);
-    // Out of reach of the full curvature, or nothing to turn.
+    // Out of reach of the curvature at `duty`, or nothing to turn.
     if !(ahead > 0.0 && side > 0.0 && 2.0 * side * r <= side * side + ahead * ahead) {
         return None;
     }
@@ -157,10 +157,10 @@ const DUTY_SLACK: f32 = 1e-3;
 /// [`EARLY_TURN_MARGIN`] times the margin; refused, the same turn at a tenth less of the
 /// curvature at a time ([`EARLY_TURN_DUTY_STEP`]), down to the plan's share. Why: in layered
 /// tissue the estimate learns a softer layer only after bending in it, and an arc that keeps its
-/// reserve to the end meets a softer layer late with the turn still to make (space-clinical, seed 688: a layer at 0.43 from 68 mm
-/// learnt by 77 mm, 2.5 mm still to the side 22 mm before the target). A turn made while the
-/// curvature is there leaves a line, which no later layer bends, and which a duty-cycled push can
-/// correct in any direction.
+/// reserve to the end meets a softer layer late with the turn still to make (space-clinical,
+/// seed 688: a layer at 0.43 from 68 mm learnt by 77 mm, 2.5 mm still to the side 22 mm before
+/// the target). A turn made while the curvature is there leaves a line, which no later layer
+/// bends, and which a duty-cycled push can correct in any direction.
 #[inline(never)]
 pub(super) fn turned_early(input: &ReplanInput, spent: &(u32, u32)) -> Option<Replanned> {
     let wide = ReplanInput {
