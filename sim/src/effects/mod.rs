@@ -178,6 +178,7 @@ pub const TWICE_CLINICAL_KEYS: [&str; 17] = [
 /// The tracker's faults of twice the clinical world, as `--fault` keys: the preset's dropouts,
 /// twice as often and twice as long.
 pub const TWICE_CLINICAL_FAULT_KEYS: [&str; 2] = ["dropout_rate=0.02", "dropout_mm=4"];
+
 impl WorldEffects {
     /// The clinical world: a 5-DOF sensor, 0.3 mm of field bias per axis and a 0.5 mm
     /// registration error (RMS distance: 0.29 mm per axis), three punctured layers, a target pushed up to 2 mm and imaged at
