@@ -179,6 +179,9 @@ class Simulation:
         report = _json.loads(text)
         self.summary: Dict[str, Any] = report["summary"]
         self.perturbation: Dict[str, Any] = report["perturbation"]
+        self.plan: Dict[str, Any] = report["plan"]
+        """The plan executed: ``form``, ``length_mm``, ``curvature_reserve`` (the share of the
+        curvature kept for steering) and ``curvature_reserve_asked`` (more where no path kept it)."""
         self.controller: Optional[Dict[str, Any]] = report.get("controller")
         self.open_loop_summary: Optional[Dict[str, Any]] = report.get("open_loop_summary")
         self.runs: int = report["runs"]

@@ -19,6 +19,7 @@ def test_seeded_simulation_equals_the_command(paper, closed_loop):
     cli = needle_json("simulate", "examples/paper.toml", "--runs", "20", "--seed", "7", *flags)
     assert sim.to_dict() == cli
     assert sim.summary == cli["summary"]
+    assert sim.plan["form"] == "RL" and sim.plan == cli["plan"]
     # Every run as the command's --detail prints it (its f32 figures, widened exactly).
     detail = needle_json(
         "simulate", "examples/paper.toml", "--runs", "20", "--seed", "7", "--detail", *flags

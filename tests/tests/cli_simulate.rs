@@ -1,7 +1,7 @@
 //! `needle simulate` end to end: the JSON contract, repeatability over thread counts, the plot,
 //! the table, and bad input.
 
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, needle, needle_json, needle_stdout};
 use needle_sim::KEYS;
 use serde_json::Value;
 
@@ -20,8 +20,25 @@ fn json_has_exactly_the_contracted_keys() {
     let v = needle_json(&["simulate", &paper(), "--runs", "8", "--json"]);
     assert_eq!(
         keys(&v),
-        ["closed_loop", "perturbation", "runs", "summary", "world"]
+        [
+            "closed_loop",
+            "perturbation",
+            "plan",
+            "runs",
+            "summary",
+            "world"
+        ]
     );
+    assert_eq!(
+        keys(&v["plan"]),
+        [
+            "curvature_reserve",
+            "curvature_reserve_asked",
+            "form",
+            "length_mm"
+        ]
+    );
+    assert_eq!(v["plan"]["form"], "RL");
     assert_eq!(v["runs"], 8);
     assert_eq!(v["closed_loop"], false);
     let p = &v["perturbation"];
@@ -451,6 +468,45 @@ fn the_plot_file_is_opened_before_simulating() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot connect"));
     assert!(!svg.exists(), "an empty plot was left behind");
+}
+
+/// A curvature reserve no path keeps within the collision bound is lowered (the space example's
+/// spheres leave 0.25 of the 0.3 asked), and the table and the JSON say so; a reserve kept as
+/// asked adds no line.
+#[test]
+fn a_reserve_lowered_for_the_bound_is_said() {
+    let dir = std::env::temp_dir().join(format!("needle-sim-reserve-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(example("space-clinical")).unwrap();
+    let asked = text.replace(
+        "max_control_degree = 3\n",
+        "max_control_degree = 3\ncurvature_reserve = 0.3\n",
+    );
+    assert_ne!(asked, text);
+    let file = dir.join("space-0.3.toml");
+    std::fs::write(&file, asked).unwrap();
+    let file = file.to_str().unwrap();
+    let args = ["simulate", file, "--closed-loop", "--runs", "2"];
+    let v = needle_json(&[&args[..], &["--json"]].concat());
+    let plan = &v["plan"];
+    let f = |k: &str| plan[k].as_f64().unwrap();
+    assert!((f("curvature_reserve_asked") - 0.3).abs() < 1e-6, "{plan}");
+    assert!((f("curvature_reserve") - 0.25).abs() < 1e-6, "{plan}");
+    let table = String::from_utf8(needle_stdout(&args)).unwrap();
+    assert!(
+        table.contains("curvature reserve: 0.25 planned, 0.3 asked"),
+        "{table}"
+    );
+    let kept = String::from_utf8(needle_stdout(&[
+        "simulate",
+        example("space-clinical").to_str().unwrap(),
+        "--closed-loop",
+        "--runs",
+        "2",
+    ]))
+    .unwrap();
+    assert!(!kept.contains("curvature reserve"), "{kept}");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Flags that would be silently ignored are usage errors (exit status 2, as clap's).

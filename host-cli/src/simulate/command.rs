@@ -169,6 +169,8 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
         (None, None) => return Err(anyhow!("no run was made")),
     };
     text.push_str(&super::table::world_line(&setup.effects));
+    let planned = setup.scenario.options.curvature_reserve;
+    text.push_str(&super::table::reserve_line(planned, setup.reserve_asked));
     write!(std::io::stdout(), "{text}")?;
     Ok(())
 }

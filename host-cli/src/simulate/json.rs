@@ -1,12 +1,39 @@
 //! The typed JSON of `needle simulate --json`.
 
+use super::setup::Setup;
 use super::steering::SteeringSummary;
 use super::{Spread, Summary};
 use crate::report::schedule::StepJson;
 use needle_sim::{ClosedRun, Perturbation, Run, WorldEffects};
-use planner_core::steer::SteerConfig;
 use serde::Serialize;
 use std::collections::BTreeMap;
+
+/// The insertion every run executes.
+#[derive(Clone, Serialize)]
+pub struct PlanJson {
+    /// The plan's form (`RL`).
+    pub form: String,
+    /// Its length (mm).
+    pub length_mm: f32,
+    /// The share of the needle's curvature it leaves for steering.
+    pub curvature_reserve: f32,
+    /// The share the scenario asked for: more than `curvature_reserve` where no path kept it
+    /// (within the collision bound, or at all).
+    pub curvature_reserve_asked: f32,
+}
+
+impl PlanJson {
+    /// What `setup` executes.
+    pub fn of(setup: &Setup) -> PlanJson {
+        let outcome = &setup.prepared.outcome;
+        PlanJson {
+            form: outcome.form.to_string(),
+            length_mm: outcome.length,
+            curvature_reserve: setup.scenario.options.curvature_reserve,
+            curvature_reserve_asked: setup.reserve_asked,
+        }
+    }
+}
 
 /// The whole output.
 #[derive(Serialize)]
@@ -15,6 +42,8 @@ pub struct SimulateJson<'a> {
     pub runs: usize,
     /// False: the schedule is executed open loop (see [`ClosedJson`] for the closed loop).
     pub closed_loop: bool,
+    /// The plan executed.
+    pub plan: PlanJson,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
     /// The world's effects beyond it (every key; all off in the default world).
@@ -98,9 +127,9 @@ fn error(s: &Spread) -> ErrorJson {
     }
 }
 
-/// The JSON of a simulation.
+/// The JSON of the open-loop simulation of `setup`.
 pub fn to_json<'a>(
-    (p, w): (&Perturbation, &WorldEffects),
+    setup: &Setup,
     runs: &'a [Run],
     summary: &Summary,
     detail: bool,
@@ -108,8 +137,9 @@ pub fn to_json<'a>(
     SimulateJson {
         runs: runs.len(),
         closed_loop: false,
-        perturbation: *p,
-        world: *w,
+        plan: PlanJson::of(setup),
+        perturbation: setup.perturbation,
+        world: setup.effects,
         summary: summary_json(summary),
         runs_detail: detail.then(|| runs.iter().map(RunJson::of).collect()),
     }
@@ -134,6 +164,8 @@ pub struct ClosedJson<'a> {
     pub runs: usize,
     /// True.
     pub closed_loop: bool,
+    /// The plan steered.
+    pub plan: PlanJson,
     /// The perturbation every run drew from.
     pub perturbation: Perturbation,
     /// The world's effects beyond it.
@@ -182,10 +214,9 @@ fn summary_json(summary: &Summary) -> SummaryJson {
     }
 }
 
-/// The JSON of a closed-loop simulation.
+/// The JSON of the closed-loop simulation of `setup`.
 pub fn closed_json<'a>(
-    (p, w): (&Perturbation, &WorldEffects),
-    controller: &SteerConfig,
+    setup: &Setup,
     runs: &'a [ClosedRun],
     summary: &Summary,
     steering: &SteeringSummary,
@@ -195,9 +226,10 @@ pub fn closed_json<'a>(
     ClosedJson {
         runs: runs.len(),
         closed_loop: true,
-        perturbation: *p,
-        world: *w,
-        controller: crate::scenario::steering::steering_keys(controller),
+        plan: PlanJson::of(setup),
+        perturbation: setup.perturbation,
+        world: setup.effects,
+        controller: crate::scenario::steering::steering_keys(&setup.config),
         summary: ClosedSummaryJson {
             figures: summary_json(summary),
             steering: steering.clone(),

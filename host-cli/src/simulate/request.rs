@@ -172,28 +172,17 @@ pub fn set_up(
 
 /// The `needle simulate --json` object of the runs made (`detail`: every run's record).
 pub fn results_json(setup: &Setup, results: &Results, detail: bool) -> Result<String> {
-    let p = &setup.perturbation;
-    let w = &setup.effects;
     Ok(match (&results.closed, &results.open) {
         (Some(closed), open) => {
             let open = open.as_deref().map(summarise);
             let summary = summarise(closed.iter().map(|c| &c.run));
             let steering = summarise_steering(closed, setup.config.reach_tolerance_mm);
-            let config = &setup.config;
-            let j = closed_json(
-                (p, w),
-                config,
-                closed,
-                &summary,
-                &steering,
-                open.as_ref(),
-                detail,
-            );
+            let j = closed_json(setup, closed, &summary, &steering, open.as_ref(), detail);
             serde_json::to_string(&j)?
         }
         (None, Some(runs)) => {
             let summary = summarise(runs);
-            serde_json::to_string(&to_json((p, w), runs, &summary, detail))?
+            serde_json::to_string(&to_json(setup, runs, &summary, detail))?
         }
         (None, None) => return Err(anyhow!("no run was made")),
     })

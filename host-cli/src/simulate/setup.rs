@@ -39,6 +39,9 @@ pub struct Setup {
     pub seed: u64,
     /// The collision bound the plan keeps, if any (a device plans under it too).
     pub bound: Option<PlanBound>,
+    /// The curvature reserve the scenario asked for; `scenario` holds the one planned with,
+    /// less where no path kept this much ([`prepare_keeping_reserve`]).
+    pub reserve_asked: f32,
 }
 
 /// What is kept of each run beyond its figures.
@@ -129,6 +132,7 @@ impl Setup {
         bound: Option<&PlanBound>,
     ) -> Result<Setup> {
         perturbation.validate()?;
+        let reserve_asked = scenario.options.curvature_reserve;
         let (scenario, prepared) = prepare_keeping_reserve(&scenario, bound)?;
         let planned = Planned::of(&scenario, &prepared.outcome);
         Ok(Setup {
@@ -142,6 +146,7 @@ impl Setup {
             runs,
             seed,
             bound: bound.copied(),
+            reserve_asked,
         })
     }
 
