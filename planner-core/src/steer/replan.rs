@@ -6,145 +6,13 @@
 //! optimiser's numbers).
 
 use super::attempt::attempt;
-use crate::execute::nominal::execute_from;
+use super::predict::predict_accepted;
+pub use super::predict::{predict, predict_with, Prediction};
 use crate::execute::schedule::{continuation_steps, Op, Step, Steps};
-use crate::model::broad::{worth_a_tree, Broad, Set};
-use crate::model::clearance::closest;
 use crate::model::form::{Form, SegmentKind, MAX_CONTROL_DEGREE};
 use crate::model::kinematics::{Frame, V3};
-use crate::model::scenario::{Obstacles, Scenario, Workspace, MAX_OBSTACLES};
+use crate::model::scenario::{Obstacles, Scenario, Workspace};
 use crate::report::{SegmentPlan, Segments};
-
-/// Spacing of the sampled clearance check across a plane scenario's cylinders (mm).
-const PLANE_SPACING: f32 = 0.25;
-
-/// What executing a continuation's steps on the nominal needle from the estimated tip gives.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Prediction {
-    /// Distance from the predicted end to the estimated target (mm).
-    pub target_error: f32,
-    /// Smallest predicted clearance to any obstacle surface (mm; infinite without obstacles).
-    pub min_clearance: f32,
-    /// The predicted end frame.
-    pub end: Frame,
-}
-
-/// Executes `steps` from `tip` with arc radius `radius` and measures the end against `target` and
-/// the clearance to every obstacle, as the simulated tissue counts it: exact to spheres in 3-D;
-/// in a plane scenario to the circles' cylinders across the plane, from points `PLANE_SPACING`
-/// apart less half that spacing (no point of the path is farther from a sample). With many
-/// spheres ([`worth_a_tree`]), a tree built here measures only those near the path.
-pub fn predict(
-    scenario: &Scenario,
-    tip: &Frame,
-    steps: &[Step],
-    radius: f32,
-    target: V3,
-) -> Prediction {
-    let broad = worth_a_tree(scenario.obstacles.len()).then(|| Broad::new(&scenario.obstacles));
-    predict_with(scenario, broad.as_ref(), tip, steps, radius, target)
-}
-
-/// [`predict`] with the tree over the scenario's spheres (`None`: every sphere is measured),
-/// for a caller that predicts many times in one scenario: the same answer bit for bit.
-pub fn predict_with(
-    scenario: &Scenario,
-    broad: Option<&Broad>,
-    tip: &Frame,
-    steps: &[Step],
-    radius: f32,
-    target: V3,
-) -> Prediction {
-    let plane = scenario.options.workspace == Workspace::PlaneYz;
-    let mut min_clearance = f32::INFINITY;
-    let end = execute_from(*tip, steps, radius, |start, kind, length, radius| {
-        if plane && !scenario.obstacles.is_empty() {
-            // Each sample point serves every obstacle (drawing the points was most of a
-            // reading's cost when done per obstacle; the same points, so the same bits).
-            let pieces =
-                crate::fmath::clamp(libm::ceilf(length / PLANE_SPACING), 1.0, 4096.0) as u32;
-            let mut least = [f32::INFINITY; MAX_OBSTACLES];
-            for k in 0..=pieces {
-                let q = start.point_at(kind, length * k as f32 / pieces as f32, radius);
-                for (l, ob) in least.iter_mut().zip(&scenario.obstacles) {
-                    let (dy, dz) = (q.y - ob.center[1], q.z - ob.center[2]);
-                    *l = crate::fmath::min(*l, crate::fmath::sqrt(dy * dy + dz * dz));
-                }
-            }
-            for (l, ob) in least.iter().zip(&scenario.obstacles) {
-                let d = l - ob.radius - 0.5 * length / pieces as f32;
-                min_clearance = crate::fmath::min(min_clearance, d);
-            }
-        } else if !plane {
-            let segment = Piece {
-                start,
-                kind,
-                length,
-                radius,
-            };
-            min_clearance = nearest(scenario, broad, &segment, min_clearance);
-        }
-    });
-    let miss = end.p - target;
-    Prediction {
-        target_error: crate::fmath::sqrt(miss.dot(&miss)),
-        min_clearance,
-        end,
-    }
-}
-
-/// The first reach a segment's nearest sphere is looked for within when none is known yet (mm;
-/// it grows fourfold, [`REACH_GROWTHS`] times, before every sphere is measured).
-const FIRST_REACH_MM: f32 = 8.0;
-
-/// Times the reach grows.
-const REACH_GROWTHS: usize = 6;
-
-/// One segment of a predicted path.
-struct Piece<'a> {
-    start: &'a Frame,
-    kind: SegmentKind,
-    length: f32,
-    radius: f32,
-}
-
-/// The smaller of `least` and the clearance of `piece` to the nearest sphere. With a tree, only
-/// the spheres it finds within the reach are measured: `least` itself once it is known (a
-/// sphere farther than it cannot lower it), else a reach that grows until a sphere lies within.
-fn nearest(scenario: &Scenario, broad: Option<&Broad>, piece: &Piece, least: f32) -> f32 {
-    let obstacles = &scenario.obstacles;
-    let among = |set: &Set, mut least: f32| {
-        for ob in set.iter().filter_map(|o| obstacles.get(o)) {
-            let c = V3::new(ob.center[0], ob.center[1], ob.center[2]);
-            let d = closest(piece.start, piece.kind, piece.length, piece.radius, &c);
-            least = crate::fmath::min(least, d.distance - ob.radius);
-        }
-        least
-    };
-    // The distance to a line costs less than a look-up in the tree.
-    let Some(broad) = broad.filter(|_| piece.kind == SegmentKind::Arc) else {
-        return among(&Set::all(obstacles.len()), least);
-    };
-    let (mut reach, growths) = if least.is_finite() {
-        (least.max(0.0), 1)
-    } else {
-        (FIRST_REACH_MM, REACH_GROWTHS)
-    };
-    for _ in 0..growths {
-        let mut near = Set::default();
-        let p = piece;
-        broad.near_segment(
-            obstacles, p.start, p.kind, p.length, p.radius, reach, &mut near,
-        );
-        let found = among(&near, least);
-        // Every sphere left out is at least `reach` away.
-        if found < reach || least.is_finite() {
-            return found;
-        }
-        reach *= 4.0;
-    }
-    among(&Set::all(obstacles.len()), least)
-}
 
 /// The segments the remaining `steps` drive: each rotation becomes the bevel before the next
 /// arc (a spun line keeps the bevel where it is).
@@ -323,19 +191,21 @@ pub(super) fn sound_within(
     miss: f32,
     spent: &(u32, u32),
 ) -> Option<Replanned> {
-    let prediction = predict(
+    let fits = input.inserted_mm + length <= input.scenario.needle.length
+        && peak <= input.scenario.driver.max_twist_deg;
+    if !fits {
+        return None;
+    }
+    let floor = input.scenario.options.min_clearance + input.margin;
+    let prediction = predict_accepted(
         input.scenario,
         &input.tip,
         &steps,
         input.radius,
         input.target,
-    );
-    let floor = input.scenario.options.min_clearance + input.margin;
-    let sound = prediction.target_error <= miss
-        && input.inserted_mm + length <= input.scenario.needle.length
-        && prediction.min_clearance > floor
-        && peak <= input.scenario.driver.max_twist_deg;
-    sound.then_some(Replanned {
+        (miss, floor),
+    )?;
+    Some(Replanned {
         steps,
         prediction,
         evaluations: spent.0,
