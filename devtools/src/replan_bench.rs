@@ -1,13 +1,54 @@
-//! The instructions of closed-loop steering on the device: one simulated insertion (default
-//! perturbation, seed 1) steered by the firmware in QEMU, each reading counted on its own by the
-//! instruction-count plugin (the firmware brackets every poll that answers a reading).
+//! The instructions of closed-loop steering on the device: one simulated insertion (seed 1, in
+//! the default world or the clinical one) steered by the firmware in QEMU, each reading counted
+//! on its own by the instruction-count plugin (the firmware brackets every poll that answers a
+//! reading).
 
 use crate::qemu::Qemu;
 use anyhow::{anyhow, bail, Context, Result};
 use needle_link::{Client, LinkError, Transport};
-use needle_sim::{closed_loop, Controller, Perturbation, Planned, TrackerFaults};
-use planner_core::steer::{SteerConfig, SteerReply, SteerStats, TipMeasurement};
+use needle_sim::{
+    closed_loop_in, Conditions, Controller, Perturbation, Planned, TrackerFaults, WorldEffects,
+};
+use planner_core::steer::{NoiseModel, SteerConfig, SteerReply, SteerStats, TipMeasurement};
 use planner_core::Scenario;
+
+/// What a lab tells the steering of an insertion in soft, layered tissue: the `[steering]` of
+/// examples/paper-clinical.toml and space-clinical.toml (a test holds them equal). Told that the
+/// tissue's curvature changes along the way, the steering tries more turns per replan (the turn
+/// made early, eased) than with [`SteerConfig::DEFAULT`].
+pub const LAB_STEERING: SteerConfig = SteerConfig {
+    noise: NoiseModel {
+        registration_mm: 0.42,
+        target_speed_walk: 0.02,
+        curvature_walk: 0.02,
+        ..NoiseModel::DEFAULT
+    },
+    ..SteerConfig::DEFAULT
+};
+
+/// How one insertion is steered, and in which world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Steered {
+    /// What the steering is told.
+    pub config: SteerConfig,
+    /// The clinical world (`needle simulate --world clinical`: a 5-DOF tracker, layers and
+    /// punctures, a pushed target, latency, dropouts) instead of the default one.
+    pub clinical: bool,
+}
+
+impl Steered {
+    /// The default configuration in the default world.
+    pub const DEFAULT: Steered = Steered {
+        config: SteerConfig::DEFAULT,
+        clinical: false,
+    };
+
+    /// A lab's configuration ([`LAB_STEERING`]) in the clinical world.
+    pub const LAB: Steered = Steered {
+        config: LAB_STEERING,
+        clinical: true,
+    };
+}
 
 /// Instructions per reading over one closed-loop insertion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,11 +76,13 @@ impl<T: Transport> Controller for Firmware<'_, T> {
     }
 }
 
-/// Steers one insertion of `scenario` on `device` and returns the per-reading figures.
+/// Steers one insertion of `scenario` on `device` as `how` says and returns the per-reading
+/// figures.
 pub fn measure<T: Transport>(
     device: &mut Client<T>,
     qemu: &Qemu,
     scenario: &Scenario,
+    how: &Steered,
 ) -> Result<ReplanFigures> {
     let planned = planner_core::plan_scheduled(scenario)
         .map_err(|e| anyhow!("the host cannot plan the scenario: {e}"))?;
@@ -58,15 +101,24 @@ pub fn measure<T: Transport>(
         .context("planning")?
         .map_err(|e| anyhow!("the device refused the scenario: {e}"))?;
     device
-        .steer_start(&SteerConfig::DEFAULT)
+        .steer_start(&how.config)
         .context("starting to steer")?;
+    let (effects, faults) = if how.clinical {
+        (WorldEffects::clinical(), WorldEffects::clinical_faults())
+    } else {
+        (WorldEffects::default(), TrackerFaults::default())
+    };
+    let world = Conditions {
+        perturbation: &Perturbation::default(),
+        effects: &effects,
+        faults: &faults,
+    };
     let before = qemu.counts()?.len();
-    let run = closed_loop(
+    let run = closed_loop_in(
         scenario,
         &Planned::of(scenario, &best),
         &schedule,
-        &Perturbation::default(),
-        &TrackerFaults::default(),
+        &world,
         &mut Firmware(device),
         1,
     )

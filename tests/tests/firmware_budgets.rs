@@ -75,3 +75,16 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// The bench's lab row (`paper-bounded-lab`) steers with what the clinical examples tell their
+/// steering, so the budget holds for the configuration a lab runs.
+#[test]
+fn the_lab_row_steers_as_the_clinical_examples_say() {
+    use needle_cli::scenario::execution::load_execution;
+    use needle_devtools::replan_bench::LAB_STEERING;
+    for name in ["paper-clinical", "space-clinical"] {
+        let told = load_execution(&needle_e2e::example(name)).unwrap().steering;
+        assert_eq!(told, LAB_STEERING, "{name}");
+    }
+    assert_ne!(LAB_STEERING, planner_core::steer::SteerConfig::DEFAULT);
+}
