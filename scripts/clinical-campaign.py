@@ -6,7 +6,7 @@ clinical world, on the two examples as they are and as a lab sets them up (examp
 a 1 % collision bound for the closed loop, and the tracker's hidden error told to the steering),
 and on 20 planted scenarios (seeds 201..220, written by `needle benchmark --generator planted
 --write-scenarios`, each planned for steering under a 1 % collision bound; then the same with the
-examples' `[steering]` added, and the unseen family 301..320 so). Each row also counts the runs
+examples' `[steering]` and curvature reserve added, and the unseen family 301..320 so). Each row also counts the runs
 within the tissue's reach (`summary.within_reach`: the world's full curvature turned at the target
 from the entry comes within the reach tolerance) and the share of those reached. Prints one JSON line per row, then the markdown table; writes OUTDIR/table.json.
 
@@ -68,10 +68,12 @@ def row(name, results):
             "reached_p95": reached_errs[int(0.95 * (len(reached_errs) - 1))] if reached_errs else float("nan")}
 
 LAB_STEERING = "\n[steering]\nregistration_mm = 0.42\ntarget_speed_walk = 0.02\ncurvature_walk = 0.02\n"
+# The curvature reserve the clinical examples ask for (layered tissue: more curvature in hand).
+LAB_RESERVE = "curvature_reserve = 0.4\n"
 
-def write_generated(gen, steering="", seed=201):
+def write_generated(gen, steering="", seed=201, reserve=""):
     """The planted family of `seed`, each scenario planned for steering under a 1 % collision bound (and
-    `steering` appended: what the lab tells the closed loop)."""
+    `steering` appended: what the lab tells the closed loop; `reserve` added to `[planner]`)."""
     os.makedirs(gen, exist_ok=True)
     subprocess.run([needle, "benchmark", "--generator", "planted", "--scenarios", "20", "--seed", str(seed),
                     "--runs", "1", "--open-loop-only", "--write-scenarios", gen],
@@ -80,14 +82,14 @@ def write_generated(gen, steering="", seed=201):
         path = os.path.join(gen, f)
         s = open(path).read()
         if "max_collision_probability" not in s:
-            s = s.replace("[planner]\n", "[planner]\nmax_collision_probability = 0.01\n", 1)
+            s = s.replace("[planner]\n", "[planner]\nmax_collision_probability = 0.01\n" + reserve, 1)
             s += '\n[execution]\nmode = "closed_loop"\n' + steering
             open(path, "w").write(s)
 
 os.makedirs(out, exist_ok=True)
 write_generated(f"{out}/gen")
-write_generated(f"{out}/gen-lab", LAB_STEERING)
-write_generated(f"{out}/gen-lab-301", LAB_STEERING, 301)
+write_generated(f"{out}/gen-lab", LAB_STEERING, reserve=LAB_RESERVE)
+write_generated(f"{out}/gen-lab-301", LAB_STEERING, 301, LAB_RESERVE)
 table = []
 for ex in ["examples/paper.toml", "examples/space.toml", "examples/paper-clinical.toml",
            "examples/space-clinical.toml"]:

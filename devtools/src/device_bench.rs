@@ -180,9 +180,12 @@ pub fn measure(
             steer(format!("{}-steered", s.name), &steered, &Steered::DEFAULT)?;
         }
         // A scenario planned under a collision bound is one a lab steers: steered again as a lab
-        // sets it up, in the clinical world, where the replans try the most turns.
+        // sets it up (its reserve and steering), in the clinical world, where the replans try
+        // the most turns.
         if s.chance.is_some() {
-            steer(format!("{}-lab", s.name), &steered, &Steered::LAB)?;
+            let mut lab = s.scenario.clone();
+            lab.options.curvature_reserve = crate::replan_bench::LAB_RESERVE;
+            steer(format!("{}-lab", s.name), &lab, &Steered::LAB)?;
         }
     }
     drop(device);

@@ -26,6 +26,11 @@ pub const LAB_STEERING: SteerConfig = SteerConfig {
     ..SteerConfig::DEFAULT
 };
 
+/// The curvature reserve the clinical examples' plans keep (`planner.curvature_reserve`): layered
+/// tissue takes curvature away where a plan needs it, so a lab keeps more in hand, and each
+/// replan then eases the turn made early from the full curvature down to this share.
+pub const LAB_RESERVE: f32 = 0.4;
+
 /// How one insertion is steered, and in which world.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Steered {

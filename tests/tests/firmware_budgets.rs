@@ -76,15 +76,19 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
-/// The bench's lab row (`paper-bounded-lab`) steers with what the clinical examples tell their
-/// steering, so the budget holds for the configuration a lab runs.
+/// The bench's lab row (`paper-bounded-lab`) plans and steers as the clinical examples say (their
+/// curvature reserve, what they tell their steering), so the budget holds for what a lab runs.
 #[test]
 fn the_lab_row_steers_as_the_clinical_examples_say() {
+    use needle_cli::scenario::build::load_scenario;
     use needle_cli::scenario::execution::load_execution;
-    use needle_devtools::replan_bench::LAB_STEERING;
+    use needle_devtools::replan_bench::{LAB_RESERVE, LAB_STEERING};
     for name in ["paper-clinical", "space-clinical"] {
-        let told = load_execution(&needle_e2e::example(name)).unwrap().steering;
+        let file = needle_e2e::example(name);
+        let told = load_execution(&file).unwrap().steering;
         assert_eq!(told, LAB_STEERING, "{name}");
+        let reserve = load_scenario(&file).unwrap().options.curvature_reserve;
+        assert_eq!(reserve, LAB_RESERVE, "{name}");
     }
     assert_ne!(LAB_STEERING, planner_core::steer::SteerConfig::DEFAULT);
 }
