@@ -35,6 +35,7 @@ mod lost;
 mod noise;
 mod predict;
 pub mod replan;
+mod slip;
 mod state;
 pub mod target;
 mod turns;
