@@ -39,6 +39,13 @@ const GATE: f32 = 25.0;
 /// examples; the widest is kept.
 const HELD_BACK_MM: f32 = 2.5;
 
+/// The fused fixes' consistency ([`LOST_CONSISTENCY`] and above: a world the model does not
+/// describe) up to which a tip held back counts as held rather than lost. A stall's own lag
+/// raises it to 2.1-2.3 by the first rejected fix (the runs above); in the world at twice the
+/// steering's assumption it sits near 3, and there two stalled runs taken for held touched a
+/// sphere (docs/execution.md, "A tip held by a membrane").
+const HELD_CONSISTENCY: f32 = 2.5;
+
 /// Heading fixes rejected in a row (with their positions fused) after which the heading is
 /// re-anchored to the fix ([`Estimate::fuse_heading`]). Two: a single rejection is an outlier
 /// as the gate means it; at three, the world at twice the assumption still had a heading 7
@@ -285,7 +292,8 @@ impl Estimate {
         }
         let Some(d2) = self.fuse_rows(&h, y, [r; 3]) else {
             // A tip a membrane holds back is behind on the path it travelled, not lost.
-            let held = self.slip.slip(z, self.tip.e3()) < -HELD_BACK_MM;
+            let held = self.slip.slip(z, self.tip.e3()) < -HELD_BACK_MM
+                && self.consistency < HELD_CONSISTENCY;
             if !held {
                 self.rejected
                     .rejected(super::lost::off_the_path(y, self.tip.e3()));
