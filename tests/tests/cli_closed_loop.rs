@@ -1,7 +1,8 @@
 //! `needle simulate --closed-loop` end to end: how steered runs end (reached or missed), the
-//! bevel rotations they report, and a bounded plan kept off a device.
+//! bevel rotations they report, a bounded plan kept off a device, and the curvature reserve the
+//! plan kept.
 
-use needle_e2e::{example, needle_json};
+use needle_e2e::{example, needle_json, needle_stdout};
 use serde_json::Value;
 
 fn paper() -> String {
@@ -95,4 +96,53 @@ fn rotations_are_reported_per_run_and_summarised() {
     assert_eq!(s["median_per_run"].as_u64().unwrap(), counts[4]);
     assert_eq!(s["max_per_run"].as_u64().unwrap(), counts[8]);
     assert!((s["smallest_deg"].as_f64().unwrap() - smallest).abs() < 1e-4);
+}
+
+/// A curvature reserve no path keeps within the collision bound is lowered, and the table and
+/// the JSON say so: the clinical examples ask for 0.4; the space example's spheres leave 0.25 of
+/// it, the paper's keep it all (no line).
+#[test]
+fn a_reserve_lowered_for_the_bound_is_said() {
+    let space = example("space-clinical");
+    let args = [
+        "simulate",
+        space.to_str().unwrap(),
+        "--closed-loop",
+        "--runs",
+        "2",
+    ];
+    let v = needle_json(&[&args[..], &["--json"]].concat());
+    let plan = &v["plan"];
+    let mut keys: Vec<&String> = plan.as_object().unwrap().keys().collect();
+    keys.sort();
+    let expected = [
+        "curvature_reserve",
+        "curvature_reserve_asked",
+        "form",
+        "length_mm",
+    ];
+    assert_eq!(keys, expected);
+    let f = |k: &str| plan[k].as_f64().unwrap();
+    assert!((f("curvature_reserve_asked") - 0.4).abs() < 1e-6, "{plan}");
+    assert!((f("curvature_reserve") - 0.25).abs() < 1e-6, "{plan}");
+    let table = String::from_utf8(needle_stdout(&args)).unwrap();
+    assert!(
+        table.contains("curvature reserve: 0.25 planned, 0.4 asked"),
+        "{table}"
+    );
+    let paper = example("paper-clinical");
+    let args = [
+        "simulate",
+        paper.to_str().unwrap(),
+        "--closed-loop",
+        "--runs",
+        "2",
+    ];
+    let kept = String::from_utf8(needle_stdout(&args)).unwrap();
+    assert!(!kept.contains("curvature reserve"), "{kept}");
+    let v = needle_json(&[&args[..], &["--json"]].concat());
+    assert_eq!(
+        v["plan"]["curvature_reserve"],
+        v["plan"]["curvature_reserve_asked"]
+    );
 }
