@@ -20,6 +20,22 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
+/// The flags of the campaign's "clinical x2, lab-told" world (scripts/clinical-campaign.py):
+/// `--world clinical` with every spread and effect doubled (`needle_sim::TWICE_CLINICAL_KEYS`,
+/// `TWICE_CLINICAL_FAULT_KEYS`), the steering told `target_speed_walk = 0.02`.
+pub fn twice_clinical_flags() -> Vec<String> {
+    let mut flags: Vec<String> = ["--world", "clinical", "--steer", "target_speed_walk=0.02"]
+        .map(String::from)
+        .to_vec();
+    for kv in needle_sim::TWICE_CLINICAL_KEYS {
+        flags.extend(["--perturb".into(), kv.to_string()]);
+    }
+    for kv in needle_sim::TWICE_CLINICAL_FAULT_KEYS {
+        flags.extend(["--fault".into(), kv.to_string()]);
+    }
+    flags
+}
+
 /// The interpreter of the venv `scripts/python-env` makes (pyigtl, nibabel, pynrrd):
 /// `$NEEDLE_PYTHON`, else `target/python-env/bin/python`. Missing, the calling test fails:
 /// skipping would pass without checking anything.

@@ -103,14 +103,12 @@ fn rotations_are_reported_per_run_and_summarised() {
 /// it, the paper's keep it all (no line).
 #[test]
 fn a_reserve_lowered_for_the_bound_is_said() {
-    let space = example("space-clinical");
-    let args = [
-        "simulate",
-        space.to_str().unwrap(),
-        "--closed-loop",
-        "--runs",
-        "2",
-    ];
+    let steered = |file: &std::path::Path| {
+        let file = file.to_str().unwrap().to_string();
+        ["simulate", &file, "--closed-loop", "--runs", "2"].map(String::from)
+    };
+    let space = steered(&example("space-clinical"));
+    let args = space.each_ref().map(String::as_str);
     let v = needle_json(&[&args[..], &["--json"]].concat());
     let plan = &v["plan"];
     let mut keys: Vec<&String> = plan.as_object().unwrap().keys().collect();
@@ -130,14 +128,8 @@ fn a_reserve_lowered_for_the_bound_is_said() {
         table.contains("curvature reserve: 0.25 planned, 0.4 asked"),
         "{table}"
     );
-    let paper = example("paper-clinical");
-    let args = [
-        "simulate",
-        paper.to_str().unwrap(),
-        "--closed-loop",
-        "--runs",
-        "2",
-    ];
+    let paper = steered(&example("paper-clinical"));
+    let args = paper.each_ref().map(String::as_str);
     let kept = String::from_utf8(needle_stdout(&args)).unwrap();
     assert!(!kept.contains("curvature reserve"), "{kept}");
     let v = needle_json(&[&args[..], &["--json"]].concat());

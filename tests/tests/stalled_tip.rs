@@ -4,8 +4,7 @@
 //! `tracking_lost` before the estimator told a held tip from a lost one (docs/execution.md, "A tip
 //! held by a membrane").
 
-use needle_e2e::{example, needle_json};
-use needle_sim::{TWICE_CLINICAL_FAULT_KEYS, TWICE_CLINICAL_KEYS};
+use needle_e2e::{example, needle_json, twice_clinical_flags};
 
 #[test]
 fn a_tip_held_by_a_membrane_is_steered_on_to_the_target() {
@@ -52,27 +51,12 @@ fn a_tip_held_by_a_membrane_is_steered_on_to_the_target() {
 #[test]
 fn at_twice_the_world_a_stall_still_stops_before_a_sphere() {
     let paper = example("paper");
-    let mut args = vec![
-        "simulate".to_string(),
-        paper.to_str().unwrap().to_string(),
-        "--closed-loop".into(),
-        "--world".into(),
-        "clinical".into(),
-        "--runs".into(),
-        "1".into(),
-        "--seed".into(),
-        "584".into(),
-        "--json".into(),
-        "--detail".into(),
-        "--steer".into(),
-        "target_speed_walk=0.02".into(),
-    ];
-    for kv in TWICE_CLINICAL_KEYS {
-        args.extend(["--perturb".into(), kv.to_string()]);
-    }
-    for kv in TWICE_CLINICAL_FAULT_KEYS {
-        args.extend(["--fault".into(), kv.to_string()]);
-    }
+    let mut args: Vec<String> = [paper.to_str().unwrap(), "--closed-loop", "--runs", "1"]
+        .map(String::from)
+        .to_vec();
+    args.insert(0, "simulate".into());
+    args.extend(["--seed", "584", "--json", "--detail"].map(String::from));
+    args.extend(twice_clinical_flags());
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let run = &needle_json(&args)["runs_detail"][0];
     assert_eq!(run["collided"], false, "{run}");

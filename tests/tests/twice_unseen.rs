@@ -5,36 +5,17 @@
 //! (`Estimate::fuse_heading`); now no run touches, and every run that cannot finish ends in a
 //! reported stop (docs/execution.md, "A heading the fixes keep rejecting").
 
-use needle_e2e::{needle_json, workspace};
-use needle_sim::{TWICE_CLINICAL_FAULT_KEYS, TWICE_CLINICAL_KEYS};
+use needle_e2e::{needle_json, twice_clinical_flags, workspace};
 
 /// The file's 50 runs of the campaign (seeds 1 to 50) at twice the world: the runs that
 /// touched an obstacle, and those that ended neither reached nor in a reported stop.
 fn twice(file: &str) -> (Vec<u64>, usize) {
     let path = workspace().join("tests/data/unseen").join(file);
-    let mut args = vec![
-        "simulate".to_string(),
-        path.to_str().unwrap().to_string(),
-        "--closed-loop".into(),
-        "--world".into(),
-        "clinical".into(),
-        "--runs".into(),
-        "50".into(),
-        "--seed".into(),
-        "1".into(),
-        "--json".into(),
-        "--detail".into(),
-        "--steer".into(),
-        "target_speed_walk=0.02".into(),
-    ];
-    for kv in TWICE_CLINICAL_KEYS {
-        args.push("--perturb".into());
-        args.push(kv.into());
-    }
-    for kv in TWICE_CLINICAL_FAULT_KEYS {
-        args.push("--fault".into());
-        args.push(kv.into());
-    }
+    let mut args: Vec<String> = ["simulate", path.to_str().unwrap(), "--closed-loop"]
+        .map(String::from)
+        .to_vec();
+    args.extend(["--runs", "50", "--seed", "1", "--json", "--detail"].map(String::from));
+    args.extend(twice_clinical_flags());
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let v = needle_json(&args);
     let runs = v["runs_detail"].as_array().unwrap();
