@@ -11,7 +11,7 @@ use crate::world::World;
 use crate::world::WorldError;
 use crate::{EffectsError, PerturbError, Perturbation, WorldEffects};
 use planner_core::execute::schedule::{Schedule, Step};
-use planner_core::model::kinematics::Frame;
+use planner_core::model::kinematics::{Frame, V3};
 use planner_core::steer::{
     Command, Pose, SteerConfig, SteerError, SteerReply, SteerStats, Steering, StopReason,
     TipMeasurement,
@@ -281,6 +281,8 @@ pub struct Seen<'a, C> {
     pub reading: &'a TipMeasurement,
     /// The true tip frame when the reading was taken.
     pub tip: &'a Frame,
+    /// The true target (where the tissue has carried it) when the reading was taken.
+    pub target: V3,
     /// The step the world was executing.
     pub step: &'a Step,
     /// The controller, having answered the reading.
@@ -316,7 +318,7 @@ pub fn closed_loop_observed<C: Controller>(
     'continuations: loop {
         let mut next: Option<Vec<Step>> = None;
         for step in &steps {
-            world.execute_seen(step, |m, tip| {
+            world.execute_seen(step, |m, tip, target| {
                 for (reading, injected) in tracker.readings(m) {
                     let reply = match controller.update(&reading) {
                         Ok(r) => r,
@@ -332,6 +334,7 @@ pub fn closed_loop_observed<C: Controller>(
                     observe(&Seen {
                         reading,
                         tip,
+                        target,
                         step,
                         controller,
                     });

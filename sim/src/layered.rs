@@ -6,7 +6,7 @@ use crate::effects::layers::Move;
 use crate::reading::Measurement;
 use crate::world::{Executed, World};
 use crate::MAX_PIECE_MM;
-use planner_core::model::kinematics::Frame;
+use planner_core::model::kinematics::{Frame, V3};
 use planner_core::SegmentKind;
 use std::ops::ControlFlow;
 
@@ -20,7 +20,7 @@ impl World {
         length: f32,
         true_len: f32,
         radius: f32,
-        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame, V3) -> ControlFlow<()>,
     ) -> Executed {
         let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
         let nominal = true_len / libm::ceilf(true_len / spacing).max(1.0);

@@ -5,7 +5,7 @@
 use crate::reading::Measurement;
 use crate::world::{Executed, World};
 use crate::MAX_PIECE_MM;
-use planner_core::model::kinematics::Frame;
+use planner_core::model::kinematics::{Frame, V3};
 use std::ops::ControlFlow;
 
 impl World {
@@ -17,7 +17,7 @@ impl World {
         &mut self,
         length: f32,
         true_len: f32,
-        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame, V3) -> ControlFlow<()>,
         mut advance: impl FnMut(&mut World, f32),
     ) -> Executed {
         let spacing = self.p.measure_every_mm.min(MAX_PIECE_MM);
@@ -30,7 +30,7 @@ impl World {
             commanded = length * share;
             self.moved();
             let m = self.measure();
-            if on_measure(&m, &self.tip).is_break() && k < pieces {
+            if on_measure(&m, &self.tip, self.true_target).is_break() && k < pieces {
                 return Executed {
                     inserted_mm: commanded,
                     interrupted: true,

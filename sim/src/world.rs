@@ -258,15 +258,16 @@ impl World {
         step: &Step,
         mut on_measure: impl FnMut(&Measurement) -> ControlFlow<()>,
     ) -> Executed {
-        self.execute_seen(step, |m, _| on_measure(m))
+        self.execute_seen(step, |m, _, _| on_measure(m))
     }
 
-    /// [`World::execute`], `on_measure` also seeing the true tip frame at each measurement
-    /// (what the tracker's reading should have been; the world's own draws are the same).
+    /// [`World::execute`], `on_measure` also seeing the true tip frame and the true target at
+    /// each measurement (what the tracker's reading should have been; the world's own draws are
+    /// the same).
     pub fn execute_seen(
         &mut self,
         step: &Step,
-        mut on_measure: impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        mut on_measure: impl FnMut(&Measurement, &Frame, V3) -> ControlFlow<()>,
     ) -> Executed {
         let mut draw = StepDraw::default();
         let done = match step.op {
@@ -275,7 +276,7 @@ impl World {
                 self.last = Last::Rotate;
                 self.moved();
                 let m = self.measure();
-                let _ = on_measure(&m, &self.tip);
+                let _ = on_measure(&m, &self.tip, self.true_target);
                 Executed {
                     inserted_mm: 0.0,
                     interrupted: false,
@@ -357,7 +358,7 @@ impl World {
         length_mm: f32,
         duty: f32,
         draw: &mut StepDraw,
-        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame, V3) -> ControlFlow<()>,
     ) -> Executed {
         if self.last != Last::Duty {
             self.segment_factor = 1.0 + normal(&mut self.physics, self.p.segment_curvature_spread);
@@ -415,7 +416,7 @@ impl World {
         length: f32,
         radius: f32,
         draw: &mut StepDraw,
-        on_measure: &mut impl FnMut(&Measurement, &Frame) -> ControlFlow<()>,
+        on_measure: &mut impl FnMut(&Measurement, &Frame, V3) -> ControlFlow<()>,
     ) -> Executed {
         let sd = self.p.insertion_error_mm * libm::sqrtf(length.max(0.0) / 100.0);
         let error = normal(&mut self.physics, sd);

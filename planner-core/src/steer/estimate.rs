@@ -272,7 +272,9 @@ impl Estimate {
         self.slip.advanced(length);
         self.tip = next;
         let near = (self.target - self.tip.p).norm() < PUSH_ZONE_MM;
-        self.target_filter.advanced(&mut self.target, length, near);
+        let heading = near.then(|| self.tip.e3());
+        self.target_filter
+            .advanced(&mut self.target, length, heading);
     }
 
     /// Says whether the sensor's fixes carry the roll (a 6-DOF sensor's, the default, even
