@@ -10,6 +10,7 @@
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
 use super::lost::{Rejected, LOST_CONSISTENCY};
+use super::offset::TrackerOffset;
 use super::target::{TargetFilter, TargetFix, PUSH_ZONE_MM};
 use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
@@ -120,6 +121,8 @@ pub struct Estimate {
     headings_rejected: u8,
     /// The fused fixes' progress against the commanded insertion.
     slip: super::slip::Slip,
+    /// The tracker's offset from the imaging frame, read near the entry.
+    offset: TrackerOffset,
 }
 
 impl Estimate {
@@ -151,6 +154,7 @@ impl Estimate {
             rejected: Rejected::NONE,
             headings_rejected: 0,
             slip: super::slip::Slip::NONE,
+            offset: TrackerOffset::new(tip.p, noise),
         }
     }
 
@@ -270,6 +274,7 @@ impl Estimate {
             self.cov[(4, 4)] += walk * walk * length;
         }
         self.slip.advanced(length);
+        self.offset.advanced(next.p - self.tip.p, length);
         self.tip = next;
         let near = (self.target - self.tip.p).norm() < PUSH_ZONE_MM;
         let heading = near.then(|| self.tip.e3());
@@ -286,6 +291,12 @@ impl Estimate {
 
     /// Fuses a measured tip position; `false` (and no change) for an outlier.
     pub fn fuse_position(&mut self, z: V3) -> bool {
+        let agrees = self.consistency <= LOST_CONSISTENCY;
+        let (z, read) = self.offset.corrected(z, self.tip.e3(), agrees);
+        if let Some(offset) = read {
+            // The estimate followed the fixes: it moves with them into the imaging frame.
+            self.tip.p -= offset;
+        }
         let r = self.noise.position_mm * self.noise.position_mm;
         let y = z - self.tip.p;
         let mut h = SMatrix::<f32, 3, STATES>::zeros();
@@ -453,6 +464,12 @@ impl Estimate {
     /// Covariance of the position estimate (mm²).
     pub fn position_covariance(&self) -> Matrix3<f32> {
         self.cov.fixed_view::<3, 3>(0, 0).into_owned()
+    }
+
+    /// The tracker's offset from the imaging frame taken off the fixes (zero until read near
+    /// the entry, and always without a hidden error told).
+    pub fn tracker_offset(&self) -> V3 {
+        self.offset.offset()
     }
 
     /// Standard deviation of the target estimate, per axis (mm).

@@ -33,6 +33,7 @@ mod attempt;
 pub mod estimate;
 mod lost;
 mod noise;
+mod offset;
 mod predict;
 pub mod replan;
 mod slip;

@@ -133,3 +133,38 @@ fn one_rejected_heading_fix_changes_nothing() {
     assert!(!fused[0]);
     assert!((error - 8.0).abs() < 0.5, "{error}");
 }
+
+/// An arc of 30 mm read by a tracker whose every fix is moved by `off`, the steering told a
+/// hidden error of `registration_mm`: the estimate's distance from the true tip across the
+/// heading at the end, and the offset it took off the fixes.
+fn offset_fixes(registration_mm: f32, off: V3) -> (f32, V3) {
+    let noise = NoiseModel {
+        registration_mm,
+        ..NoiseModel::DEFAULT
+    };
+    let mut e = Estimate::new(start(), V3::new(0.0, 30.0, 80.0), &noise);
+    let mut truth = start();
+    for _ in 0..30 {
+        e.advanced(SegmentKind::Arc, 1.0, 63.7);
+        truth = truth.advanced(SegmentKind::Arc, 1.0, 63.7);
+        assert!(e.fuse_position(truth.p + off));
+        assert!(e.fuse_orientation(truth.e3(), Some(truth.e2())));
+    }
+    let d = e.tip.p - truth.p;
+    let across = d - truth.e3() * d.dot(&truth.e3());
+    (across.norm(), e.tracker_offset())
+}
+
+#[test]
+fn a_tracker_offset_told_of_is_read_near_the_entry_and_taken_off() {
+    let off = V3::new(0.5, -0.4, 0.0);
+    let (told, read) = offset_fixes(0.42, off);
+    let (untold, none) = offset_fixes(0.0, off);
+    assert_eq!(none, V3::zeros());
+    // Untold, the estimate follows the fixes: off by most of the offset across the heading
+    // (the kinematics from the entry hold it back a little).
+    assert!(untold > 0.7 * off.norm(), "{untold}");
+    // Told, most of it is read (shrunk by the entry's spread) and taken off.
+    assert!(read.norm() > 0.6 * off.norm(), "{read:?}");
+    assert!(told < 0.35 * untold, "{told} against {untold}");
+}

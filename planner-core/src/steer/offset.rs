@@ -1,0 +1,240 @@
+//! The tracker's offset from the imaging frame, read near the entry. The registration and the
+//! field's distortion move every fix by an error no fix shows by itself. Near the entry the
+//! insertion shows it: the robot knows where it started the needle (to the entry's spread), and
+//! the tip has gone only the few millimetres it was pushed, along headings the fixes keep
+//! measured. So the fixes' mean distance from the path reckoned from the entry, across the
+//! heading, is the offset plus the entry's error. Across only: along the heading a membrane that
+//! holds the tip (a stall of a millimetre or more) looks the same as an offset.
+//!
+//! Once read, the offset (shrunk by what the entry's spread and the fixes' noise leave of it) is
+//! taken off every later fix. The offset seen near the entry is not the one at the target (a
+//! registration's rotation, a field's modes), so the steering keeps the whole of
+//! `registration_mm` clear of the obstacles as before; the target is aimed with less of it.
+
+use super::noise::NoiseModel;
+use crate::model::kinematics::V3;
+
+/// The insertion over which the fixes are read (mm): the path reckoned from the entry drifts by
+/// a few hundredths of a millimetre over it, and it holds about 20 fixes.
+const READ_OVER_MM: f32 = 15.0;
+
+/// The fewest fixes read before the offset is taken off (dropouts may leave fewer).
+const FEWEST_FIXES: u16 = 5;
+
+/// Fixes farther than this many standard deviations (squared, over the two axes across) from
+/// the reckoned path are not read (outliers).
+const GATE: f32 = 25.0;
+
+/// The largest mean distance from the reckoned path that reads as an offset (squared, in units
+/// of the offset's and the entry's variance per axis; about the 99th percentile of two axes).
+/// Farther, the reckoned path is what is wrong (a heading the fixes could not hold in a world
+/// noisier than the model): nothing is read.
+const MOST_OFFSET: f32 = 9.2;
+
+/// The tracker's offset: read from the fixes near the entry, then taken off every fix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackerOffset {
+    /// The tip as the insertion alone puts it: the entry moved by the estimate's own steps,
+    /// never by a fix.
+    reckoned: V3,
+    /// Insertion so far (mm).
+    inserted: f32,
+    /// Sum of the fixes' distances from the reckoned tip across the heading, and their count.
+    sum: V3,
+    count: u16,
+    /// The offset taken off the fixes, once read.
+    read: Option<V3>,
+    /// Variances per axis (mm²): the offset's prior (`registration_mm`), the entry's, a fix's.
+    prior: f32,
+    entry: f32,
+    fix: f32,
+}
+
+impl TrackerOffset {
+    /// Before the insertion, the tip at `entry`. Without a hidden error told
+    /// (`registration_mm` 0) nothing is ever read and every fix is left as it is.
+    pub fn new(entry: V3, noise: &NoiseModel) -> TrackerOffset {
+        TrackerOffset {
+            reckoned: entry,
+            inserted: 0.0,
+            sum: V3::zeros(),
+            count: 0,
+            read: None,
+            prior: noise.registration_mm * noise.registration_mm,
+            entry: noise.entry_position_mm * noise.entry_position_mm,
+            fix: noise.position_mm * noise.position_mm,
+        }
+    }
+
+    /// The estimate stepped by `moved` over `length` mm of insertion.
+    pub fn advanced(&mut self, moved: V3, length: f32) {
+        if moved.iter().all(|v| v.is_finite()) && length.is_finite() {
+            self.reckoned += moved;
+            self.inserted += length;
+        }
+    }
+
+    /// The offset taken off the fixes (zero until read).
+    pub fn offset(&self) -> V3 {
+        self.read.unwrap_or_else(V3::zeros)
+    }
+
+    /// The fix `z` (the tip heading along `heading`) as the imaging frame has it: `z` less the
+    /// offset once read. Near the entry the fix is read; the first fix past
+    /// [`READ_OVER_MM`] reads the offset, and it is returned as `Some` that once (the estimate
+    /// moves by it). Read only if the fixes so far agree with the model (`agrees`): in a world
+    /// noisier than the model the reckoned path is not to be trusted.
+    pub fn corrected(&mut self, z: V3, heading: V3, agrees: bool) -> (V3, Option<V3>) {
+        if let Some(o) = self.read {
+            return (z - o, None);
+        }
+        if !(self.prior > 0.0) || !z.iter().all(|v| v.is_finite()) {
+            return (z, None);
+        }
+        if self.inserted < READ_OVER_MM {
+            let d = z - self.reckoned;
+            let across = d - heading * d.dot(&heading);
+            if across.dot(&across) <= GATE * (self.prior + self.entry + self.fix) {
+                self.sum += across;
+                self.count = self.count.saturating_add(1);
+            }
+            return (z, None);
+        }
+        let n = f32::from(self.count);
+        let mean = self.sum / n.max(1.0);
+        let mean = mean - heading * mean.dot(&heading);
+        let plausible = mean.dot(&mean) <= MOST_OFFSET * (self.prior + self.entry);
+        if self.count < FEWEST_FIXES || !agrees || !plausible {
+            // Never read: the fixes are left as they are.
+            self.prior = 0.0;
+            return (z, None);
+        }
+        let shrink = self.prior / (self.prior + self.entry + self.fix / n);
+        let o = mean * shrink;
+        self.read = Some(o);
+        (z - o, Some(o))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn told(registration_mm: f32) -> NoiseModel {
+        NoiseModel {
+            registration_mm,
+            ..NoiseModel::DEFAULT
+        }
+    }
+
+    /// A straight insertion along z with fixes moved by `off`, one a millimetre: the fix at 20
+    /// mm as corrected, and what was read.
+    fn insert(noise: &NoiseModel, off: V3) -> (V3, Option<V3>) {
+        let mut o = TrackerOffset::new(V3::zeros(), noise);
+        let heading = V3::z();
+        let mut out = (V3::zeros(), None);
+        for k in 1..=20 {
+            o.advanced(heading, 1.0);
+            let (z, read) = o.corrected(V3::new(0.0, 0.0, k as f32) + off, heading, true);
+            if read.is_some() {
+                out.1 = read;
+            }
+            out.0 = z;
+        }
+        out
+    }
+
+    #[test]
+    fn an_offset_across_the_heading_is_taken_off_and_along_it_is_left() {
+        let off = V3::new(0.5, -0.4, 0.3);
+        let (z, read) = insert(&told(0.42), off);
+        let read = read.expect("read once past the entry's millimetres");
+        // Read from the 14 fixes before 15 mm, shrunk by what the entry's spread and their noise
+        // leave: 0.42² / (0.42² + 0.2² + 0.5² / 14).
+        let shrink = 0.42f32 * 0.42 / (0.42 * 0.42 + 0.04 + 0.25 / 14.0);
+        assert!(
+            (read - V3::new(0.5, -0.4, 0.0) * shrink).norm() < 1e-5,
+            "{read:?}"
+        );
+        assert!((z - V3::new(0.0, 0.0, 20.0) - (off - read)).norm() < 1e-5);
+        assert!((z.x.abs() < 0.5 * 0.5) && (z.y.abs() < 0.5 * 0.4), "{z:?}");
+        assert!(
+            (z.z - 20.3).abs() < 1e-5,
+            "along the heading the fix is left: {z:?}"
+        );
+    }
+
+    #[test]
+    fn without_a_hidden_error_told_fixes_are_left_as_they_are() {
+        let off = V3::new(0.5, -0.4, 0.3);
+        let (z, read) = insert(&told(0.0), off);
+        assert_eq!(read, None);
+        assert_eq!(z, V3::new(0.0, 0.0, 20.0) + off);
+    }
+
+    #[test]
+    fn too_few_fixes_near_the_entry_read_nothing() {
+        let noise = told(0.42);
+        let mut o = TrackerOffset::new(V3::zeros(), &noise);
+        for k in 1..=20 {
+            o.advanced(V3::z(), 1.0);
+            // A dropout over the first 12 mm: three fixes before 15 mm.
+            if (13..15).contains(&k) || k > 15 {
+                let z = V3::new(0.5, 0.0, k as f32);
+                let (c, read) = o.corrected(z, V3::z(), true);
+                assert_eq!((c, read), (z, None), "fix at {k} mm");
+            }
+        }
+        assert_eq!(o.offset(), V3::zeros());
+    }
+
+    #[test]
+    fn a_far_fix_near_the_entry_is_not_read() {
+        let noise = told(0.42);
+        let mut o = TrackerOffset::new(V3::zeros(), &noise);
+        let mut read = None;
+        for k in 1..=16 {
+            o.advanced(V3::z(), 1.0);
+            // One outlier 8 mm off among fixes 0.3 mm off.
+            let x = if k == 5 { 8.0 } else { 0.3 };
+            read = read.or(o.corrected(V3::new(x, 0.0, k as f32), V3::z(), true).1);
+        }
+        let read = read.expect("read");
+        assert!(read.x > 0.0 && read.x < 0.3, "{read:?}");
+    }
+
+    #[test]
+    fn non_finite_input_changes_nothing() {
+        let noise = told(0.42);
+        let mut o = TrackerOffset::new(V3::zeros(), &noise);
+        let before = o;
+        o.advanced(V3::new(f32::NAN, 0.0, 0.0), 1.0);
+        let z = V3::new(f32::INFINITY, 0.0, 0.0);
+        let (c, read) = o.corrected(z, V3::z(), true);
+        assert_eq!((o, read), (before, None));
+        assert!(c.x.is_infinite());
+    }
+
+    /// Fixes `off` from a straight insertion along z up to 20 mm, the model agreeing or not:
+    /// what was read.
+    fn read(off: V3, agrees: bool) -> Option<V3> {
+        let mut o = TrackerOffset::new(V3::zeros(), &told(0.42));
+        let mut read = None;
+        for k in 1..=20 {
+            o.advanced(V3::z(), 1.0);
+            read = read.or(o
+                .corrected(V3::new(0.0, 0.0, k as f32) + off, V3::z(), agrees)
+                .1);
+        }
+        read
+    }
+
+    #[test]
+    fn an_implausible_offset_or_a_world_unlike_the_model_reads_nothing() {
+        let small = V3::new(0.5, -0.4, 0.0);
+        assert!(read(small, true).is_some());
+        assert_eq!(read(small, false), None);
+        // 1.5 mm across: beyond three standard deviations of 0.42 mm and the entry's 0.2.
+        assert_eq!(read(V3::new(1.5, 0.0, 0.0), true), None);
+    }
+}
