@@ -296,6 +296,7 @@ impl Estimate {
         if let Some(offset) = read {
             // The estimate followed the fixes: it moves with them into the imaging frame.
             self.tip.p -= offset;
+            self.slip.moved(-offset);
         }
         let r = self.noise.position_mm * self.noise.position_mm;
         let y = z - self.tip.p;

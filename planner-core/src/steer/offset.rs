@@ -2,9 +2,10 @@
 //! field's distortion move every fix by an error no fix shows by itself. Near the entry the
 //! insertion shows it: the robot knows where it started the needle (to the entry's spread), and
 //! the tip has gone only the few millimetres it was pushed, along headings the fixes keep
-//! measured. So the fixes' mean distance from the path reckoned from the entry, across the
-//! heading, is the offset plus the entry's error. Across only: along the heading a membrane that
-//! holds the tip (a stall of a millimetre or more) looks the same as an offset.
+//! measured. So the fixes' distance from the path reckoned from the entry is the offset plus the
+//! entry's error: across the heading their mean; along it their median, because a membrane that
+//! holds the tip (a stall) moves the fixes back only while it holds, and then the tip jumps to
+//! where it was pushed.
 //!
 //! Once read, the offset (shrunk by what the entry's spread and the fixes' noise leave of it) is
 //! taken off every later fix. The offset seen near the entry is not the one at the target (a
@@ -17,6 +18,12 @@ use crate::model::kinematics::V3;
 /// The insertion over which the fixes are read (mm): the path reckoned from the entry drifts by
 /// a few hundredths of a millimetre over it, and it holds about 20 fixes.
 const READ_OVER_MM: f32 = 15.0;
+
+/// The fixes kept along the heading (about two a millimetre over [`READ_OVER_MM`]).
+const ALONG_KEPT: usize = 32;
+
+/// The variance of a median of normal draws over that of their mean (π/2).
+const MEDIAN_VARIANCE: f32 = 1.571;
 
 /// The fewest fixes read before the offset is taken off (dropouts may leave fewer).
 const FEWEST_FIXES: u16 = 5;
@@ -42,6 +49,9 @@ pub struct TrackerOffset {
     /// Sum of the fixes' distances from the reckoned tip across the heading, and their count.
     sum: V3,
     count: u16,
+    /// The fixes' distances from the reckoned tip along the heading (the first ones).
+    along: [f32; ALONG_KEPT],
+    alongs: usize,
     /// The offset taken off the fixes, once read.
     read: Option<V3>,
     /// Variances per axis (mm²): the offset's prior (`registration_mm`), the entry's, a fix's.
@@ -59,6 +69,8 @@ impl TrackerOffset {
             inserted: 0.0,
             sum: V3::zeros(),
             count: 0,
+            along: [0.0; ALONG_KEPT],
+            alongs: 0,
             read: None,
             prior: noise.registration_mm * noise.registration_mm,
             entry: noise.entry_position_mm * noise.entry_position_mm,
@@ -97,6 +109,10 @@ impl TrackerOffset {
             if across.dot(&across) <= GATE * (self.prior + self.entry + self.fix) {
                 self.sum += across;
                 self.count = self.count.saturating_add(1);
+                if let Some(slot) = self.along.get_mut(self.alongs) {
+                    *slot = d.dot(&heading);
+                    self.alongs += 1;
+                }
             }
             return (z, None);
         }
@@ -110,7 +126,16 @@ impl TrackerOffset {
             return (z, None);
         }
         let shrink = self.prior / (self.prior + self.entry + self.fix / n);
-        let o = mean * shrink;
+        let mut o = mean * shrink;
+        let kept = &mut self.along[..self.alongs];
+        kept.sort_unstable_by(f32::total_cmp);
+        if let Some(&median) = kept.get(kept.len() / 2) {
+            let spread = MEDIAN_VARIANCE * self.fix / kept.len() as f32;
+            let shrink = self.prior / (self.prior + self.entry + spread);
+            if median * median <= MOST_OFFSET * (self.prior + self.entry) {
+                o += heading * (median * shrink);
+            }
+        }
         self.read = Some(o);
         (z - o, Some(o))
     }
@@ -145,23 +170,37 @@ mod tests {
     }
 
     #[test]
-    fn an_offset_across_the_heading_is_taken_off_and_along_it_is_left() {
+    fn an_offset_is_read_near_the_entry_and_taken_off_later_fixes() {
         let off = V3::new(0.5, -0.4, 0.3);
         let (z, read) = insert(&told(0.42), off);
         let read = read.expect("read once past the entry's millimetres");
         // Read from the 14 fixes before 15 mm, shrunk by what the entry's spread and their noise
-        // leave: 0.42² / (0.42² + 0.2² + 0.5² / 14).
-        let shrink = 0.42f32 * 0.42 / (0.42 * 0.42 + 0.04 + 0.25 / 14.0);
-        assert!(
-            (read - V3::new(0.5, -0.4, 0.0) * shrink).norm() < 1e-5,
-            "{read:?}"
-        );
+        // leave: 0.42² / (0.42² + 0.2² + 0.5² / 14), along the heading for a median.
+        let shrink = |spread: f32| 0.42f32 * 0.42 / (0.42 * 0.42 + 0.04 + spread * 0.25 / 14.0);
+        let expected = V3::new(0.5 * shrink(1.0), -0.4 * shrink(1.0), 0.3 * shrink(1.571));
+        assert!((read - expected).norm() < 1e-5, "{read:?}");
         assert!((z - V3::new(0.0, 0.0, 20.0) - (off - read)).norm() < 1e-5);
-        assert!((z.x.abs() < 0.5 * 0.5) && (z.y.abs() < 0.5 * 0.4), "{z:?}");
         assert!(
-            (z.z - 20.3).abs() < 1e-5,
-            "along the heading the fix is left: {z:?}"
+            (z - V3::new(0.0, 0.0, 20.0)).norm() < 0.3 * off.norm(),
+            "{z:?}"
         );
+    }
+
+    #[test]
+    fn a_stall_near_the_entry_does_not_read_as_an_offset_along_the_heading() {
+        // Fixes 0.3 mm ahead of the reckoned path but for four held 1 mm back (a membrane at
+        // 6 mm), then the tip jumps back onto it.
+        let mut o = TrackerOffset::new(V3::zeros(), &told(0.42));
+        let mut read = None;
+        for k in 1..=16 {
+            o.advanced(V3::z(), 1.0);
+            let held = if (6..10).contains(&k) { -1.0 } else { 0.0 };
+            let z = V3::new(0.0, 0.0, k as f32 + 0.3 + held);
+            read = read.or(o.corrected(z, V3::z(), true).1);
+        }
+        let read = read.expect("read");
+        let shrink = 0.42f32 * 0.42 / (0.42 * 0.42 + 0.04 + 1.571 * 0.25 / 14.0);
+        assert!((read.z - 0.3 * shrink).abs() < 1e-5, "{read:?}");
     }
 
     #[test]

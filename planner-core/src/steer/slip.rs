@@ -15,6 +15,12 @@ const WINDOW: usize = 8;
 /// axis).
 const SPAN_MM: f32 = 3.0;
 
+/// The least insertion between two kept fixes (mm). A reading comes after every turn of the bevel
+/// as well as after every push, at the insertion of the one before it: kept, eight of them
+/// spanned 2 mm, under [`SPAN_MM`], and a stall while the steering turned at every push went
+/// unseen (the tip held, counted as lost, 34 mm from the target).
+const SPACING_MM: f32 = 0.5;
+
 /// The last fused fixes, each with the insertion commanded when it was taken.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Slip {
@@ -59,8 +65,19 @@ impl Slip {
         }
     }
 
+    /// The fixes are read in a frame moved by `by` from now on: the kept ones move with it.
+    pub fn moved(&mut self, by: V3) {
+        for (z, _) in &mut self.fixes[..self.len] {
+            *z += by;
+        }
+    }
+
     /// The fix `z` was fused.
     pub fn fused(&mut self, z: V3) {
+        let newest = self.fixes[(self.next + WINDOW - 1) % WINDOW].1;
+        if self.len > 0 && self.inserted - newest < SPACING_MM {
+            return;
+        }
         self.fixes[self.next] = (z, self.inserted);
         self.next = (self.next + 1) % WINDOW;
         self.len = (self.len + 1).min(WINDOW);
@@ -123,5 +140,28 @@ mod tests {
         nan.advanced(f32::NAN);
         nan.advanced(1.0);
         assert_eq!(nan.slip(V3::new(f32::NAN, 0.0, 0.0), heading), 0.0);
+    }
+
+    #[test]
+    fn readings_after_turns_do_not_push_the_older_fixes_out() {
+        // A push of half a millimetre and a turn, each read, 8 mm long; the tip held from 5 mm.
+        let heading = V3::new(0.0, 0.0, 1.0);
+        let mut s = Slip::NONE;
+        let (mut depth, mut tip) = (0.0, V3::zeros());
+        while depth < 8.0 {
+            s.advanced(0.5);
+            depth += 0.5;
+            if depth <= 5.0 {
+                tip += heading * 0.5;
+            }
+            s.fused(tip);
+            s.fused(tip);
+        }
+        // The fix 3 mm back (at 5 mm) is still kept: the held tip is 3 mm short.
+        assert!(
+            (s.slip(tip, heading) + 3.0).abs() < 1e-3,
+            "{}",
+            s.slip(tip, heading)
+        );
     }
 }
