@@ -291,8 +291,7 @@ impl Estimate {
 
     /// Fuses a measured tip position; `false` (and no change) for an outlier.
     pub fn fuse_position(&mut self, z: V3) -> bool {
-        let agrees = self.consistency <= LOST_CONSISTENCY;
-        let (z, read) = self.offset.corrected(z, self.tip.e3(), agrees);
+        let (z, read) = self.offset.corrected(z, self.tip.e3());
         if let Some(offset) = read {
             // The estimate followed the fixes: it moves with them into the imaging frame.
             self.tip.p -= offset;

@@ -39,7 +39,8 @@ pub struct NoiseModel {
     pub curvature_walk: f32,
     /// The tracker's error against the imaging frame that no fix reveals, per axis (mm; 0 or
     /// more): the registration and the field's distortion. Kept clear of the obstacles on top
-    /// of the estimate's own spread.
+    /// of the estimate's own spread; above 0 the offset is also read near the entry and taken
+    /// off later fixes (`steer::offset`).
     pub registration_mm: f32,
 }
 
