@@ -164,7 +164,8 @@ impl TrackerOffset {
     }
 }
 
-/// Insertion sort: a few values once an insertion (core's sort costs the device 6 KB of flash).
+/// Insertion sort: a few values, once an insertion. Core's sort cost the device 4.8 KiB more
+/// flash.
 fn sort(values: &mut [f32]) {
     for i in 1..values.len() {
         let mut j = i;
