@@ -8,7 +8,7 @@
 //! `needle simulate`, e.g. `--world clinical`). Means in mm. Every figure is simulated.
 
 use needle_cli::simulate::{closed_loop_setup, run_seed};
-use needle_sim::{closed_loop_observed, in_process, Conditions};
+use needle_sim::{closed_loop_observed, in_process};
 use planner_core::model::kinematics::V3;
 
 type Failure = Box<dyn std::error::Error>;
@@ -61,11 +61,7 @@ fn main() -> Result<(), Failure> {
     };
     let runs: usize = runs.parse()?;
     let setup = closed_loop_setup(std::path::Path::new(file), 1, &args[3..])?;
-    let world = Conditions {
-        perturbation: &setup.perturbation,
-        effects: &setup.effects,
-        faults: &setup.faults,
-    };
+    let world = setup.conditions();
     let mut tally = Tally::default();
     for i in 0..runs {
         let seed = run_seed(setup.seed, i);

@@ -9,7 +9,7 @@
 //! default 25 runs each). Every figure is simulated.
 
 use needle_cli::simulate::{closed_loop_setup, run_seed, Spread};
-use needle_sim::{roll_trace, Conditions, RollSample, RollSummary};
+use needle_sim::{roll_trace, RollSample, RollSummary};
 
 type Failure = Box<dyn std::error::Error>;
 
@@ -28,11 +28,7 @@ impl Tally {
     fn add(&mut self, file: &std::path::Path, dof: u8, runs: usize) -> Result<(), Failure> {
         let flags = ["--perturb".to_string(), format!("tracker_dof={dof}")];
         let setup = closed_loop_setup(file, 1, &flags)?;
-        let world = Conditions {
-            perturbation: &setup.perturbation,
-            effects: &setup.effects,
-            faults: &setup.faults,
-        };
+        let world = setup.conditions();
         let (s, planned, sched) = (&setup.scenario, &setup.planned, &setup.prepared.schedule);
         for i in 0..runs {
             let seed = run_seed(setup.seed, i);

@@ -179,17 +179,22 @@ impl Setup {
         Ok(out)
     }
 
+    /// The world the runs are simulated in: the perturbation, the effects and the faults.
+    pub fn conditions(&self) -> Conditions<'_> {
+        Conditions {
+            perturbation: &self.perturbation,
+            effects: &self.effects,
+            faults: &self.faults,
+        }
+    }
+
     /// One run steered by `controller` (already started on the schedule) in the world of `seed`.
     pub fn steer<C: Controller>(
         &self,
         controller: &mut C,
         seed: u64,
     ) -> Result<ClosedRun, ClosedLoopError<C::Error>> {
-        let world = Conditions {
-            perturbation: &self.perturbation,
-            effects: &self.effects,
-            faults: &self.faults,
-        };
+        let world = self.conditions();
         closed_loop_in(
             &self.scenario,
             &self.planned,
