@@ -9,6 +9,7 @@ pub mod device;
 pub mod lab;
 pub mod random;
 pub mod report;
+pub mod reserve;
 pub mod scale;
 pub mod scenario;
 pub mod simulate;

@@ -4,15 +4,11 @@ use anyhow::{anyhow, Result};
 use clap::{Parser, Subcommand};
 use needle_cli::analysis::cli as analysis;
 use needle_cli::device::{self, commands::LinkArgs};
-use needle_cli::report::execution::{add_to_json, execution_lines};
-use needle_cli::report::local::plan_locally;
-use needle_cli::report::{plan_json, plan_table, schedule_table, Stats};
+use needle_cli::report::local::{plan_locally, LocalPlan};
+use needle_cli::report::schedule_table;
 use needle_cli::scenario::{
     load_execution, load_scenario, load_scenario_shapes, restrict, Execution,
 };
-use planner_core::chance::ChancePlan;
-use planner_core::execute::risk::ExecutionRisk;
-use planner_core::execute::schedule::Schedule;
 use planner_core::{PlanReport, Scenario};
 use std::io::Write;
 use std::path::PathBuf;
@@ -145,43 +141,20 @@ fn load(args: &PlanArgs) -> Result<Scenario> {
     Ok(scenario)
 }
 
-/// What a plan predicts about its execution (the scenario has `[execution]` or a bound).
-struct Predicted<'a> {
-    execution: &'a Execution,
-    risks: Vec<Option<ExecutionRisk>>,
-    chance: Option<&'a ChancePlan>,
-}
-
 /// Prints a plan as `plan` and `send` do: the table (and with `--schedule` the schedule's), or
 /// the JSON report with `best.schedule` (`best` is `null` when no form is feasible, and there is
 /// no schedule), with the predictions when there are any.
-fn print_plan_predicted(
-    args: &PlanArgs,
-    scenario: &Scenario,
-    report: &PlanReport,
-    schedule: Option<&Schedule>,
-    stats: Stats,
-    predicted: Option<&Predicted>,
-) -> Result<()> {
+fn print_plan(args: &PlanArgs, made: &LocalPlan, execution: &Execution) -> Result<()> {
+    let schedule = made.schedule()?;
+    let mut out = std::io::stdout();
     if args.json {
-        let mut json = plan_json(scenario, report, schedule, stats);
-        if let Some(p) = predicted {
-            add_to_json(&mut json, scenario, p.execution, &p.risks, p.chance, report);
-        }
-        writeln!(std::io::stdout(), "{json}")?;
-    } else {
-        write!(std::io::stdout(), "{}", plan_table(report, stats))?;
-        if let Some(p) = predicted {
-            let lines = execution_lines(report, p.execution, &p.risks, p.chance);
-            write!(std::io::stdout(), "{lines}")?;
-        }
-        if let Some(schedule) = schedule.filter(|_| args.schedule) {
-            write!(
-                std::io::stdout(),
-                "{}",
-                schedule_table(schedule, &scenario.driver)
-            )?;
-        }
+        writeln!(out, "{}", made.json(execution))?;
+        return Ok(());
+    }
+    write!(out, "{}", made.table(execution))?;
+    if let Some(schedule) = schedule.filter(|_| args.schedule) {
+        let driver = &made.scenario.driver;
+        write!(out, "{}", schedule_table(schedule, driver))?;
     }
     Ok(())
 }
@@ -199,26 +172,14 @@ fn plan(args: &PlanArgs) -> Result<()> {
     let scenario = load(args)?;
     let execution = load_execution(&args.file)?;
     let made = plan_locally(&scenario, &execution)?;
-    let report = made.report();
-    let predicted = made.risks.clone().map(|risks| Predicted {
-        execution: &execution,
-        risks,
-        chance: made.chance.as_ref(),
-    });
-    let schedule = made.schedule()?;
-    print_plan_predicted(
-        args,
-        &scenario,
-        report,
-        schedule,
-        made.stats,
-        predicted.as_ref(),
-    )?;
+    print_plan(args, &made, &execution)?;
+    // The scenario as planned: its reserve is the plan's.
+    let (scenario, report) = (&made.scenario, made.report());
     if let Some(out) = &args.plot {
-        analysis::write_plan_plot(&args.file, args.approx, &scenario, report, out)?;
+        analysis::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
     }
     if let Some(dir) = &args.export {
-        needle_cli::report::slicer::export(dir, &scenario, report)?;
+        needle_cli::report::slicer::export(dir, scenario, report)?;
     }
     made.verdict()
 }
@@ -230,25 +191,13 @@ fn send(args: &SendArgs) -> Result<()> {
         device::checked::Sent::Planned(made) => *made,
         device::checked::Sent::Refused(e) => return Err(e),
     };
+    print_plan(&args.plan, &made, &execution)?;
     let report = made.report();
-    let predicted = made.risks.clone().map(|risks| Predicted {
-        execution: &execution,
-        risks,
-        chance: made.chance.as_ref(),
-    });
-    print_plan_predicted(
-        &args.plan,
-        &scenario,
-        report,
-        made.schedule()?,
-        made.stats,
-        predicted.as_ref(),
-    )?;
     if report.best().is_none() {
         return reachable(report);
     }
     if let Some(dir) = &args.plan.export {
-        needle_cli::report::slicer::export(dir, &scenario, report)?;
+        needle_cli::report::slicer::export(dir, &made.scenario, report)?;
     }
     made.verdict()
 }

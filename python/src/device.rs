@@ -91,7 +91,7 @@ impl Device {
                     Ok(Sent::Refused(e)) => Err(Wrong::Plan(e)),
                     Ok(Sent::Planned(made)) => {
                         let verdict = made.verdict().err().map(|e| message(&e));
-                        Ok((made.json(&core, &execution), verdict))
+                        Ok((made.json(&execution), verdict))
                     }
                 })
             })

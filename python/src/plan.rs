@@ -83,7 +83,7 @@ pub fn plan<'py>(
             guarded(|| {
                 let made = plan_locally(&core, &execution)?;
                 let verdict = made.verdict().err().map(|e| crate::errors::message(&e));
-                Ok((made.json(&core, &execution), verdict))
+                Ok((made.json(&execution), verdict))
             })
         })
         .map_err(|f| f.into_py(plan_error))?;

@@ -7,6 +7,7 @@ use super::send::plan_on_device;
 use super::verify::{verified_chance, verified_schedule};
 use crate::report::local::LocalPlan;
 use crate::report::Stats;
+use crate::reserve::{is_unreachable, keeping_reserve, Shortfall};
 use crate::scenario::Execution;
 use anyhow::{anyhow, Result};
 use planner_core::Scenario;
@@ -21,8 +22,28 @@ pub enum Sent {
 }
 
 /// Plans `scenario` on the device at `link`, under `execution`'s collision bound if it has one,
-/// and checks the answer. `Err` when the link fails or the answer fails a check.
+/// keeping as much of the curvature reserve as a path allows (`crate::reserve`: the scenario is
+/// sent again with less where the device's plan falls short), and checks each answer. `Err` when
+/// the link fails or an answer fails a check.
 pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
+    let (_, sent) = keeping_reserve(
+        scenario,
+        |s| plan_checked_once(s, execution, link),
+        |sent| match sent {
+            Ok(Sent::Planned(made)) => made.shortfall(),
+            Ok(Sent::Refused(e)) => is_unreachable(e).then_some(Shortfall::Unreachable),
+            Err(_) => None,
+        },
+    );
+    let mut sent = sent?;
+    if let Sent::Planned(made) = &mut sent {
+        made.reserve_asked = scenario.options.curvature_reserve;
+    }
+    Ok(sent)
+}
+
+/// One plan of `scenario` as it is on the device, checked.
+fn plan_checked_once(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
     let (result, device) = plan_on_device(scenario, execution.chance_request(), link)?;
     let answer = match result {
         Ok(a) => a,
@@ -32,7 +53,7 @@ pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs)
         time_us: device.time_us,
     };
     let checked = verified_chance(scenario, execution, &answer)?;
-    let made = LocalPlan::from_device(scenario, execution, answer.planned, checked, stats);
+    let made = LocalPlan::new(scenario, execution, answer.planned, checked, stats);
     if made.report().best().is_some() {
         verified_schedule(scenario, &made.planned)?;
     }

@@ -29,6 +29,13 @@ pub struct ExecutionJson {
     pub rounds: Option<u32>,
     /// How far each obstacle was grown for the plan (mm, scenario order; `null` without a bound).
     pub margins: Option<Vec<f64>>,
+    /// The share of the curvature the plan leaves for steering (`planner.curvature_reserve`,
+    /// lowered where no path kept what was asked: `crate::reserve`).
+    #[serde(default)]
+    pub curvature_reserve: Option<f32>,
+    /// The share asked for: the scenario's, before any was given up.
+    #[serde(default)]
+    pub curvature_reserve_asked: Option<f32>,
 }
 
 /// Each form's predicted risk (`None` for an infeasible form or one the driver cannot
@@ -55,10 +62,12 @@ pub fn form_risks(
         .collect()
 }
 
-/// Adds the predictions to a plan's JSON.
+/// Adds the predictions to a plan's JSON (`scenario` as planned, its reserve perhaps lowered
+/// from `reserve_asked`).
 pub fn add_to_json(
     json: &mut PlanJson,
     scenario: &Scenario,
+    reserve_asked: f32,
     execution: &Execution,
     risks: &[Option<ExecutionRisk>],
     chance: Option<&ChancePlan>,
@@ -85,6 +94,8 @@ pub fn add_to_json(
                 .map(|m| f64::from(*m))
                 .collect()
         }),
+        curvature_reserve: Some(scenario.options.curvature_reserve),
+        curvature_reserve_asked: Some(reserve_asked),
     });
 }
 

@@ -3,8 +3,9 @@
 //! and the verdict it exits with. The command and the Python package both go through here, so
 //! they give the same report and the same messages.
 
-use super::execution::{add_to_json, form_risks};
+use super::execution::{add_to_json, execution_lines, form_risks};
 use super::json::{plan_json, PlanJson, Stats};
+use crate::reserve::{is_unreachable, keeping_reserve, reserve_line, Shortfall};
 use crate::scenario::Execution;
 use anyhow::{anyhow, Context, Result};
 use planner_core::chance::{plan_within_risk_as, ChancePlan};
@@ -15,6 +16,11 @@ use std::time::Instant;
 
 /// A plan made here, with everything `needle plan` prints of it.
 pub struct LocalPlan {
+    /// The scenario as planned: its curvature reserve is the one the plan keeps, lowered from
+    /// the one asked for where no path kept that (`crate::reserve`).
+    pub scenario: Scenario,
+    /// The curvature reserve the scenario asked for.
+    pub reserve_asked: f32,
     /// The report and the best form's schedule.
     pub planned: ScheduledPlan,
     /// With a collision bound: the rounds that kept it.
@@ -28,8 +34,25 @@ pub struct LocalPlan {
 }
 
 /// Plans `scenario` as `needle plan` does: under `execution`'s collision bound when it has one,
-/// the best form scheduled. Errors are those the command stops on before printing anything.
+/// keeping as much of the curvature reserve as a path allows (`crate::reserve`), the best form
+/// scheduled. Errors are those the command stops on before printing anything.
 pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalPlan> {
+    let (_, made) = keeping_reserve(
+        scenario,
+        |s| plan_once(s, execution),
+        |made| match made {
+            Ok(m) => m.shortfall(),
+            Err(e) => is_unreachable(e).then_some(Shortfall::Unreachable),
+        },
+    );
+    let mut made = made?;
+    made.reserve_asked = scenario.options.curvature_reserve;
+    made.schedule()?;
+    Ok(made)
+}
+
+/// One plan of `scenario` as it is.
+fn plan_once(scenario: &Scenario, execution: &Execution) -> Result<LocalPlan> {
     let start = Instant::now();
     let chance = match execution.max_collision_probability {
         Some(bound) => Some(
@@ -45,25 +68,14 @@ pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalP
     let stats = Stats {
         time_us: start.elapsed().as_micros() as u64,
     };
-    let risks = execution
-        .given
-        .then(|| form_risks(scenario, &planned.report, execution));
-    let made = LocalPlan {
-        planned,
-        chance,
-        risks,
-        stats,
-        bound: execution.max_collision_probability,
-    };
-    made.schedule()?;
-    Ok(made)
+    Ok(LocalPlan::new(scenario, execution, planned, chance, stats))
 }
 
 impl LocalPlan {
-    /// A plan a device made (`chance`: its figures under the bound, checked here), with this
-    /// machine's predictions of it, so it is printed and judged as `needle plan` prints and
-    /// judges its own.
-    pub fn from_device(
+    /// A plan made of `scenario` (here, or on a device: `chance`, its figures under the bound,
+    /// checked here), with this machine's predictions of it, so it is printed and judged as
+    /// `needle plan` prints and judges its own.
+    pub fn new(
         scenario: &Scenario,
         execution: &Execution,
         planned: ScheduledPlan,
@@ -74,6 +86,8 @@ impl LocalPlan {
             .given
             .then(|| form_risks(scenario, &planned.report, execution));
         LocalPlan {
+            scenario: scenario.clone(),
+            reserve_asked: scenario.options.curvature_reserve,
             planned,
             chance,
             risks,
@@ -100,15 +114,49 @@ impl LocalPlan {
         }
     }
 
+    /// Why this plan falls short in a way a lower curvature reserve might mend: no best form,
+    /// or none within the collision bound.
+    pub fn shortfall(&self) -> Option<Shortfall> {
+        if self.report().best().is_none() {
+            return Some(Shortfall::Unreachable);
+        }
+        match (&self.chance, self.bound) {
+            (Some(c), Some(_)) if !c.within_bound => Some(Shortfall::MissesBound),
+            _ => None,
+        }
+    }
+
     /// The `needle plan --json` report.
-    pub fn json(&self, scenario: &Scenario, execution: &Execution) -> PlanJson {
+    pub fn json(&self, execution: &Execution) -> PlanJson {
         let schedule = self.schedule().ok().flatten();
-        let mut json = plan_json(scenario, self.report(), schedule, self.stats);
+        let mut json = plan_json(&self.scenario, self.report(), schedule, self.stats);
         if let Some(risks) = &self.risks {
-            let chance = self.chance.as_ref();
-            add_to_json(&mut json, scenario, execution, risks, chance, self.report());
+            let (chance, asked) = (self.chance.as_ref(), self.reserve_asked);
+            let report = self.report();
+            add_to_json(
+                &mut json,
+                &self.scenario,
+                asked,
+                execution,
+                risks,
+                chance,
+                report,
+            );
         }
         json
+    }
+
+    /// The `needle plan` table: every form, the predictions when there are any, and the
+    /// reserve when less was kept than asked.
+    pub fn table(&self, execution: &Execution) -> String {
+        let mut text = super::plan_table(self.report(), self.stats);
+        if let Some(risks) = &self.risks {
+            let chance = self.chance.as_ref();
+            text.push_str(&execution_lines(self.report(), execution, risks, chance));
+        }
+        let planned = self.scenario.options.curvature_reserve;
+        text.push_str(&reserve_line(planned, self.reserve_asked));
+        text
     }
 
     /// Why the command fails after printing the report: no feasible form, or no plan within the

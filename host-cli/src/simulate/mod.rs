@@ -15,6 +15,7 @@ pub mod table;
 pub use args::{at_least_one, SimulateArgs};
 pub use command::{closed_loop_setup, run_simulate};
 
+use crate::reserve::{is_unreachable, keeping_reserve, Shortfall};
 use anyhow::{anyhow, Context, Result};
 use needle_sim::Perturbation;
 use needle_sim::Run;
@@ -105,69 +106,45 @@ pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepare
     Ok(Prepared { outcome, schedule })
 }
 
-/// The least curvature reserve a plan steered with a reserve keeps: with less, a tissue that
-/// bends a few percent less than assumed leaves the target out of reach too often to steer for
-/// (docs/execution.md, "Curvature in hand": such plans reached the target in 8 to 45 % of runs).
-pub const LEAST_CURVATURE_RESERVE: f32 = 0.1;
+pub use crate::reserve::{LEAST_CURVATURE_RESERVE, LEAST_CURVATURE_RESERVE_FOR_BOUND};
 
-/// The least curvature reserve given up to meet a collision bound: a plan that meets the bound
-/// only with less is refused for it rather than steered with too little curvature in hand
-/// (docs/execution.md, "The closed loop under its own bound": plans kept at 0.1 to meet it
-/// missed the target in 2 % of runs).
-pub const LEAST_CURVATURE_RESERVE_FOR_BOUND: f32 = 0.15;
-
-/// How much curvature reserve one more try at the bound gives up.
-const RESERVE_STEP_FOR_BOUND: f32 = 0.05;
-
-/// [`prepare`], keeping as much of the scenario's curvature reserve as a path allows: where
-/// no path exists at the reserve asked for (a target close behind an obstacle needs the
-/// needle's full bend), the reserve is halved while it stays at least
-/// [`LEAST_CURVATURE_RESERVE`]; where paths exist but none keeps the bound, it is lowered by
-/// 0.05 while it stays at least [`LEAST_CURVATURE_RESERVE_FOR_BOUND`] (a wider needle bend has
-/// more room around the spheres). Otherwise the scenario is refused, saying why. A scenario
-/// without a reserve is planned as it is. Returns the scenario with the reserve planned with,
-/// and the plan.
+/// [`prepare`], keeping as much of the scenario's curvature reserve as a path allows (the rule
+/// of [`crate::reserve`]); a scenario it gives up on is refused, saying why. Returns the scenario
+/// with the reserve planned with, and the plan.
 pub fn prepare_keeping_reserve(
     scenario: &Scenario,
     bound: Option<&PlanBound>,
 ) -> Result<(Scenario, Prepared)> {
-    let mut s = scenario.clone();
-    loop {
-        let e = match prepare(&s, bound) {
-            Ok(p) => return Ok((s, p)),
-            Err(e) => e,
-        };
-        let reserve = s.options.curvature_reserve;
-        let lowered = reserve - RESERVE_STEP_FOR_BOUND;
-        s.options.curvature_reserve = if reserve > 0.0 && is_unreachable(&e) {
-            let half = 0.5 * reserve;
-            if half < LEAST_CURVATURE_RESERVE {
-                return Err(e.context(format!(
-                    "no path keeps a curvature reserve of {reserve} or more for steering \
-                     (planned at the needle's full curvature, a tissue that bends a little less \
-                     leaves the target out of reach)"
-                )));
-            }
-            half
-        } else if misses_bound(&e) && lowered >= LEAST_CURVATURE_RESERVE_FOR_BOUND - 1e-4 {
-            lowered
-        } else {
-            return Err(e);
-        };
+    let (s, made) = keeping_reserve(
+        scenario,
+        |s| prepare(s, bound),
+        |made| made.as_ref().err().and_then(shortfall),
+    );
+    let reserve = s.options.curvature_reserve;
+    match made {
+        Ok(p) => Ok((s, p)),
+        Err(e) if reserve > 0.0 && is_unreachable(&e) => Err(e.context(format!(
+            "no path keeps a curvature reserve of {reserve} or more for steering (planned at \
+             the needle's full curvature, a tissue that bends a little less leaves the target \
+             out of reach)"
+        ))),
+        Err(e) => Err(e),
+    }
+}
+
+/// Why `e` refused a plan that a lower reserve might make.
+fn shortfall(e: &anyhow::Error) -> Option<Shortfall> {
+    if is_unreachable(e) {
+        Some(Shortfall::Unreachable)
+    } else if misses_bound(e) {
+        Some(Shortfall::MissesBound)
+    } else {
+        None
     }
 }
 
 fn misses_bound(e: &anyhow::Error) -> bool {
     e.chain().any(|c| c.downcast_ref::<BoundNotMet>().is_some())
-}
-
-fn is_unreachable(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        matches!(
-            c.downcast_ref::<planner_core::PlanError>(),
-            Some(planner_core::PlanError::Unreachable)
-        )
-    })
 }
 
 /// The seed of run `i` (runs are independent: a run's result depends on its seed alone).

@@ -67,24 +67,7 @@ pub fn world_line(w: &WorldEffects) -> String {
     format!("world: {}{given}\n", values.join(" "))
 }
 
-/// The curvature reserve planned with, when a path kept less of it than asked (a plan that
-/// keeps what it was asked for prints no such line): a lab that asked for more reach must see it
-/// did not get it.
-pub fn reserve_line(planned: f32, asked: f32) -> String {
-    if planned >= asked {
-        return String::new();
-    }
-    let share = |v: f32| {
-        let text = format!("{v:.3}");
-        text.trim_end_matches('0').trim_end_matches('.').to_string()
-    };
-    format!(
-        "curvature reserve: {} planned, {} asked (no path keeping more reached the target \
-         within the collision bound)\n",
-        share(planned),
-        share(asked)
-    )
-}
+pub use crate::reserve::reserve_line;
 
 /// The table of a simulation.
 pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
