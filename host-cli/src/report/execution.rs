@@ -32,10 +32,10 @@ pub struct ExecutionJson {
     /// The share of the curvature the plan leaves for steering (`planner.curvature_reserve`,
     /// lowered where no path kept what was asked: `crate::reserve`).
     #[serde(default)]
-    pub curvature_reserve: Option<f32>,
+    pub curvature_reserve: Option<f64>,
     /// The share asked for: the scenario's, before any was given up.
     #[serde(default)]
-    pub curvature_reserve_asked: Option<f32>,
+    pub curvature_reserve_asked: Option<f64>,
 }
 
 /// Each form's predicted risk (`None` for an infeasible form or one the driver cannot
@@ -94,9 +94,15 @@ pub fn add_to_json(
                 .map(|m| f64::from(*m))
                 .collect()
         }),
-        curvature_reserve: Some(scenario.options.curvature_reserve),
-        curvature_reserve_asked: Some(reserve_asked),
+        curvature_reserve: Some(share(scenario.options.curvature_reserve)),
+        curvature_reserve_asked: Some(share(reserve_asked)),
     });
+}
+
+/// A share of the curvature as the JSON gives it: to a millionth, so a reserve lowered in steps
+/// of 0.05 reads 0.25, not the f32's 0.2499999850988388.
+fn share(v: f32) -> f64 {
+    (f64::from(v) * 1e6).round() / 1e6
 }
 
 /// The lines `needle plan` prints under its table.
