@@ -26,6 +26,7 @@ pub enum Sent {
 /// sent again with less where the device's plan falls short), and checks each answer. `Err` when
 /// the link fails or an answer fails a check.
 pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
+    let start = std::time::Instant::now();
     let (_, sent) = keeping_reserve(
         scenario,
         |s| plan_checked_once(s, execution, link),
@@ -38,6 +39,8 @@ pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs)
     let mut sent = sent?;
     if let Sent::Planned(made) = &mut sent {
         made.reserve_asked = scenario.options.curvature_reserve;
+        // Every plan sent to keep the reserve counts in the time.
+        made.stats.time_us = start.elapsed().as_micros() as u64;
     }
     Ok(sent)
 }

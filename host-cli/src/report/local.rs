@@ -37,6 +37,7 @@ pub struct LocalPlan {
 /// keeping as much of the curvature reserve as a path allows (`crate::reserve`), the best form
 /// scheduled. Errors are those the command stops on before printing anything.
 pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalPlan> {
+    let start = Instant::now();
     let (_, made) = keeping_reserve(
         scenario,
         |s| plan_once(s, execution),
@@ -47,6 +48,8 @@ pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalP
     );
     let mut made = made?;
     made.reserve_asked = scenario.options.curvature_reserve;
+    // Every plan made to keep the reserve counts in the time.
+    made.stats.time_us = start.elapsed().as_micros() as u64;
     made.schedule()?;
     Ok(made)
 }
