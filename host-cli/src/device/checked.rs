@@ -39,6 +39,7 @@ pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs)
     let mut sent = sent?;
     if let Sent::Planned(made) = &mut sent {
         made.reserve_asked = scenario.options.curvature_reserve;
+        made.judge(execution);
         // Every plan sent to keep the reserve counts in the time.
         made.stats.time_us = start.elapsed().as_micros() as u64;
     }

@@ -48,6 +48,7 @@ pub fn plan_locally(scenario: &Scenario, execution: &Execution) -> Result<LocalP
     );
     let mut made = made?;
     made.reserve_asked = scenario.options.curvature_reserve;
+    made.judge(execution);
     // Every plan made to keep the reserve counts in the time.
     made.stats.time_us = start.elapsed().as_micros() as u64;
     made.schedule()?;
@@ -76,8 +77,8 @@ fn plan_once(scenario: &Scenario, execution: &Execution) -> Result<LocalPlan> {
 
 impl LocalPlan {
     /// A plan made of `scenario` (here, or on a device: `chance`, its figures under the bound,
-    /// checked here), with this machine's predictions of it, so it is printed and judged as
-    /// `needle plan` prints and judges its own.
+    /// checked here), without this machine's predictions of each form yet ([`LocalPlan::judge`]):
+    /// a plan made at a reserve that is then given up needs none.
     pub fn new(
         scenario: &Scenario,
         execution: &Execution,
@@ -85,18 +86,24 @@ impl LocalPlan {
         chance: Option<ChancePlan>,
         stats: Stats,
     ) -> LocalPlan {
-        let risks = execution
-            .given
-            .then(|| form_risks(scenario, &planned.report, execution));
         LocalPlan {
             scenario: scenario.clone(),
             reserve_asked: scenario.options.curvature_reserve,
             planned,
             chance,
-            risks,
+            risks: None,
             stats,
             bound: execution.max_collision_probability,
         }
+    }
+
+    /// Adds this machine's predictions of each form (when the scenario has an `[execution]`
+    /// table or a bound), so the plan is printed and judged as `needle plan` prints and judges
+    /// its own.
+    pub fn judge(&mut self, execution: &Execution) {
+        self.risks = execution
+            .given
+            .then(|| form_risks(&self.scenario, &self.planned.report, execution));
     }
 
     /// The report of every form.

@@ -106,8 +106,6 @@ pub fn prepare(scenario: &Scenario, bound: Option<&PlanBound>) -> Result<Prepare
     Ok(Prepared { outcome, schedule })
 }
 
-pub use crate::reserve::{LEAST_CURVATURE_RESERVE, LEAST_CURVATURE_RESERVE_FOR_BOUND};
-
 /// [`prepare`], keeping as much of the scenario's curvature reserve as a path allows (the rule
 /// of [`crate::reserve`]); a scenario it gives up on is refused, saying why. Returns the scenario
 /// with the reserve planned with, and the plan.
