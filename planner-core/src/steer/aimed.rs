@@ -44,7 +44,7 @@ pub(super) fn aimed_duty(input: &ReplanInput, spent: &(u32, u32)) -> Option<Repl
 /// The bevel aimed at the target (at `local` in the tip's axes), rounded to the dead band's
 /// steps (none, or the band): the continuation `build` makes from each (its steps, peak twist
 /// and length), the first that passes the check.
-fn aimed_tries(
+pub(super) fn aimed_tries(
     input: &ReplanInput,
     local: crate::model::kinematics::V3,
     spent: &(u32, u32),
@@ -62,18 +62,23 @@ fn aimed_within(
     spent: &(u32, u32),
     build: impl Fn(f32) -> Option<(Steps, f32, f32)>,
 ) -> Option<Replanned> {
+    let (bevels, first) = aimed_bevels(input, local);
+    bevels[first..]
+        .iter()
+        .find_map(|&bevel_deg| sound_within(input, build(bevel_deg)?, miss, spent))
+}
+
+/// The bevels [`aimed_tries`] tries for a target at `local` (in the tip's axes), from the index
+/// returned: the aim rounded to the dead band's steps, then widened to the band, or only the
+/// latter when they agree. Each is a check.
+pub(super) fn aimed_bevels(
+    input: &ReplanInput,
+    local: crate::model::kinematics::V3,
+) -> ([f32; 2], usize) {
     let aim = wrapped_deg(crate::fmath::atan2(-local.x, local.y));
     let banded = dead_banded(aim, input.dead_band_deg);
     let widened = widened_to_band(aim, input.dead_band_deg);
-    let bevels = [banded, widened];
-    let tries = if banded == widened {
-        &bevels[1..]
-    } else {
-        &bevels[..]
-    };
-    tries
-        .iter()
-        .find_map(|&bevel_deg| sound_within(input, build(bevel_deg)?, miss, spent))
+    ([banded, widened], usize::from(banded == widened))
 }
 
 /// The turn spent first: the bevel turned towards the target, an arc pushed at the full
@@ -99,7 +104,26 @@ fn front_loaded_at(input: &ReplanInput, duty: f32, spent: &(u32, u32)) -> Option
     let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
     let (ahead, r) = (local.z, input.radius / duty);
-    // Out of reach of the curvature at `duty`, or nothing to turn.
+    let phi = heading_turn(side, ahead, r)?;
+    let arc = r * phi;
+    let (across, along) = (
+        side - r * (1.0 - libm::cosf(phi)),
+        ahead - r * libm::sinf(phi),
+    );
+    let line = crate::fmath::sqrt(across * across + along * along);
+    let driver = &input.scenario.driver;
+    aimed_tries(input, local, spent, |bevel_deg| {
+        let (mut steps, peak) =
+            duty_continuation(driver, bevel_deg, arc, duty, input.twist_deg).ok()?;
+        steps.push(duty_step(driver, line, 0.0)).ok()?;
+        Some((steps, peak, arc + line))
+    })
+}
+
+/// The angle (rad) an arc of radius `r`, bent towards a target `side` mm to the side and
+/// `ahead` mm ahead, turns until the needle heads at it; `None` when the target is out of
+/// reach of that curvature, or there is nothing to turn.
+pub(super) fn heading_turn(side: f32, ahead: f32, r: f32) -> Option<f32> {
     if !(ahead > 0.0 && side > 0.0 && 2.0 * side * r <= side * side + ahead * ahead) {
         return None;
     }
@@ -119,59 +143,7 @@ fn front_loaded_at(input: &ReplanInput, duty: f32, spent: &(u32, u32)) -> Option
             hi = mid;
         }
     }
-    let phi = 0.5 * (lo + hi);
-    let arc = r * phi;
-    let (across, along) = (
-        side - r * (1.0 - libm::cosf(phi)),
-        ahead - r * libm::sinf(phi),
-    );
-    let line = crate::fmath::sqrt(across * across + along * along);
-    let driver = &input.scenario.driver;
-    aimed_tries(input, local, spent, |bevel_deg| {
-        let (mut steps, peak) =
-            duty_continuation(driver, bevel_deg, arc, duty, input.twist_deg).ok()?;
-        steps.push(duty_step(driver, line, 0.0)).ok()?;
-        Some((steps, peak, arc + line))
-    })
-}
-
-/// How much wider than the steering's margin a turn made early keeps from the obstacles: it is
-/// taken while the plan still reaches, so it may ask for more room than a continuation that must
-/// be taken (3 standard deviations of the tip's position, not 2). Chosen on space-clinical and
-/// the planted family 201-220 (1: three collisions in 1000 space runs where 1.5 leaves one,
-/// that of the plan): docs/execution.md, "Layers ahead: the turn made early".
-const EARLY_TURN_MARGIN: f32 = 1.5;
-
-/// The step by which the turn made early eases off the full curvature when an obstacle refuses
-/// it: a tenth of the curvature at a time, down to the plan's share. A gentler turn runs nearer
-/// the plan's own arc, which was planned clear of the obstacles, and still turns before a
-/// softer layer can take the curvature away. Measured (docs/execution.md, "The turn made early,
-/// eased"): the planted families 201/301/401/501 97.3/98.6/97.3/96.8 -> 97.6/98.8/98.0/96.6 %
-/// reached; the unseen 601 and 701 97.2/97.1 -> 97.6/97.2 %.
-const EARLY_TURN_DUTY_STEP: f32 = 0.1;
-
-/// Rounding slack when a duty stepped down from 1 meets the plan's share.
-const DUTY_SLACK: f32 = 1e-3;
-
-/// The turn made early: [`front_loaded`] while the plan's share still reaches, if it keeps
-/// [`EARLY_TURN_MARGIN`] times the margin; refused, the same turn at a tenth less of the
-/// curvature at a time ([`EARLY_TURN_DUTY_STEP`]), down to the plan's share. Why: in layered
-/// tissue the estimate learns a softer layer only after bending in it, and an arc that keeps its
-/// reserve to the end meets a softer layer late with the turn still to make (space-clinical,
-/// seed 688: a layer at 0.43 from 68 mm learnt by 77 mm, 2.5 mm still to the side 22 mm before
-/// the target). A turn made while the curvature is there leaves a line, which no later layer
-/// bends, and which a duty-cycled push can correct in any direction.
-#[inline(never)]
-pub(super) fn turned_early(input: &ReplanInput, spent: &(u32, u32)) -> Option<Replanned> {
-    let wide = ReplanInput {
-        margin: EARLY_TURN_MARGIN * input.margin,
-        ..*input
-    };
-    // At most 1 / EARLY_TURN_DUTY_STEP tries, each a prediction and a check.
-    (0..=(1.0 / EARLY_TURN_DUTY_STEP) as u32)
-        .map(|k| 1.0 - k as f32 * EARLY_TURN_DUTY_STEP)
-        .take_while(|&duty| duty > 0.0 && duty >= input.arc_duty - DUTY_SLACK)
-        .find_map(|duty| front_loaded_at(&wide, duty, spent))
+    Some(0.5 * (lo + hi))
 }
 
 /// The nearest the needle can come to the target when nothing reaches it: the bevel turned
@@ -205,14 +177,14 @@ pub(super) fn closest_approach(
 }
 
 #[cfg(test)]
-mod tests {
+pub(in crate::steer) mod tests {
     use super::*;
     use crate::execute::schedule::Op;
     use crate::model::kinematics::{Frame, V3};
     use crate::model::scenario::{Obstacle, Scenario, Workspace};
 
     /// The paper's needle in 3-D, no obstacle.
-    fn open_space() -> Scenario {
+    pub(in crate::steer) fn open_space() -> Scenario {
         let mut scenario = Scenario::paper();
         scenario.options.workspace = Workspace::Space;
         scenario.obstacles.clear();
@@ -221,7 +193,7 @@ mod tests {
 
     /// A tip at 50 mm heading +z, the target 30 mm ahead and 2 mm to the side, the arcs pushed
     /// at `arc_duty`.
-    fn off_course(scenario: &Scenario, arc_duty: f32) -> ReplanInput<'_> {
+    pub(in crate::steer) fn off_course(scenario: &Scenario, arc_duty: f32) -> ReplanInput<'_> {
         ReplanInput {
             scenario,
             tip: Frame {
@@ -346,115 +318,5 @@ mod tests {
             ..input
         };
         assert!(closest_approach(&input, 100.0, &(0, 0)).is_none());
-    }
-
-    /// Told the tissue changes ahead, a replan turns early although the plan's share still
-    /// reaches: the full curvature first, then a spun line. Told nothing, it keeps the share.
-    #[test]
-    fn a_replan_told_of_layers_turns_early() {
-        let scenario = open_space();
-        let pushes = |input: &ReplanInput| -> std::vec::Vec<f32> {
-            let (found, _, _) = super::super::replan::replan(input, &[]);
-            let found = found.expect("a continuation");
-            assert!(
-                found.prediction.target_error < 1e-3,
-                "{:?}",
-                found.prediction
-            );
-            found
-                .steps
-                .iter()
-                .filter_map(|s| match s.op {
-                    Op::InsertDuty { duty, .. } => Some(duty),
-                    _ => None,
-                })
-                .collect()
-        };
-        let told = ReplanInput {
-            turn_early: true,
-            ..off_course(&scenario, 0.8)
-        };
-        assert_eq!(pushes(&told), [1.0, 0.0]);
-        let untold = ReplanInput {
-            turn_early: false,
-            ..told
-        };
-        assert!(
-            pushes(&untold).iter().all(|&d| d <= 0.8),
-            "{:?}",
-            pushes(&untold)
-        );
-    }
-
-    /// The early turn keeps a wider margin than a continuation that must be taken: with a
-    /// sphere beside its path, at a margin the turn spent first keeps but the early turn does
-    /// not, only the first is found.
-    #[test]
-    fn the_early_turn_keeps_a_wider_margin() {
-        let mut scenario = open_space();
-        let beside = Obstacle {
-            center: [-2.0, 0.0, 70.0],
-            radius: 1.0,
-        };
-        scenario.obstacles.push(beside).unwrap();
-        let floor = scenario.options.min_clearance;
-        let probe = ReplanInput {
-            margin: 1e-3,
-            ..off_course(&scenario, 0.8)
-        };
-        let clearance = front_loaded(&probe, &(0, 0))
-            .expect("a continuation")
-            .prediction
-            .min_clearance;
-        assert!(clearance > floor + 0.5, "{clearance}");
-        let margin = (clearance - floor) / (0.5 * (1.0 + EARLY_TURN_MARGIN));
-        let input = ReplanInput { margin, ..probe };
-        assert!(front_loaded(&input, &(0, 0)).is_some());
-        assert!(turned_early(&input, &(0, 0)).is_none());
-    }
-
-    /// With a sphere beside the full-curvature turn's line (10 mm to turn over 40 mm), the
-    /// early turn eases off: at a margin the turn at 0.9 of the curvature keeps and the full
-    /// one does not, the early turn pushes its arc at 0.9; it never goes below the plan's share.
-    #[test]
-    fn the_early_turn_eases_off_the_curvature_near_an_obstacle() {
-        let mut scenario = open_space();
-        let beside = Obstacle {
-            center: [5.5, 0.0, 70.0],
-            radius: 1.0,
-        };
-        scenario.obstacles.push(beside).unwrap();
-        let floor = scenario.options.min_clearance;
-        let probe = ReplanInput {
-            target: V3::new(10.0, 0.0, 90.0),
-            margin: 1e-3,
-            ..off_course(&scenario, 0.8)
-        };
-        let clearance = |duty| {
-            front_loaded_at(&probe, duty, &(0, 0))
-                .expect("a continuation")
-                .prediction
-                .min_clearance
-        };
-        let (full, eased) = (clearance(1.0), clearance(0.9));
-        assert!(eased > full + 0.2, "{full} {eased}");
-        let margin = (0.5 * (full + eased) - floor) / EARLY_TURN_MARGIN;
-        let input = ReplanInput { margin, ..probe };
-        let found = turned_early(&input, &(0, 0)).expect("an eased turn");
-        let duties: std::vec::Vec<f32> = found
-            .steps
-            .iter()
-            .filter_map(|s| match s.op {
-                Op::InsertDuty { duty, .. } => Some(duty),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(duties, [0.9, 0.0]);
-        // A plan keeping nothing in hand: the full curvature or nothing.
-        let no_reserve = ReplanInput {
-            arc_duty: 1.0,
-            ..input
-        };
-        assert!(turned_early(&no_reserve, &(0, 0)).is_none());
     }
 }

@@ -30,6 +30,7 @@
 mod aimed;
 pub mod apriori;
 mod attempt;
+mod early;
 pub mod estimate;
 mod lost;
 mod noise;

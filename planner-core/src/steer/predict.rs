@@ -10,7 +10,7 @@ use crate::model::kinematics::{Frame, V3};
 use crate::model::scenario::{Scenario, Workspace, MAX_OBSTACLES};
 
 /// Spacing of the sampled clearance check across a plane scenario's cylinders (mm).
-const PLANE_SPACING: f32 = 0.25;
+pub(super) const PLANE_SPACING: f32 = 0.25;
 
 /// What executing a continuation's steps on the nominal needle from the estimated tip gives.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -96,8 +96,10 @@ pub struct ReplanInput<'a> {
     /// would be missed, or the clearance is at stake); one that only restores the margin keeps
     /// it, and the route.
     pub spend_reserve: bool,
-    /// The lab says the tissue's curvature changes along the insertion: the turn the target
-    /// needs is made first, while the curvature is there ([`super::aimed::turned_early`]).
+    /// The lab says the tissue's curvature changes along the insertion: this replan tries only
+    /// the turn the target needs made first, while the curvature is there
+    /// ([`super::early::turned_early`]); refused, the steering tries the rest at the next
+    /// reading (one reading's work is one or the other, within the device's budget).
     pub turn_early: bool,
 }
 
@@ -213,19 +215,18 @@ pub(super) fn sound_within(
     })
 }
 
-/// Re-plans from the estimate: told of layers, the turn made early first; then the remaining
-/// segments (warm start), the same with a degree of freedom more ([`variants`]), the short forms
-/// RL, LR and RR aimed at the target, all at the continuation's arc duty; then the turn spent
+/// Re-plans from the estimate: told to turn early, the turn made early alone; otherwise the
+/// remaining segments (warm start), the same with a degree of freedom more ([`variants`]), the
+/// short forms RL, LR and RR aimed at the target, all at the continuation's arc duty; then the turn spent
 /// first; the duty-cycled arc aimed through the target; when the arcs keep curvature in hand,
 /// the short forms at the full curvature. Returns the continuation (if any passes the check),
 /// the evaluations and the iterations spent.
 pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
     let mut spent = (0u32, 0u32);
-    let early = (input.turn_early && input.arc_duty < 1.0)
-        .then(|| super::aimed::turned_early(input, &spent))
-        .flatten();
-    let found = early
-        .or_else(|| forms_from(input, remaining, &mut spent))
+    if input.turn_early {
+        return (super::early::turned_early(input, &spent), 0, 0);
+    }
+    let found = forms_from(input, remaining, &mut spent)
         .or_else(|| {
             (input.arc_duty < 1.0 && input.spend_reserve)
                 .then(|| super::aimed::front_loaded(input, &spent))

@@ -48,6 +48,10 @@ pub struct Steering {
     /// Depth of the last replan: a reading without insertion since (after a turn) re-plans
     /// only when the continuation has become unsafe.
     last_replan_depth: f32,
+    /// The last replan tried only the turn made early, refused: the next tries the rest. One
+    /// reading's work is either, not both (the device answers a reading within its budget), and
+    /// a continuation that keeps its margin loses nothing by waiting a reading.
+    early_refused: bool,
     last_kind: Option<SegmentKind>,
     /// The last reading came during a spun line: its bevel direction is meaningless.
     spinning: bool,
@@ -100,6 +104,7 @@ impl Steering {
             base: 0.0,
             last_fix_depth: 0.0,
             last_replan_depth: f32::NEG_INFINITY,
+            early_refused: false,
             last_kind: None,
             spinning: false,
             last_seq: None,
@@ -396,6 +401,10 @@ impl Steering {
         let advanced = self.depth > self.last_replan_depth + DONE_SLACK;
         if (advanced && (now.target_error > trigger || too_close)) || urgent {
             self.last_replan_depth = self.depth;
+            let early = self.config.noise.curvature_walk > 0.0
+                && self.scenario.arc_duty() < 1.0
+                && !(self.early_refused || too_close || urgent)
+                && ahead > ONLY_TRIM_WITHIN_MM;
             let input = ReplanInput {
                 scenario: &self.scenario,
                 tip: self.estimate.tip,
@@ -408,7 +417,7 @@ impl Steering {
                 dead_band_deg: self.config.rotation_dead_band_deg,
                 arc_duty: self.scenario.arc_duty(),
                 spend_reserve: urgent || now.target_error > trigger,
-                turn_early: self.config.noise.curvature_walk > 0.0,
+                turn_early: early,
             };
             let (found, evaluations, _) = if ahead > ONLY_TRIM_WITHIN_MM {
                 replan(&input, &segments_of(&remaining).unwrap_or_default())
@@ -416,6 +425,11 @@ impl Steering {
                 (None, 0, 0)
             };
             reply.evaluations = evaluations;
+            self.early_refused = early && found.is_none();
+            if self.early_refused {
+                self.last_reply = Some(reply.clone());
+                return reply;
+            }
             let found = found
                 .or_else(|| self.trimmed(&remaining, &now, floor + margin))
                 .or_else(|| {
