@@ -217,10 +217,10 @@ pub(super) fn sound_within(
 
 /// Re-plans from the estimate: told to turn early, the turn made early alone; otherwise the
 /// remaining segments (warm start), the same with a degree of freedom more ([`variants`]), the
-/// short forms RL, LR and RR aimed at the target, all at the continuation's arc duty; then the turn spent
-/// first; the duty-cycled arc aimed through the target; when the arcs keep curvature in hand,
-/// the short forms at the full curvature. Returns the continuation (if any passes the check),
-/// the evaluations and the iterations spent.
+/// short forms RL, LR and RR aimed at the target, all at the continuation's arc duty; then the
+/// turn spent first; the duty-cycled arc aimed through the target; when the arcs keep curvature
+/// in hand, the short forms at the full curvature. Returns the continuation (if any passes the
+/// check), the evaluations and the iterations spent.
 pub fn replan(input: &ReplanInput, remaining: &[SegmentPlan]) -> (Option<Replanned>, u32, u32) {
     let mut spent = (0u32, 0u32);
     if input.turn_early {
