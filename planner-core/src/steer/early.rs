@@ -42,35 +42,53 @@ pub(super) fn turned_early(input: &ReplanInput, spent: &(u32, u32)) -> Option<Re
         margin: EARLY_TURN_MARGIN * input.margin,
         ..*input
     };
+    // Out of the curvature's reach, no share of the turn reaches either.
+    let turn = Turn::of(input)?;
     // Every try aims the bevel at the same target: each costs the same checks.
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
-    let (bevels, first) = aimed_bevels(input, local);
+    let (bevels, first) = aimed_bevels(input, turn.local);
     let mut tries = EARLY_CHECKS / (bevels.len() - first);
     let floor = input.scenario.options.min_clearance + wide.margin - SCREEN_SLACK_MM;
-    if let Some((arc, line)) = whole_turn(&wide) {
-        if screened_clearance(&wide, arc, line) >= floor {
-            if let Some(found) = front_loaded(&wide, spent) {
-                return Some(found);
-            }
-            tries -= 1;
+    let (arc, line) = whole_turn(&wide, &turn);
+    if screened_clearance(&wide, &turn, arc, line) >= floor {
+        if let Some(found) = front_loaded(&wide, spent) {
+            return Some(found);
         }
+        tries -= 1;
     }
-    largest_share(&wide, input.arc_duty, tries, spent)
+    largest_share(&wide, &turn, tries, spent)
+}
+
+/// The turn the target asks for, from the tip: worked out once a reading (the angle is a
+/// bisection of 24 sines and cosines) for the whole turn and every share of it.
+struct Turn {
+    /// The target in the tip's axes.
+    local: V3,
+    /// Its distance to the side of the heading (mm).
+    side: f32,
+    /// The angle (rad) the full estimated curvature turns until the needle heads at it.
+    phi: f32,
+}
+
+impl Turn {
+    /// `None` when the target is out of the curvature's reach, or nothing is left to turn.
+    fn of(input: &ReplanInput) -> Option<Turn> {
+        let local = input.tip.r.transpose() * (input.target - input.tip.p);
+        let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
+        let phi = heading_turn(side, local.z, input.radius)?;
+        Some(Turn { local, side, phi })
+    }
 }
 
 /// The whole turn ([`front_loaded`]) as [`part_then_arc`] gives a share: its arc at the full
 /// curvature (mm), then the line to the target (an arc at duty 0).
-fn whole_turn(input: &ReplanInput) -> Option<(f32, ThenArc)> {
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
-    let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
-    let r = input.radius;
-    let phi = heading_turn(side, local.z, r)?;
+fn whole_turn(input: &ReplanInput, turn: &Turn) -> (f32, ThenArc) {
+    let (r, phi) = (input.radius, turn.phi);
     let (dx, dz) = (
-        side - r * (1.0 - libm::cosf(phi)),
-        local.z - r * libm::sinf(phi),
+        turn.side - r * (1.0 - libm::cosf(phi)),
+        turn.local.z - r * libm::sinf(phi),
     );
     let length = crate::fmath::sqrt(dx * dx + dz * dz);
-    Some((r * phi, ThenArc { length, duty: 0.0 }))
+    (r * phi, ThenArc { length, duty: 0.0 })
 }
 
 /// The checks the turn made early may spend in one reading, on what the screen keeps of the
@@ -81,12 +99,12 @@ fn whole_turn(input: &ReplanInput) -> Option<(f32, ThenArc)> {
 const EARLY_CHECKS: usize = 6;
 
 /// The largest share of the turn the obstacles leave (at `wide`'s margin), a tenth less at a
-/// time, then the arc through the target, as long as that arc needs no more than `arc_duty`.
-/// Each share is screened on its ideal arcs first (closed form); at most `tries` of those the
-/// screen keeps get the check. Share 0 is the one arc through the target.
+/// time, then the arc through the target, as long as that arc needs no more than the plan's
+/// share. Each share is screened on its ideal arcs first (closed form); at most `tries` of those
+/// the screen keeps get the check. Share 0 is the one arc through the target.
 fn largest_share(
     wide: &ReplanInput,
-    arc_duty: f32,
+    turn: &Turn,
     tries: usize,
     spent: &(u32, u32),
 ) -> Option<Replanned> {
@@ -97,18 +115,18 @@ fn largest_share(
     }
     for k in (0..TURN_SHARES).rev() {
         let share = k as f32 / TURN_SHARES as f32;
-        let Some((arc, then)) = part_then_arc(wide, share) else {
+        let Some((arc, then)) = part_then_arc(wide, turn, share) else {
             continue;
         };
-        if then.duty > arc_duty + DUTY_SLACK {
+        if then.duty > wide.arc_duty + DUTY_SLACK {
             // A smaller share leaves an arc that needs more still.
             break;
         }
         let fits = wide.inserted_mm + arc + then.length <= wide.scenario.needle.length;
-        if !(fits && screened_clearance(wide, arc, then) >= floor) {
+        if !(fits && screened_clearance(wide, turn, arc, then) >= floor) {
             continue;
         }
-        if let Some(found) = share_of_turn(wide, arc, then, spent) {
+        if let Some(found) = share_of_turn(wide, turn, arc, then, spent) {
             return Some(found);
         }
         checked += 1;
@@ -131,13 +149,12 @@ const TURN_SHARES: u32 = 10;
 const SCREEN_SLACK_MM: f32 = 0.1;
 
 /// The least clearance (mm) of part of the turn (`arc` mm at the full curvature) and the arc
-/// after it (a line at duty 0) from every obstacle, on the ideal arcs in the plane of the turn: a screen before the
-/// check (a few operations an obstacle, no prediction). In a plane scenario the obstacles are
+/// after it (a line at duty 0) from every obstacle, on the ideal arcs in the plane of the turn:
+/// a screen before the check (a few operations an obstacle, no prediction). In a plane scenario the obstacles are
 /// cylinders across the plane and the turn is in the plane: the distance across the plane is
 /// left out, and half the check's sample spacing taken off, as the check counts them.
-fn screened_clearance(input: &ReplanInput, arc: f32, then: ThenArc) -> f32 {
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
-    let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
+fn screened_clearance(input: &ReplanInput, turn: &Turn, arc: f32, then: ThenArc) -> f32 {
+    let (local, side) = (turn.local, turn.side);
     if !(side > 0.0) {
         return f32::NAN;
     }
@@ -241,13 +258,13 @@ impl Arc {
 /// check passes.
 fn share_of_turn(
     input: &ReplanInput,
+    turn: &Turn,
     arc: f32,
     then: ThenArc,
     spent: &(u32, u32),
 ) -> Option<Replanned> {
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
     let driver = &input.scenario.driver;
-    aimed_tries(input, local, spent, |bevel_deg| {
+    aimed_tries(input, turn.local, spent, |bevel_deg| {
         if !(arc > 0.0) {
             // No turn first: the one arc through the target.
             let (steps, peak) =
@@ -275,11 +292,9 @@ struct ThenArc {
 /// the bevel stays). A circle tangent to the heading through a point `s` to the side and `a`
 /// ahead has curvature 2s / (s² + a²) and turns by 2·atan2(s, a). `None` when the target is
 /// out of the curvature's reach, or nothing is left to turn.
-fn part_then_arc(input: &ReplanInput, share: f32) -> Option<(f32, ThenArc)> {
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
-    let side = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
-    let r = input.radius;
-    let phi = share * heading_turn(side, local.z, r)?;
+fn part_then_arc(input: &ReplanInput, turn: &Turn, share: f32) -> Option<(f32, ThenArc)> {
+    let (local, side, r) = (turn.local, turn.side, input.radius);
+    let phi = share * turn.phi;
     let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
     // The target from the arc's end, in the plane of the turn: across and along its heading.
     let (dx, dz) = (side - r * (1.0 - cos), local.z - r * sin);

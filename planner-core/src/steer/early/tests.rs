@@ -166,11 +166,12 @@ fn part_of_the_turn_then_the_arc_ends_on_the_target() {
         target: V3::new(10.0, 0.0, 90.0),
         ..off_course(&scenario, 0.8)
     };
+    let turn = Turn::of(&input).expect("reachable");
     let r = input.radius;
     let mut last_duty = 0.0f32;
     for k in (1..TURN_SHARES).rev() {
         let share = k as f32 / TURN_SHARES as f32;
-        let (arc, then) = part_then_arc(&input, share).expect("reachable");
+        let (arc, then) = part_then_arc(&input, &turn, share).expect("reachable");
         let phi = arc / r;
         let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
         let start = V3::new(r * (1.0 - cos), 0.0, 50.0 + r * sin);
@@ -211,11 +212,12 @@ fn the_screen_measures_the_clearance_the_check_does() {
             margin: -100.0,
             ..off_course(&scenario, 0.8)
         };
+        let turn = Turn::of(&input).expect("reachable");
         for k in 1..TURN_SHARES {
             let share = k as f32 / TURN_SHARES as f32;
-            let (arc, then) = part_then_arc(&input, share).expect("reachable");
-            let screened = screened_clearance(&input, arc, then);
-            let checked = share_of_turn(&input, arc, then, &(0, 0))
+            let (arc, then) = part_then_arc(&input, &turn, share).expect("reachable");
+            let screened = screened_clearance(&input, &turn, arc, then);
+            let checked = share_of_turn(&input, &turn, arc, then, &(0, 0))
                 .expect("no floor")
                 .prediction
                 .min_clearance;
@@ -225,8 +227,8 @@ fn the_screen_measures_the_clearance_the_check_does() {
             );
         }
         // The whole turn: its arc, then the line.
-        let (arc, line) = whole_turn(&input).expect("reachable");
-        let screened = screened_clearance(&input, arc, line);
+        let (arc, line) = whole_turn(&input, &turn);
+        let screened = screened_clearance(&input, &turn, arc, line);
         let checked = front_loaded(&input, &(0, 0))
             .expect("no floor")
             .prediction
