@@ -150,9 +150,10 @@ const SCREEN_SLACK_MM: f32 = 0.1;
 
 /// The least clearance (mm) of part of the turn (`arc` mm at the full curvature) and the arc
 /// after it (a line at duty 0) from every obstacle, on the ideal arcs in the plane of the turn:
-/// a screen before the check (a few operations an obstacle, no prediction). In a plane scenario the obstacles are
-/// cylinders across the plane and the turn is in the plane: the distance across the plane is
-/// left out, and half the check's sample spacing taken off, as the check counts them.
+/// a screen before the check (a few operations an obstacle, no prediction). In a plane scenario
+/// the obstacles are cylinders across the plane and the turn is in the plane: the distance
+/// across the plane is left out, and half the check's sample spacing taken off, as the check
+/// counts them.
 fn screened_clearance(input: &ReplanInput, turn: &Turn, arc: f32, then: ThenArc) -> f32 {
     let (local, side) = (turn.local, turn.side);
     if !(side > 0.0) {
