@@ -93,9 +93,9 @@ fn whole_turn(input: &ReplanInput, turn: &Turn) -> (f32, ThenArc) {
 
 /// The checks the turn made early may spend in one reading, on what the screen keeps of the
 /// whole turn, then of the shares: each predicts the motor steps along the rest of the path,
-/// about 0.15 M instructions on the device among the paper's spheres, and the reading's budget
-/// is 1 M (docs/firmware.md; the lab row's largest reading is these six, 0.97 M). Eight reached
-/// no more on space-clinical, four less (docs/execution.md, "Part of the turn made early").
+/// and a reading's budget on the device is 1 M instructions (docs/firmware.md; the lab row's
+/// largest reading is 0.40 M). Eight reached no more on space-clinical, four less
+/// (docs/execution.md, "Part of the turn made early").
 const EARLY_CHECKS: usize = 6;
 
 /// The largest share of the turn the obstacles leave (at `wide`'s margin), a tenth less at a
