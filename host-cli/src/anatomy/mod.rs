@@ -6,11 +6,15 @@
 //! `nifti` crate; [`cover`] builds the conservative sphere cover and measures it; [`command`] is
 //! the command line.
 
+pub mod block;
 pub mod command;
 pub mod cover;
+pub mod edt;
 pub mod interior;
 pub mod label_map;
 pub mod markups;
+pub mod measure;
+pub mod medial;
 pub mod mesh;
 pub mod nifti_file;
 pub mod nrrd;

@@ -41,19 +41,19 @@ impl ScenarioFile {
     /// The spheres of entry `a`; `ends` (entry, target) must lie outside them.
     fn anatomy_spheres(&self, a: &AnatomyFile, ends: [[f32; 3]; 2]) -> Result<Vec<Obstacle>> {
         let path = self.relative(&a.file);
-        let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
-        let map = LabelMap::read_with(&path, voxel)?;
         let options = CoverOptions {
             margin_mm: a.margin_mm.unwrap_or(0.0),
-            max_spheres: a.max_spheres.unwrap_or(MAX_OBSTACLES).max(1),
+            max_spheres: a.max_spheres.unwrap_or(MAX_OBSTACLES),
             tightness: a.tightness.unwrap_or(DEFAULT_TIGHTNESS),
-        };
-        let labels = a.labels.clone().unwrap_or_default();
-        let names = a.segments.clone().unwrap_or_default();
+        }
+        .validated()?;
+        let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
+        let map = LabelMap::read_with(&path, voxel, a.unit.as_deref())?;
         let at = |e: anyhow::Error| anyhow!("{}: {e:#}", path.display());
         let [entry, target] = ends;
         let mut out = Vec::new();
-        for segment in selected(&map, &labels, &names).map_err(at)? {
+        let chosen = selected(&map, a.labels.as_deref(), a.segments.as_deref()).map_err(at)?;
+        for segment in chosen {
             let cover = cover_segment(&map, &segment, &options).map_err(at)?;
             for s in cover.spheres {
                 let inside = |p: [f32; 3]| {
