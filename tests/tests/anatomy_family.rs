@@ -159,7 +159,7 @@ fn the_family_is_covered_whole() {
 fn cover_benchmark() {
     let dir = std::env::temp_dir().join(format!("needle-anat-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let case = anatomy_case(2, 1.6);
+    let case = anatomy_case(2, 2.3);
     let voxels = case.labels.labels.iter().filter(|&&l| l != 0).count();
     let path = dir.join("bench.nrrd");
     let style = NrrdStyle {
