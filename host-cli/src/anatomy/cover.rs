@@ -12,7 +12,8 @@
 use super::block::Block;
 use super::label_map::{LabelMap, Segment};
 use super::measure::{dilated, tightness, Dilated, Tightness};
-use super::medial::{deepest_first, depths, medial_cover};
+use super::medial::{deepest_first, depths, medial_cover, Fit};
+pub use super::reach::Reach;
 use anyhow::{bail, Result};
 use serde::Serialize;
 
@@ -166,7 +167,13 @@ fn block_for(map: &LabelMap, voxels: &[[i64; 3]], reach: f64) -> Block {
 }
 
 /// The tightness of `spheres` about the segment, on `b` (which must hold them).
-fn measured(map: &LabelMap, b: &Block, d: &Dilated, spheres: &[Sphere]) -> Tightness {
+fn measured(
+    map: &LabelMap,
+    b: &Block,
+    d: &Dilated,
+    spheres: &[Sphere],
+    reach: Option<&Reach>,
+) -> Tightness {
     let balls: Vec<([f64; 3], f64)> = spheres
         .iter()
         .map(|s| {
@@ -174,17 +181,45 @@ fn measured(map: &LabelMap, b: &Block, d: &Dilated, spheres: &[Sphere]) -> Tight
             ([0, 1, 2].map(|k| g[k] - b.lo[k] as f64), s.radius)
         })
         .collect();
-    tightness(b, d, &balls)
+    let in_reach = |c: usize| {
+        let g = b.cell(c);
+        reach.is_none_or(|r| r.holds(map.world([0, 1, 2].map(|k| (g[k] as i64 + b.lo[k]) as f64))))
+    };
+    tightness(b, d, &balls, Some(&in_reach))
 }
 
-/// The cover (spheres with the margin) that the options ask for, its tightness, and whether it
-/// is as tight as asked.
+/// A cover of a segment that its choice tried.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// The spheres (the margin included).
+    pub spheres: Vec<Sphere>,
+    /// How tight they are; `None` for one sphere around the whole segment when a looser cover
+    /// was taken (measured when chosen).
+    pub tightness: Option<Tightness>,
+    /// Their volume outside the dilated segment where a needle can reach (mm³).
+    pub outside_in_reach_mm3: f64,
+    /// Whether they are as tight as asked (within the reach, when one is given).
+    pub tight_enough: bool,
+}
+
+/// A segment's voxels and the covers tried, loosest first: the last is the one the options ask
+/// for (the fewest spheres as tight as asked, else the tightest tried).
+pub struct Ladder {
+    /// The segment's voxels.
+    pub voxels: Vec<[i64; 3]>,
+    /// The covers tried.
+    pub candidates: Vec<Candidate>,
+}
+
+/// The covers of `voxels` tried for the options, loosest first; with a `reach`, spheres beyond
+/// it take the loosest overshoot, and tightness counts only the volume within it.
 fn choose(
     map: &LabelMap,
     voxels: &[[i64; 3]],
     o: &CoverOptions,
     name: &str,
-) -> Result<(Vec<Sphere>, Tightness, bool)> {
+    reach: Option<&Reach>,
+) -> Result<Vec<Candidate>> {
     let m = o.margin_mm;
     let probe = Block::around(map, voxels, [1, 1, 1]);
     let hd = probe.half_diagonal();
@@ -197,48 +232,93 @@ fn choose(
     one.radius += m;
     let dilated_volume =
         d.bits.iter().map(|x| x.count_ones()).sum::<u32>() as f64 / 8.0 * map.voxel_volume();
-    let over_budget = || {
-        anyhow::anyhow!(
-            "covering {name} within a tightness of {} needs more than {} spheres \
-             (--max-spheres): raise it, or loosen --tightness",
-            o.tightness,
-            o.max_spheres
-        )
+    let one_outside = if reach.is_some_and(|r| r.misses(one.center, one.radius)) {
+        0.0
+    } else {
+        (one.volume() - dilated_volume).max(0.0)
     };
-    if one.volume() <= o.tightness * dilated_volume * (1.0 + 1e-9) {
-        let big = block_for(map, voxels, one.radius);
-        let t = measured(map, &big, &dilated(&big, m), &[one]);
-        return Ok((vec![one], t, true));
+    let one_clear = reach.is_none_or(|x| {
+        [x.entry, x.target]
+            .iter()
+            .all(|&p| dist(one.center, p) > one.radius)
+    });
+    let mut tried = vec![Candidate {
+        spheres: vec![one],
+        tightness: None,
+        outside_in_reach_mm3: one_outside,
+        tight_enough: one_clear && one_outside <= goal * dilated_volume * (1.0 + 1e-9),
+    }];
+    if tried[0].tight_enough {
+        return Ok(tried);
     }
     if o.max_spheres == 1 {
-        return Err(over_budget());
+        bail!(
+            "covering {name} within a tightness of {} needs more than 1 spheres \
+             (--max-spheres): raise it, or loosen --tightness",
+            o.tightness
+        );
     }
     let depth = depths(&b);
     let order = deepest_first(&b, &depth);
-    let mut tightest = None;
+    let to_world = |g: [usize; 3]| map.world([0, 1, 2].map(|a| (g[a] as i64 + b.lo[a]) as f64));
+    let beyond_reach =
+        |g: [usize; 3], r: f64| reach.is_some_and(|x| x.misses(to_world(g), safe(r) + m));
+    let holds_kept_out = |g: [usize; 3], r: f64| {
+        let c = to_world(g);
+        reach.is_some_and(|x| {
+            [x.entry, x.target]
+                .iter()
+                .any(|&p| dist(c, p) <= safe(r) + m)
+        })
+    };
+    let fit = Fit {
+        beyond_reach: &beyond_reach,
+        coarse_k: OVERSHOOTS[0] * hd,
+        holds_kept_out: &holds_kept_out,
+    };
     for k in OVERSHOOTS.map(|x| x * hd) {
         // Over the budget: the tightest cover within it, if a looser overshoot gave one.
-        let Some(balls) = medial_cover(&b, &depth, &order, k, o.max_spheres) else {
-            return tightest.ok_or_else(over_budget);
+        let fit = reach.map(|_| &fit);
+        let Some(balls) = medial_cover(&b, &depth, &order, k, o.max_spheres, fit) else {
+            break;
         };
         let spheres: Vec<Sphere> = balls
             .iter()
             .map(|ball| Sphere {
-                center: map.world([0, 1, 2].map(|a| (ball.cell[a] as i64 + b.lo[a]) as f64)),
+                center: to_world(ball.cell),
                 radius: safe(ball.radius) + m,
             })
             .collect();
-        let t = measured(map, &b, &d, &spheres);
-        if t.outside_dilated <= goal {
-            return Ok((spheres, t, true));
+        let t = measured(map, &b, &d, &spheres, reach);
+        let tight_enough = t.outside_in_reach <= goal;
+        tried.push(Candidate {
+            spheres,
+            tightness: Some(t),
+            outside_in_reach_mm3: t.outside_in_reach * dilated_volume,
+            tight_enough,
+        });
+        if tight_enough {
+            break;
         }
-        tightest = Some((spheres, t, false));
     }
-    Ok(tightest.expect("the overshoots are not empty"))
+    if tried.len() == 1 {
+        bail!(
+            "covering {name} within a tightness of {} needs more than {} spheres \
+             (--max-spheres): raise it, or loosen --tightness",
+            o.tightness,
+            o.max_spheres
+        );
+    }
+    Ok(tried)
 }
 
-/// The cover of `segment` in `map`.
-pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Result<SegmentCover> {
+/// The covers of `segment` tried for the options, loosest first (see [`Ladder`]).
+pub fn ladder(
+    map: &LabelMap,
+    segment: &Segment,
+    o: &CoverOptions,
+    reach: Option<&Reach>,
+) -> Result<Ladder> {
     let o = &o.validated()?;
     let voxels = map.voxels_of(segment.label);
     if voxels.is_empty() {
@@ -248,11 +328,34 @@ pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Res
             segment.label
         );
     }
-    let name = format!("{:?} (label {})", segment.name, segment.label);
-    let (spheres, t, tight_enough) = choose(map, &voxels, o, &name)?;
-    let uncovered = uncovered_voxels(map, &voxels, &spheres, o.margin_mm);
+    let candidates = choose(map, &voxels, o, &name_of(segment), reach)?;
+    Ok(Ladder { voxels, candidates })
+}
+
+fn name_of(segment: &Segment) -> String {
+    format!("{:?} (label {})", segment.name, segment.label)
+}
+
+/// `segment`'s cover `c` of its ladder, checked voxel by voxel on the map's own affine.
+pub fn finish(
+    map: &LabelMap,
+    segment: &Segment,
+    ladder: &Ladder,
+    c: &Candidate,
+    o: &CoverOptions,
+) -> Result<SegmentCover> {
+    let m = o.margin_mm;
+    let voxels = &ladder.voxels;
+    let t = c.tightness.unwrap_or_else(|| {
+        let big = block_for(map, voxels, c.spheres[0].radius);
+        measured(map, &big, &dilated(&big, m), &c.spheres, None)
+    });
+    let uncovered = uncovered_voxels(map, voxels, &c.spheres, m);
     if uncovered > 0 {
-        bail!("internal error: the cover of {name} leaves {uncovered} voxels out");
+        bail!(
+            "internal error: the cover of {} leaves {uncovered} voxels out",
+            name_of(segment)
+        );
     }
     let volume = voxels.len() as f64 * map.voxel_volume();
     Ok(SegmentCover {
@@ -260,13 +363,20 @@ pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Res
         label: segment.label,
         voxels: voxels.len(),
         volume_mm3: volume,
-        spheres,
+        spheres: c.spheres.clone(),
         outside_ratio: t.outside,
         outside_dilated_ratio: t.outside_dilated,
         dilated_volume_mm3: t.dilated_over_segment * volume,
-        tight_enough,
+        tight_enough: c.tight_enough,
         farthest_mm: t.farthest,
     })
+}
+
+/// The cover of `segment` in `map`.
+pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Result<SegmentCover> {
+    let l = ladder(map, segment, o, None)?;
+    let last = l.candidates.last().expect("a ladder is never empty");
+    finish(map, segment, &l, last, o)
 }
 
 /// The voxels of `voxels` that no sphere of `spheres`, shrunk by `margin`, holds whole (all eight
@@ -336,4 +446,19 @@ pub fn uncovered_corners(map: &LabelMap, voxels: &[[i64; 3]], spheres: &[Sphere]
         })
         .filter(|&p| !spheres.iter().any(|s| dist(s.center, p) <= s.radius))
         .count()
+}
+
+/// The half diagonal of `map`'s voxels (mm) and the distance (mm) from `p` to the nearest
+/// centre of `voxels`: a margin below their difference keeps `p` outside every cover of
+/// `voxels` a scenario makes (each voxel can be held by a sphere about its own centre).
+pub fn clear_of(map: &LabelMap, voxels: &[[i64; 3]], p: [f64; 3]) -> (f64, f64) {
+    let half_diagonal = corner_offsets(map)
+        .iter()
+        .map(|o| (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt())
+        .fold(0.0, f64::max);
+    let nearest = voxels
+        .iter()
+        .map(|v| dist(centre_of(map, v), p))
+        .fold(f64::INFINITY, f64::min);
+    (half_diagonal, nearest)
 }

@@ -72,6 +72,8 @@ pub struct Tightness {
     pub outside: f64,
     /// Its volume outside the dilated segment over the dilated segment's volume.
     pub outside_dilated: f64,
+    /// The part of `outside_dilated` a needle can reach (all of it when no reach is given).
+    pub outside_in_reach: f64,
     /// The dilated segment's volume over the segment's (1 without a margin).
     pub dilated_over_segment: f64,
     /// The largest distance (mm) from a voxel centre inside the cover to the segment's nearest
@@ -80,8 +82,14 @@ pub struct Tightness {
 }
 
 /// The tightness of the balls `(centre in cells, radius mm)` about the segment of `b`, whose
-/// dilation is `d`. The balls must lie inside the box.
-pub fn tightness(b: &Block, d: &Dilated, balls: &[([f64; 3], f64)]) -> Tightness {
+/// dilation is `d`; `in_reach` tells the cells a needle can reach (every cell when `None`).
+/// The balls must lie inside the box.
+pub fn tightness(
+    b: &Block,
+    d: &Dilated,
+    balls: &[([f64; 3], f64)],
+    in_reach: Option<&dyn Fn(usize) -> bool>,
+) -> Tightness {
     let offsets = samples();
     // Bits 0-7: the samples inside some ball; bit 8: the centre.
     let mut cover = vec![0u16; b.inside.len()];
@@ -110,6 +118,7 @@ pub fn tightness(b: &Block, d: &Dilated, balls: &[([f64; 3], f64)]) -> Tightness
         }
     }
     let (mut out, mut out_dilated, mut dilated, mut voxels) = (0u64, 0u64, 0u64, 0u64);
+    let mut out_reach = 0u64;
     let mut farthest = 0.0f64;
     for (c, &bits) in cover.iter().enumerate() {
         let samples = (bits & 0xff) as u8;
@@ -119,7 +128,11 @@ pub fn tightness(b: &Block, d: &Dilated, balls: &[([f64; 3], f64)]) -> Tightness
             continue;
         }
         out += u64::from(samples.count_ones());
-        out_dilated += u64::from((samples & !d.bits[c]).count_ones());
+        let beyond = u64::from((samples & !d.bits[c]).count_ones());
+        out_dilated += beyond;
+        if beyond > 0 && in_reach.is_none_or(|r| r(c)) {
+            out_reach += beyond;
+        }
         if bits & 0x100 != 0 {
             farthest = farthest.max(d.to_segment[c]);
         }
@@ -128,6 +141,7 @@ pub fn tightness(b: &Block, d: &Dilated, balls: &[([f64; 3], f64)]) -> Tightness
     Tightness {
         outside: out as f64 / v8,
         outside_dilated: out_dilated as f64 / dilated.max(1) as f64,
+        outside_in_reach: out_reach as f64 / dilated.max(1) as f64,
         dilated_over_segment: dilated as f64 / v8,
         farthest,
     }

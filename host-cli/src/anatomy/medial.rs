@@ -34,14 +34,27 @@ pub fn deepest_first(b: &Block, depth: &[f64]) -> Vec<usize> {
     order
 }
 
-/// The medial balls with overshoot `k` (mm) that hold every cell of the segment; `None` when
-/// that takes more than `most` balls.
+/// What a cover must fit around besides the segment: balls (centre cell in box coordinates,
+/// radius in mm without the margin) where no path goes may be coarse, and no ball may hold a
+/// point kept out (the entry, the target).
+pub struct Fit<'a> {
+    /// Whether the ball lies wholly where no path goes.
+    pub beyond_reach: &'a dyn Fn([usize; 3], f64) -> bool,
+    /// The overshoot (mm) of balls beyond reach.
+    pub coarse_k: f64,
+    /// Whether the ball holds a point kept out.
+    pub holds_kept_out: &'a dyn Fn([usize; 3], f64) -> bool,
+}
+
+/// The medial balls with overshoot `k` (mm) that hold every cell of the segment, fitted to
+/// `fit` when given; `None` when that takes more than `most` balls.
 pub fn medial_cover(
     b: &Block,
     depth: &[f64],
     order: &[usize],
     k: f64,
     most: usize,
+    fit: Option<&Fit<'_>>,
 ) -> Option<Vec<Ball>> {
     let mut held = vec![false; b.inside.len()];
     let mut balls = Vec::new();
@@ -53,12 +66,41 @@ pub fn medial_cover(
             return None;
         }
         let uc = b.cell(u);
-        let c = climb(b, depth, uc, k);
-        let radius = (depth[b.index(c)].sqrt() + k).max(b.farthest_corner(c, uc));
-        hold(b, &mut held, c, radius);
-        balls.push(Ball { cell: c, radius });
+        let ball = match fit {
+            None => place(b, depth, uc, k),
+            Some(f) => fitted(b, depth, uc, k, f),
+        };
+        hold(b, &mut held, ball.cell, ball.radius);
+        balls.push(ball);
     }
     Some(pruned(b, balls))
+}
+
+/// The ball that holds cell `u`: coarse where no path goes; else with overshoot `k`, less as
+/// far as it takes to keep the points kept out outside it, down to the ball about `u` alone.
+fn fitted(b: &Block, depth: &[f64], u: [usize; 3], k: f64, f: &Fit<'_>) -> Ball {
+    if f.coarse_k > k {
+        let coarse = place(b, depth, u, f.coarse_k);
+        if (f.beyond_reach)(coarse.cell, coarse.radius) {
+            return coarse;
+        }
+    }
+    let clear = |ball: &Ball| !(f.holds_kept_out)(ball.cell, ball.radius);
+    [1.0, 0.5, 0.25, 0.0]
+        .iter()
+        .map(|s| place(b, depth, u, s * k))
+        .find(clear)
+        .unwrap_or(Ball {
+            cell: u,
+            radius: b.farthest_corner(u, u),
+        })
+}
+
+/// The ball with overshoot `k` that holds cell `u`, on the medial axis above it.
+fn place(b: &Block, depth: &[f64], u: [usize; 3], k: f64) -> Ball {
+    let c = climb(b, depth, u, k);
+    let radius = (depth[b.index(c)].sqrt() + k).max(b.farthest_corner(c, u));
+    Ball { cell: c, radius }
 }
 
 /// The cells of the segment that the ball holds whole (box indices).

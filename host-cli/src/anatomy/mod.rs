@@ -7,6 +7,7 @@
 //! the command line.
 
 pub mod block;
+pub mod budget;
 pub mod command;
 pub mod cover;
 pub mod edt;
@@ -18,6 +19,7 @@ pub mod medial;
 pub mod mesh;
 pub mod nifti_file;
 pub mod nrrd;
+pub mod reach;
 
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,107 @@
+//! `[[anatomy]]` in a scenario: a target the margin puts inside a segment's cover is an error
+//! that names the segment, by how much, and the largest margin that plans (and that margin
+//! plans); a scenario whose covers need more than the device's spheres is loosened to fit, and
+//! `needle plan` says so.
+
+use needle_e2e::anatomy_family::anatomy_case;
+use needle_e2e::label_files::{write_nrrd, Labels, NrrdStyle};
+use needle_e2e::needle;
+use std::path::{Path, PathBuf};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("needle-anat-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write_map(dir: &Path, labels: &Labels) {
+    let style = NrrdStyle {
+        space: "right-anterior-superior",
+        gzip: true,
+        pairs: &[],
+    };
+    write_nrrd(&dir.join("map.nrrd"), labels, &style);
+}
+
+fn scenario(dir: &Path, entry: [f64; 3], target: [f64; 3], margin: f64) -> PathBuf {
+    let d: Vec<f64> = (0..3).map(|k| target[k] - entry[k]).collect();
+    let text = format!(
+        "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = {entry:?}\ndirection = {d:?}\n\n\
+         [target]\nposition = {target:?}\n\n[[anatomy]]\nfile = \"map.nrrd\"\nmargin_mm = {margin:?}\n"
+    );
+    let path = dir.join(format!("margin-{margin}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A cube of 10 voxels of 1 mm (faces at 4.5 and 14.5 mm) and a target 1.5 mm beyond a face:
+/// 2 mm from the nearest voxel centre, so a sphere about that voxel with the margin holds it
+/// unless the margin is below 2 less the half diagonal (0.866 mm).
+#[test]
+fn a_target_the_margin_covers_names_the_segment_and_the_largest_margin() {
+    let dir = temp_dir("margin");
+    let a = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    let cube = Labels::of([20, 20, 20], a, |i, j, k| {
+        i16::from([i, j, k].iter().all(|x| (5..15).contains(x)))
+    });
+    write_map(&dir, &cube);
+    let (entry, target) = ([60.0, 9.0, 9.0], [16.0, 9.0, 9.0]);
+    let too_wide = scenario(&dir, entry, target, 2.0);
+    let out = needle()
+        .args(["plan", too_wide.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    for part in [
+        "the target lies inside the cover of segment \"label 1\"",
+        "2.00 mm from the nearest voxel's centre",
+        "0.87 mm too far",
+        "a margin of at most 1.13 mm keeps the target outside",
+    ] {
+        assert!(err.contains(part), "{part:?} not in: {err}");
+    }
+    let largest = scenario(&dir, entry, target, 1.13);
+    let out = needle()
+        .args(["plan", largest.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Map 3 of the family covered as tight as asked takes over 256 spheres: the scenario is
+/// loosened to the device's 256, `needle plan` plans it and says on stderr which segments were
+/// loosened.
+#[test]
+fn a_scenario_over_the_devices_spheres_is_loosened_and_says_so() {
+    let dir = temp_dir("budget");
+    let case = anatomy_case(3, 0.6);
+    write_map(&dir, &case.labels);
+    let d = case.labels.dims;
+    let a = case.labels.ijk_to_ras;
+    let top = [0, 1, 2].map(|r| {
+        let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
+        a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]
+    });
+    let path = scenario(&dir, top, case.target, 1.0);
+    let out = needle()
+        .args(["plan", path.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("looser than tightness 1.5 asks")
+            && err.contains("holds at most 256 anatomy spheres"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
