@@ -46,3 +46,11 @@ def test_labels_and_segments_together_or_empty_are_refused():
     with pytest.raises(npl.ScenarioError) as raised:
         npl.cover(MAP, max_spheres=0)
     assert "at least 1, not 0" in str(raised.value)
+
+
+def test_the_defaults_are_the_commands():
+    # The wrapper's own defaults (32 spheres, tightness 3) once gave another cover than the
+    # command's (512, 1.5).
+    got = npl.cover(MAP, margin=1.0)
+    want = needle_json("cover", str(MAP), "--margin", "1")
+    assert got == want

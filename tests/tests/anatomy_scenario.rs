@@ -105,3 +105,75 @@ fn a_scenario_over_the_devices_spheres_is_loosened_and_says_so() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The best path's clearance `needle plan` reports against the label map, beside the least
+/// distance from the path (its printed points, joined by lines 0.05 mm apart) to the centres
+/// of the labelled voxels, found one by one in f64 here: within half a voxel's diagonal, and
+/// no nearer than the margin less that. Maps 0 (1 mm voxels) and 1 (0.7 x 0.7 x 2.5 mm) of
+/// the family.
+#[test]
+fn the_label_map_clearance_is_the_distance_to_the_voxels() {
+    let dir = temp_dir("clearance");
+    for seed in [0u64, 1] {
+        let case = anatomy_case(seed, 0.6);
+        write_map(&dir, &case.labels);
+        let m = &case.labels;
+        let a = m.ijk_to_ras;
+        let world = |g: [f64; 3]| {
+            [0, 1, 2].map(|r| a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3])
+        };
+        let d = m.dims;
+        let top = world([0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0]);
+        let path = scenario(&dir, top, case.target, 1.0);
+        let out = needle()
+            .args(["plan", path.to_str().unwrap(), "--json"])
+            .output()
+            .unwrap();
+        let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let best = &r["best"];
+        let reported = best["label_map_clearance_mm"].as_f64().unwrap();
+        let points: Vec<[f64; 3]> = best["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| [0, 1, 2].map(|k| p[k].as_f64().unwrap()))
+            .collect();
+        let mut centres = Vec::new();
+        for k in 0..d[2] {
+            for j in 0..d[1] {
+                for i in 0..d[0] {
+                    if m.labels[i + d[0] * (j + d[1] * k)] != 0 {
+                        centres.push(world([i as f64, j as f64, k as f64]));
+                    }
+                }
+            }
+        }
+        let mut least = f64::INFINITY;
+        for w in points.windows(2) {
+            let steps = ((0..3)
+                .map(|k| (w[1][k] - w[0][k]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / 0.05)
+                .ceil()
+                .max(1.0) as usize;
+            for s in 0..=steps {
+                let t = s as f64 / steps as f64;
+                let p = [0, 1, 2].map(|k| w[0][k] + t * (w[1][k] - w[0][k]));
+                for c in &centres {
+                    let d2: f64 = (0..3).map(|k| (p[k] - c[k]).powi(2)).sum();
+                    least = least.min(d2);
+                }
+            }
+        }
+        let least = least.sqrt();
+        let half_diagonal = 0.5 * (0..3).map(|k| a[k][k] * a[k][k]).sum::<f64>().sqrt();
+        println!("seed {seed}: reported {reported:.3} mm, reference {least:.3} mm");
+        assert!(
+            (reported - least).abs() <= half_diagonal,
+            "seed {seed}: {reported} against {least}"
+        );
+        assert!(least >= 1.0 - half_diagonal, "seed {seed}: {least}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

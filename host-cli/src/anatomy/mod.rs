@@ -10,6 +10,7 @@ pub mod block;
 pub mod budget;
 pub mod command;
 pub mod cover;
+pub mod distance;
 pub mod edt;
 pub mod interior;
 pub mod label_map;
