@@ -171,6 +171,12 @@ fn print_plan(args: &PlanArgs, made: &LocalPlan, execution: &Execution) -> Resul
     Ok(())
 }
 
+/// Says on stderr which files `--export` wrote (stdout stays the report).
+fn wrote(files: &[PathBuf]) {
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    eprintln!("wrote {}", names.join(", "));
+}
+
 /// With `[[anatomy]]`: the best path's least distance (mm) to the covered segments' voxels,
 /// measured on the label maps themselves.
 fn label_map_clearance(args: &PlanArgs, made: &LocalPlan) -> Result<Option<f64>> {
@@ -204,7 +210,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
         analysis::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
     }
     if let Some(dir) = &args.export {
-        needle_cli::report::slicer::export(dir, scenario, report)?;
+        wrote(&needle_cli::report::slicer::export(dir, scenario, report)?);
     }
     made.verdict()
 }
@@ -222,7 +228,11 @@ fn send(args: &SendArgs) -> Result<()> {
         return reachable(report);
     }
     if let Some(dir) = &args.plan.export {
-        needle_cli::report::slicer::export(dir, &made.scenario, report)?;
+        wrote(&needle_cli::report::slicer::export(
+            dir,
+            &made.scenario,
+            report,
+        )?);
     }
     made.verdict()
 }
