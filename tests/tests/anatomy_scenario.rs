@@ -1,12 +1,16 @@
 //! `[[anatomy]]` in a scenario: a target the margin puts inside a segment's cover is an error
 //! that names the segment, by how much, and the largest margin that plans (and that margin
-//! plans); a scenario whose covers need more than the device's spheres is loosened to fit, and
-//! `needle plan` says so.
+//! plans); a scenario whose covers need more than the device's spheres is loosened to fit,
+//! `needle plan` says so and the device plans it as the host does; the clearance reported
+//! against the label map is the distance to the voxels.
 
 use needle_e2e::anatomy_family::anatomy_case;
 use needle_e2e::label_files::{write_nrrd, Labels, NrrdStyle};
 use needle_e2e::needle;
 use std::path::{Path, PathBuf};
+use wire_support::{run_needle, SimProcess};
+
+mod wire_support;
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("needle-anat-{name}-{}", std::process::id()));
@@ -78,31 +82,50 @@ fn a_target_the_margin_covers_names_the_segment_and_the_largest_margin() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Map 3 of the family covered as tight as asked takes over 256 spheres: the scenario is
-/// loosened to the device's 256, `needle plan` plans it and says on stderr which segments were
-/// loosened.
-#[test]
-fn a_scenario_over_the_devices_spheres_is_loosened_and_says_so() {
-    let dir = temp_dir("budget");
+/// Writes map 3 of the family, whose covers as tight as asked take over 256 spheres, and a
+/// scenario from above it to its lesion with a 1 mm margin.
+fn map_three(dir: &Path) -> PathBuf {
     let case = anatomy_case(3, 0.6);
-    write_map(&dir, &case.labels);
+    write_map(dir, &case.labels);
     let d = case.labels.dims;
     let a = case.labels.ijk_to_ras;
     let top = [0, 1, 2].map(|r| {
         let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
         a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]
     });
-    let path = scenario(&dir, top, case.target, 1.0);
-    let out = needle()
-        .args(["plan", path.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
+    scenario(dir, top, case.target, 1.0)
+}
+
+/// Map 3 is loosened to the device's 256 spheres; `needle plan` plans it and says on stderr
+/// which segments were loosened; `needle send` to hil-sim plans it as the host does, bit for
+/// bit, and the host measures the device's plan against the label map alike.
+#[test]
+fn a_scenario_over_the_devices_spheres_is_loosened_and_the_device_plans_it() {
+    let dir = temp_dir("budget");
+    let path = map_three(&dir);
+    let file = path.to_str().unwrap();
+    let (ok_l, out_l, err_l) = run_needle(&["plan", file, "--json"]);
     assert!(
-        err.contains("looser than tightness 1.5 asks")
-            && err.contains("holds at most 256 anatomy spheres"),
-        "{err}"
+        err_l.contains("looser than tightness 1.5 asks")
+            && err_l.contains("holds at most 256 anatomy spheres"),
+        "{err_l}"
     );
+    let sim = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
+    let send = [
+        "send",
+        file,
+        "--tcp",
+        sim.address.as_str(),
+        "--timeout",
+        "120",
+        "--json",
+    ];
+    let (ok_r, out_r, err_r) = run_needle(&send);
+    assert!(ok_l && ok_r, "{err_l} / {err_r}");
+    let strip = |s: &str| s.split("\"stats\"").next().unwrap_or(s).to_string();
+    assert_eq!(strip(&out_l), strip(&out_r));
+    assert!(out_l.contains("\"best\":{"), "{out_l}");
+    assert!(out_r.contains("\"label_map_clearance_mm\":"), "{out_r}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
