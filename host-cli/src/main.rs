@@ -157,6 +157,10 @@ fn print_plan(args: &PlanArgs, made: &LocalPlan, execution: &Execution) -> Resul
         return Ok(());
     }
     write!(out, "{}", made.table(execution))?;
+    let file = needle_cli::scenario::file::ScenarioFile::load(&args.file)?;
+    for line in file.target_lines()? {
+        writeln!(out, "{line}")?;
+    }
     if let Some(c) = clearance {
         writeln!(
             out,

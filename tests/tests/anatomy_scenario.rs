@@ -200,3 +200,47 @@ fn the_label_map_clearance_is_the_distance_to_the_voxels() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `needle plan` prints where the target lies: RAS, and its voxel (i, j, k) in each map (the
+/// same voxel whether the file is LPS or RAS); a target given as a label is named and printed
+/// (it was never printed).
+#[test]
+fn the_target_is_printed_in_ras_and_in_voxels() {
+    let dir = temp_dir("target");
+    let a = [
+        [0.5, 0.0, 0.0, -3.0],
+        [0.0, 1.0, 0.0, 2.0],
+        [0.0, 0.0, 2.0, 1.0],
+    ];
+    let cube = Labels::of([20, 20, 20], a, |i, j, k| {
+        i16::from([i, j, k].iter().all(|x| (5..15).contains(x)))
+    });
+    for space in ["left-posterior-superior", "right-anterior-superior"] {
+        let style = NrrdStyle {
+            space,
+            gzip: false,
+            pairs: &[],
+        };
+        write_nrrd(&dir.join("map.nrrd"), &cube, &style);
+        // Voxel (18, 9, 9): RAS (-3 + 9, 2 + 9, 1 + 18).
+        let path = scenario(&dir, [40.0, 11.0, 19.0], [6.0, 11.0, 19.0], 0.5);
+        let (ok, out, err) = run_needle(&["plan", path.to_str().unwrap()]);
+        assert!(ok, "{err}");
+        assert!(out.contains("target: RAS (6.00, 11.00, 19.00) mm"), "{out}");
+        assert!(
+            out.contains("voxel (i, j, k) (18.00, 9.00, 9.00) of map.nrrd"),
+            "{space}: {out}"
+        );
+    }
+    let text = "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = [40.0, 11.0, 19.0]\n\
+                direction = [-1.0, 0.0, 0.0]\n\n[target]\nlabel = 1\nlabel_file = \"map.nrrd\"\n";
+    let path = dir.join("label.toml");
+    std::fs::write(&path, text).unwrap();
+    let (ok, out, err) = run_needle(&["plan", path.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("target: the deepest point of label 1, RAS ("),
+        "{out}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,7 @@
 //! A plan measured against the segmentation itself: the best path's least distance to the
 //! voxels of the segments a scenario's `[[anatomy]]` entries cover (the cover is the optimiser's
-//! smooth model and the device's obstacle list; the label map is the organ).
+//! smooth model and the device's obstacle list; the label map is the organ), and where the
+//! target lies in the maps' voxels.
 
 use super::file::ScenarioFile;
 use crate::anatomy::command::selected;
@@ -48,5 +49,39 @@ impl ScenarioFile {
             least = Some(least.map_or(d, |l| l.min(d)));
         }
         Ok(least)
+    }
+}
+
+impl ScenarioFile {
+    /// Where the target lies: its RAS point (and the segment whose deepest point it is, when
+    /// given as a label), and its voxel coordinates (i, j, k) in each `[[anatomy]]` map.
+    pub fn target_lines(&self) -> Result<Vec<String>> {
+        if self.anatomy.is_empty() && self.target.label.is_none() {
+            return Ok(Vec::new());
+        }
+        let t = self.target_position()?.map(f64::from);
+        let what = match self.target.label {
+            Some(l) => format!("the deepest point of label {l}, "),
+            None => String::new(),
+        };
+        let mut lines = vec![format!(
+            "target: {what}RAS ({:.2}, {:.2}, {:.2}) mm",
+            t[0], t[1], t[2]
+        )];
+        for a in &self.anatomy {
+            let path = self.relative(&a.file);
+            let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
+            let map = LabelMap::read_with(&path, voxel, a.unit.as_deref())?;
+            let g = map.grid(t);
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            lines.push(format!(
+                "  voxel (i, j, k) ({:.2}, {:.2}, {:.2}) of {name}",
+                g[0], g[1], g[2]
+            ));
+        }
+        Ok(lines)
     }
 }
