@@ -344,3 +344,29 @@ fn plan_and_simulate_plots_slice_the_anatomy() {
     assert!(text.contains("closed loop, reached the target"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `needle plot examples/anatomy.toml` draws the plan `needle plan` prints: planned itself, its
+/// SVG is the one drawn from `needle plan --json`'s file (it planned without the collision
+/// bound's rounds, and drew another best path).
+#[test]
+fn plot_draws_the_plan_that_plan_prints() {
+    let dir = std::env::temp_dir().join(format!("needle-plot-plan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = needle_e2e::example("anatomy");
+    let file = file.to_str().unwrap();
+    let plan = needle_e2e::needle_stdout(&["plan", file, "--json"]);
+    let plan_path = dir.join("plan.json");
+    std::fs::write(&plan_path, plan).unwrap();
+    let (own, from_file) = (dir.join("own.svg"), dir.join("file.svg"));
+    needle_e2e::needle_stdout(&["plot", file, "-o", own.to_str().unwrap()]);
+    let args = ["plot", file, "--plan", plan_path.to_str().unwrap(), "-o"];
+    let mut args = args.to_vec();
+    args.push(from_file.to_str().unwrap());
+    needle_e2e::needle_stdout(&args);
+    let (a, b) = (
+        std::fs::read(&own).unwrap(),
+        std::fs::read(&from_file).unwrap(),
+    );
+    assert!(a == b, "the plot drew another plan than needle plan");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -133,11 +133,16 @@ pub struct PlotArgs {
 
 /// Runs `needle plot`.
 pub fn run_plot(a: &PlotArgs) -> Result<()> {
-    let (scenario, shapes) = a.scenario.load()?;
+    let (mut scenario, shapes) = a.scenario.load()?;
     let (paths, notes) = match &a.plan {
         None => {
-            let report = planner_core::plan(&scenario).context("planning failed")?;
-            plan_scene_paths(&scenario, &report)
+            // Planned as `needle plan` plans it (its execution, the bound's rounds, the
+            // curvature reserve kept), so the plot draws the plan the command prints.
+            let execution = crate::scenario::load_execution(&a.scenario.source.file)?;
+            let made = crate::report::local::plan_locally(&scenario, &execution)
+                .context("planning failed")?;
+            scenario = made.scenario.clone();
+            plan_scene_paths(&scenario, made.report())
         }
         Some(p) => {
             let text = std::fs::read_to_string(p)
