@@ -370,3 +370,66 @@ fn plot_draws_the_plan_that_plan_prints() {
     assert!(a == b, "the plot drew another plan than needle plan");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The best path's stretches within 2 mm of a slice's plane are marked on it, and only those: on
+/// `examples/anatomy.toml`, every marked point is a point of the plan within 2 mm of the plane
+/// and every such point is marked; a plane 20 mm from the path marks nothing (its projection
+/// alone seemed to cross the organs).
+#[test]
+fn the_slices_mark_where_the_path_is_in_the_plane() {
+    let dir = std::env::temp_dir().join(format!("needle-plot-depth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = needle_e2e::example("anatomy");
+    let file = file.to_str().unwrap();
+    let plan = needle_e2e::needle_stdout(&["plan", file, "--json"]);
+    let plan_path = dir.join("plan.json");
+    std::fs::write(&plan_path, &plan).unwrap();
+    let plan: serde_json::Value = serde_json::from_slice(&plan).unwrap();
+    let points: Vec<[f64; 3]> = serde_json::from_value(plan["best"]["points"].clone()).unwrap();
+    let mut marked_far = usize::MAX;
+    for at in ["8,30.8,45", "-12,20,40"] {
+        let out = dir.join("slices.svg");
+        let slice_at = format!("--slice-at={at}");
+        let args = ["plot", file, "--plan", plan_path.to_str().unwrap()];
+        let mut args = args.to_vec();
+        args.extend([slice_at.as_str(), "-o", out.to_str().unwrap()]);
+        needle_e2e::needle_stdout(&args);
+        let svg = std::fs::read_to_string(&out).unwrap();
+        let at: Vec<f64> = at.split(',').map(|v| v.parse().unwrap()).collect();
+        for p in panels(&svg) {
+            let [h, v] = p.axes;
+            let fixed = 3 - h - v;
+            let mut marked: Vec<[f64; 2]> = p
+                .elements(r#"polyline class="path in-slice""#)
+                .iter()
+                .flat_map(|e| attr(e, "points").split(' '))
+                .map(|xy| {
+                    let (x, y) = xy.split_once(',').unwrap();
+                    p.world(x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            marked.dedup_by(|a, b| (a[0] - b[0]).abs() < 1e-3 && (a[1] - b[1]).abs() < 1e-3);
+            let near: Vec<&[f64; 3]> = points
+                .iter()
+                .filter(|q| (q[fixed] - at[fixed]).abs() <= 2.0)
+                .collect();
+            assert_eq!(marked.len(), near.len(), "plane {fixed} at {at:?}");
+            for (m, q) in marked.iter().zip(&near) {
+                assert!(
+                    (m[0] - q[h]).abs() < 0.01 && (m[1] - q[v]).abs() < 0.01,
+                    "{m:?} {q:?}"
+                );
+            }
+            if fixed == 0 && at[0] < 0.0 {
+                marked_far = marked.len();
+                let nearest = points
+                    .iter()
+                    .map(|q| (q[0] - at[0]).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest > 15.0, "{nearest}");
+            }
+        }
+    }
+    assert_eq!(marked_far, 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

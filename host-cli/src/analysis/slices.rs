@@ -1,7 +1,8 @@
 //! `needle plot` of a scenario with `[[anatomy]]`: three orthogonal slices of its label maps
 //! (axial, coronal, sagittal) through one point, with the chosen segments filled, the other
 //! labels faint, the covering spheres cut by each plane, and the planned (and simulated) paths
-//! projected onto it.
+//! projected onto it, the best path's stretches within [`SLAB_MM`] of the plane marked (a path
+//! projected from far off the plane would seem to cross what the plane shows).
 //!
 //! Every panel carries `data-px="A B S"`: a world point (h, v) in mm is drawn at pixel
 //! (A + S h, B - S v), so tests and scripts can read coordinates back.
@@ -11,6 +12,9 @@ use super::slice_maps::{label_at, map_box, SliceMap};
 use super::svg::{esc, Svg};
 use planner_core::Scenario;
 use std::fmt::Write as _;
+
+/// How near the plane (mm) a stretch of the best path is marked as in the slice.
+pub const SLAB_MM: f64 = 2.0;
 
 /// What the slice picture shows.
 pub struct SliceScene<'a> {
@@ -159,9 +163,11 @@ fn legend_lines(s: &SliceScene<'_>) -> Vec<LegendLine> {
     out.extend(s.notes.iter().map(|n| (None, n.clone())));
     out.push((
         None,
-        "RAS mm (+x right, +y anterior, +z superior); paths, ▼ entry and ◎ target projected \
-         onto each plane; dashed: the other two planes"
-            .into(),
+        format!(
+            "RAS mm (+x right, +y anterior, +z superior); paths, ▼ entry and ◎ target projected \
+             onto each plane; dark band: the best path within {SLAB_MM} mm of the plane; dashed: \
+             the other two planes"
+        ),
     ));
     out
 }
@@ -225,6 +231,7 @@ fn panel(
     sections(svg, view, fixed, scenario, s.at[fixed]);
     strands(svg, view, s.executed);
     plan_paths(svg, view, s.paths);
+    in_slice(svg, view, s.paths, fixed, s.at[fixed]);
     ends(svg, view, scenario);
     svg.raw("</g></g>");
 }
@@ -332,6 +339,33 @@ fn strands(svg: &mut Svg, view: &View, executed: &[Strands]) {
             svg.polyline(&pts, &e.class, &style, "");
         }
         svg.end_group();
+    }
+}
+
+/// The best path's runs of points within [`SLAB_MM`] of the plane `axis = at`, as dark bands
+/// over its projection (a run of one point as a dot).
+fn in_slice(svg: &mut Svg, view: &View, paths: &[PlotPath], axis: usize, at: f64) {
+    for p in paths.iter().filter(|p| p.best) {
+        let near = |q: &[f32; 3]| (f64::from(q[axis]) - at).abs() <= SLAB_MM;
+        let mut run: Vec<[f64; 2]> = Vec::new();
+        for q in p.points.iter().chain(std::iter::once(&[f32::NAN; 3])) {
+            if near(q) {
+                run.push(view.px(*q));
+                continue;
+            }
+            if run.len() == 1 {
+                run.push(run[0]);
+            }
+            if !run.is_empty() {
+                svg.polyline(
+                    &run,
+                    "path in-slice",
+                    "stroke:#000;stroke-width:7;stroke-opacity:0.35;stroke-linecap:round",
+                    "",
+                );
+            }
+            run.clear();
+        }
     }
 }
 
