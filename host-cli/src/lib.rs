@@ -7,6 +7,7 @@ pub mod bench;
 pub mod benchmark;
 pub mod device;
 pub mod lab;
+pub mod progress;
 pub mod random;
 pub mod report;
 pub mod reserve;

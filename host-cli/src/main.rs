@@ -204,6 +204,9 @@ fn reachable(report: &PlanReport) -> Result<()> {
 }
 
 fn plan(args: &PlanArgs) -> Result<()> {
+    if !args.json {
+        needle_cli::progress::enable();
+    }
     let scenario = load(args)?;
     let execution = load_execution(&args.file)?;
     let made = plan_locally(&scenario, &execution)?;
@@ -220,6 +223,9 @@ fn plan(args: &PlanArgs) -> Result<()> {
 }
 
 fn send(args: &SendArgs) -> Result<()> {
+    if !args.plan.json {
+        needle_cli::progress::enable();
+    }
     let scenario = load(&args.plan)?;
     let execution = load_execution(&args.plan.file)?;
     let made = match device::checked::plan_checked(&scenario, &execution, &args.link)? {

@@ -166,10 +166,18 @@ pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
     .validated()?;
     let map = LabelMap::read_with(&a.image, a.voxel, a.unit.as_deref())?;
     let at = |e: anyhow::Error| anyhow!("{}: {e}", a.image.display());
-    selected(&map, a.labels.as_deref(), a.segments.as_deref())
-        .map_err(at)?
+    let chosen = selected(&map, a.labels.as_deref(), a.segments.as_deref()).map_err(at)?;
+    if !a.json {
+        crate::progress::enable();
+    }
+    let mut progress = crate::progress::Progress::new(format!("covering {}", a.image.display()));
+    chosen
         .iter()
-        .map(|s| cover_segment(&map, s, &options).map_err(at))
+        .enumerate()
+        .map(|(n, s)| {
+            progress.step(n, chosen.len(), &format!("segment {:?}", s.name));
+            cover_segment(&map, s, &options).map_err(at)
+        })
         .collect()
 }
 

@@ -107,7 +107,10 @@ impl ScenarioFile {
         let map = std::rc::Rc::new(LabelMap::read_with(&path, voxel, a.unit.as_deref())?);
         let at = |e: anyhow::Error| anyhow!("{}: {e:#}", path.display());
         let chosen = selected(&map, a.labels.as_deref(), a.segments.as_deref()).map_err(at)?;
-        for segment in chosen {
+        let mut progress = crate::progress::Progress::new(format!("covering {}", path.display()));
+        let total = chosen.len();
+        for (done, segment) in chosen.into_iter().enumerate() {
+            progress.step(done, total, &format!("segment {:?}", segment.name));
             // A point no cover can keep out is an error before the cover is tried.
             let voxels = map.voxels_of(segment.label);
             for (what, p) in [("entry", reach.entry), ("target", reach.target)] {
