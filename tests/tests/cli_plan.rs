@@ -264,6 +264,7 @@ fn assert_schedule_keys(v: &Value) -> Vec<String> {
             "rotate" => &["angle_deg", "duration_s", "op"],
             "insert" => &["duration_s", "length_mm", "op"],
             "insert_spin" => &["duration_s", "length_mm", "op", "turns"],
+            "insert_duty" => &["duration_s", "duty", "length_mm", "op"],
             other => panic!("unknown op {other}"),
         };
         assert_eq!(keys, want, "{step}");

@@ -159,7 +159,7 @@ fn table_and_plot() {
     );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
-        text.starts_with("simulated open-loop insertions of RL"),
+        text.starts_with("simulated open-loop insertions of R in space.toml"),
         "{text}"
     );
     assert!(text.contains("target error") && text.contains("collisions:"));
@@ -410,7 +410,7 @@ fn the_plot_tells_open_closed_and_stopped_runs_apart() {
         !closed.contains("open loop"),
         "closed loop called open loop"
     );
-    assert!(closed.contains("closed loop, reached the target: 3 of 3 runs"));
+    assert!(closed.contains("closed loop, not stopped (reached, missed or collided): 3 of 3 runs"));
     assert_eq!(closed.matches(r#"class="executed""#).count(), 1);
     let compare = ["--runs", "3", "--closed-loop", "--compare-open-loop"];
     let both = svg_of(&compare, &dir, "compare.svg");
