@@ -4,6 +4,7 @@
 pub mod log;
 pub mod outcome;
 pub mod progress;
+pub mod report;
 pub mod robot;
 pub mod session;
 pub mod slicer;
@@ -13,4 +14,5 @@ pub mod tracker;
 pub mod viewers;
 pub mod wire;
 
+pub use outcome::exit_code;
 pub use steer::{run_steer, SteerArgs};

@@ -10,7 +10,7 @@
 //! without a pose, as a tracker dropout is in the simulation.
 
 use super::log::InsertionLog;
-pub use super::outcome::{Ending, LabController, SessionOutcome};
+pub use super::outcome::{Class, Ending, LabController, SessionOutcome};
 use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
@@ -20,7 +20,7 @@ use needle_igtl::{Message, Transform};
 use planner_core::steer::{Command, Pose, StopReason, TipMeasurement};
 use serde_json::json;
 use std::net::TcpStream;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -36,6 +36,19 @@ pub enum Event {
     TrackerClosed,
     /// The robot's connection ended.
     RobotClosed,
+}
+
+/// What a session reads: the events, the tracker's shared state, and the bytes each connection
+/// delivered (to tell a peer that sends no OpenIGTLink from one that sends nothing).
+pub struct Inputs {
+    /// The session's events.
+    pub events: Receiver<Event>,
+    /// The tracker's state, kept by its reader thread.
+    pub tracker: Arc<Mutex<TrackerState>>,
+    /// Bytes received from the tracker.
+    pub tracker_bytes: Arc<AtomicU64>,
+    /// Bytes received from the robot.
+    pub robot_bytes: Arc<AtomicU64>,
 }
 
 /// The names and limits of a session.
@@ -73,6 +86,10 @@ pub struct Session<'a> {
     slicer: &'a mut Slicer,
     events: Receiver<Event>,
     tracker: Arc<Mutex<TrackerState>>,
+    tracker_bytes: Arc<AtomicU64>,
+    robot_bytes: Arc<AtomicU64>,
+    /// Robot frames that decoded, of any name.
+    robot_frames: u32,
     /// The registration in use (the file's, or the first the stream sent).
     registration: Option<Transform>,
     /// Superseded poses counted at the previous reading.
@@ -81,7 +98,8 @@ pub struct Session<'a> {
     pending: Option<(f32, f32)>,
     /// What the robot was commanded, to check its progress against.
     commanded: Commanded,
-    /// When the tracker was last given cause to move (a tip pose since then also counts).
+    /// When the tracker was last given cause to send a new pose (a command, or the robot's
+    /// report of a piece); a tip pose since then also counts.
     tracker_clock: Instant,
     /// When the robot was last commanded, while its report is awaited.
     robot_clock: Option<Instant>,
@@ -97,7 +115,7 @@ impl<'a> Session<'a> {
         robot: TcpStream,
         log: &'a mut InsertionLog,
         slicer: &'a mut Slicer,
-        (events, tracker): (Receiver<Event>, Arc<Mutex<TrackerState>>),
+        inputs: Inputs,
     ) -> Self {
         let steering = controller.stats().unwrap_or_default();
         Session {
@@ -107,8 +125,11 @@ impl<'a> Session<'a> {
             robot,
             log,
             slicer,
-            events,
-            tracker,
+            events: inputs.events,
+            tracker: inputs.tracker,
+            tracker_bytes: inputs.tracker_bytes,
+            robot_bytes: inputs.robot_bytes,
+            robot_frames: 0,
             superseded_before: 0,
             pending: None,
             commanded: Commanded::default(),
@@ -116,7 +137,9 @@ impl<'a> Session<'a> {
             robot_clock: None,
             seq: 0,
             outcome: SessionOutcome {
+                outcome: Class::Reached,
                 stop_reason: None,
+                why: None,
                 predicted_miss_mm: None,
                 steering,
                 tracker: TrackerCounts::default(),
@@ -141,11 +164,13 @@ impl<'a> Session<'a> {
         let stats = self.controller.stats().unwrap_or(self.outcome.steering);
         self.outcome.steering = stats;
         self.outcome.stop_reason = ending.stop_reason();
+        self.outcome.outcome = ending.class();
         self.look_at_tracker();
         let counts = self.outcome.tracker;
         self.log.write(
             "stop",
             json!({
+                "outcome": self.outcome.outcome,
                 "stop_reason": self.outcome.stop_reason,
                 "ending": format!("{ending:?}"),
                 "predicted_miss_mm": self.outcome.predicted_miss_mm,
@@ -259,16 +284,36 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// The interlocks of time. While the robot owes a report, only the robot's timeout runs: a
+    /// robot that does not answer leaves a lock-step tracker nothing to send, and its silence
+    /// must not be blamed on the tracker. Once the robot reported, the tracker's timeout runs
+    /// from the report. A peer that sent bytes but never one OpenIGTLink frame is named so.
     fn timed_out(&self) -> Option<Ending> {
-        let last_tip = self.state().last_tip_at;
+        if let Some(t) = self.robot_clock {
+            if t.elapsed() <= self.config.robot_timeout {
+                return None;
+            }
+            let babbled = self.robot_bytes.load(Ordering::Relaxed) > 0 && self.robot_frames == 0;
+            return Some(if babbled {
+                Ending::RobotNotOpenIgtlink
+            } else {
+                Ending::RobotNotAnswering
+            });
+        }
+        let (last_tip, frames) = {
+            let s = self.state();
+            (s.last_tip_at, s.frames_decoded)
+        };
         let heard = last_tip.map_or(self.tracker_clock, |t| t.max(self.tracker_clock));
-        if heard.elapsed() > self.config.tracking_timeout {
-            return Some(Ending::TrackingLost);
+        if heard.elapsed() <= self.config.tracking_timeout {
+            return None;
         }
-        match self.robot_clock {
-            Some(t) if t.elapsed() > self.config.robot_timeout => Some(Ending::RobotNotAnswering),
-            _ => None,
-        }
+        let babbled = self.tracker_bytes.load(Ordering::Relaxed) > 0 && frames == 0;
+        Some(if babbled {
+            Ending::TrackerNotOpenIgtlink
+        } else {
+            Ending::TrackingLost
+        })
     }
 
     fn registered(&self, pose: Pose) -> Pose {
@@ -289,6 +334,9 @@ impl<'a> Session<'a> {
         &mut self,
         frame: Result<needle_igtl::Frame, needle_igtl::Error>,
     ) -> Option<Ending> {
+        if frame.is_ok() {
+            self.robot_frames = self.robot_frames.saturating_add(1);
+        }
         let text = match frame {
             Ok(f) if f.info.device_name == REPORT_DEVICE => match f.message {
                 Message::String(s) => s.text,
@@ -301,6 +349,7 @@ impl<'a> Session<'a> {
                 depth_mm, base_deg, ..
             }) => {
                 self.robot_clock = None;
+                self.tracker_clock = Instant::now();
                 if let Err(why) = self.commanded.check(depth_mm, base_deg) {
                     self.log.write("robot_disagrees", json!({ "why": why }));
                     return Some(Ending::RobotDisagrees);

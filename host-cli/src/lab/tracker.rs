@@ -94,6 +94,9 @@ pub struct TrackerState {
     used_stamp: Option<Timestamp>,
     /// Counts over the session.
     pub counts: TrackerCounts,
+    /// Frames that decoded, of any name: none while bytes come is a peer that does not speak
+    /// OpenIGTLink.
+    pub frames_decoded: u32,
     /// Log lines not yet written (event, fields), at most [`NOTES_KEPT`].
     pub notes: VecDeque<(&'static str, Value)>,
     tip_status_ok: bool,
@@ -111,6 +114,7 @@ impl Default for TrackerState {
             last_tip_at: None,
             used_stamp: None,
             counts: TrackerCounts::default(),
+            frames_decoded: 0,
             notes: VecDeque::new(),
             tip_status_ok: true,
             notice_pending: false,
@@ -129,6 +133,7 @@ impl TrackerState {
                 return;
             }
         };
+        self.frames_decoded = self.frames_decoded.saturating_add(1);
         let name = frame.info.device_name.as_str();
         let flagged = frame
             .info
