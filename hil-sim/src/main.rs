@@ -81,6 +81,20 @@ struct LabArgs {
     /// than it did.
     #[arg(long, requires = "lab")]
     robot_misreport_after: Option<u32>,
+    /// With --lab: the robot's absolute base roll when an insertion begins (degrees); it turns
+    /// to the posture's roll the shorter way and reports absolute rolls.
+    #[arg(
+        long,
+        requires = "lab",
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    robot_start_roll: f64,
+    /// With --lab: the robot holds the needle in a fixed guide along the entry axis and
+    /// refuses a posture that tilts it (`posture-refused max_tilt_deg=0`).
+    #[arg(long, requires = "lab")]
+    robot_fixed_guide: bool,
     /// With --lab: the registration `needle steer --registration` is given (JSON, tracker to
     /// scenario frame); the tracker then reports in the tracker's frame.
     #[arg(long, requires = "lab")]
@@ -139,6 +153,10 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
         l.rate.is_finite() && l.rate >= 0.0,
         "--rate must be 0 or more"
     );
+    anyhow::ensure!(
+        l.robot_start_roll.is_finite() && l.robot_start_roll.abs() <= 1e6,
+        "--robot-start-roll must be a finite angle within 1e6 degrees"
+    );
     if let Some(hz) = l.stream_rate {
         anyhow::ensure!(
             hz.is_finite() && (1.0..=100_000.0).contains(&hz),
@@ -170,6 +188,8 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
+            robot_start_roll_deg: l.robot_start_roll,
+            robot_fixed_guide: l.robot_fixed_guide,
         },
         tracker: TrackerClients::new(TrackerConfig {
             registration: l

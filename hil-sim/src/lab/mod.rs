@@ -24,13 +24,13 @@
 
 pub mod tracker;
 
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use needle_cli::lab::wire::{read_frames, send_text};
 use needle_cli::simulate::setup::Setup;
 use needle_igtl::Message;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
-use planner_core::execute::schedule::Step;
+use planner_core::execute::schedule::{Posture, Step};
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
 use std::ops::ControlFlow;
@@ -61,6 +61,12 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
+    /// The robot's absolute base roll when an insertion begins (degrees): it turns from there
+    /// to the posture's roll by the shorter way, and reports absolute rolls.
+    pub robot_start_roll_deg: f64,
+    /// The robot holds the needle in a fixed guide along the entry axis: it refuses a posture
+    /// that tilts it.
+    pub robot_fixed_guide: bool,
 }
 
 /// How a pose is flagged invalid.
@@ -102,6 +108,32 @@ pub struct LabRun {
     pub collided: bool,
     /// Smallest clearance of the true path (mm).
     pub min_clearance: f32,
+}
+
+impl LabRun {
+    fn of(seed: u64, end: End, pieces: u32, run: &needle_sim::Run) -> LabRun {
+        LabRun {
+            seed,
+            end,
+            pieces,
+            target_error: run.target_error,
+            path_rms: run.path_rms,
+            path_max: run.path_max,
+            collided: run.collided,
+            min_clearance: run.min_clearance,
+        }
+    }
+}
+
+/// A vector made unit length.
+fn unit(v: [f32; 3]) -> [f32; 3] {
+    let n = v
+        .iter()
+        .map(|x| x * x)
+        .sum::<f32>()
+        .sqrt()
+        .max(f32::MIN_POSITIVE);
+    v.map(|x| x / n)
 }
 
 /// What the robot heard.
@@ -183,6 +215,9 @@ impl Robot {
                 Ok(RobotCommand::Step(_)) => {
                     eprintln!("hil-sim lab: a step outside a step list is ignored");
                 }
+                Ok(RobotCommand::Posture { .. }) => {
+                    eprintln!("hil-sim lab: a posture once inserting is ignored");
+                }
             }
         }
     }
@@ -250,20 +285,18 @@ impl Lab {
         let s = &self.setup;
         let schedule = &s.prepared.schedule;
         let (p, effects) = (&s.perturbation, &s.effects);
-        let mut world = World::with_effects(&s.scenario, schedule, p, effects, seed)
-            .map_err(|e| anyhow!("{e}"))?;
-        let mut faults = Tracker::new(&s.faults, seed);
         let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
-        let mut steps = match robot.commands.recv() {
-            Ok(RobotCommand::Steps { count }) => robot.steps(count),
-            Ok(RobotCommand::Stop) => {
-                // A host that gave up before steering (no registration came) hears it stopped.
-                robot.report(RobotReport::Stopped);
-                None
-            }
-            _ => None,
-        }
-        .context("the host sent no step list")?;
+        let (posture, base0_deg, steps) = self.start(&mut robot)?;
+        // The needle starts where the robot set it: the plan's posture if it was commanded.
+        let mut at = schedule.clone();
+        at.posture = posture;
+        let mut world =
+            World::with_effects(&s.scenario, &at, p, effects, seed).map_err(|e| anyhow!("{e}"))?;
+        let Some(mut steps) = steps else {
+            let run = finish(&world, &s.planned, seed);
+            return Ok(LabRun::of(seed, End::Stopped, 0, &run));
+        };
+        let mut faults = Tracker::new(&s.faults, seed);
         self.tracker.wait_for_one()?;
         let mut end = None;
         let mut last_piece = Instant::now();
@@ -296,7 +329,7 @@ impl Lab {
                     robot.report(RobotReport::Progress {
                         piece: robot.pieces,
                         depth_mm: m.depth_mm + self.misreport(robot.pieces),
-                        base_deg: m.base_deg,
+                        base_deg: base0_deg + f64::from(m.base_deg),
                     });
                     match robot.word() {
                         Word::Go => return ControlFlow::Continue(()),
@@ -330,16 +363,71 @@ impl Lab {
             robot.report(RobotReport::Stopped);
         }
         let run = finish(&world, &s.planned, seed);
-        Ok(LabRun {
-            seed,
-            end: end.unwrap_or(End::ConnectionLost),
-            pieces: robot.pieces,
-            target_error: run.target_error,
-            path_rms: run.path_rms,
-            path_max: run.path_max,
-            collided: run.collided,
-            min_clearance: run.min_clearance,
-        })
+        let end = end.unwrap_or(End::ConnectionLost);
+        Ok(LabRun::of(seed, end, robot.pieces, &run))
+    }
+
+    /// The start of an insertion: the posture (taken, or refused by a fixed guide asked to
+    /// tilt), then the first step list. Gives the posture the needle is set at (without a
+    /// `posture` command: along the entry axis at the robot's own roll), the absolute base roll
+    /// it took, and the steps (none: the host stopped before steering, and heard it stopped).
+    fn start(&self, robot: &mut Robot) -> Result<(Posture, f64, Option<Vec<Step>>)> {
+        let planned = self.setup.prepared.schedule.posture;
+        let start = self.config.robot_start_roll_deg;
+        let mut posture = Posture {
+            theta1_deg: 0.0,
+            theta2_deg: 0.0,
+            roll_deg: start as f32,
+            direction: unit(self.setup.scenario.entry.direction),
+            ..planned
+        };
+        let mut base0_deg = start;
+        loop {
+            match robot.commands.recv() {
+                Ok(RobotCommand::Posture {
+                    theta1_deg,
+                    theta2_deg,
+                    roll_deg,
+                }) => {
+                    if self.config.robot_fixed_guide && (theta1_deg, theta2_deg) != (0.0, 0.0) {
+                        robot.report(RobotReport::PostureRefused { max_tilt_deg: 0.0 });
+                        continue;
+                    }
+                    // The shorter way round from where the base is to the roll asked.
+                    let r = f64::from(roll_deg);
+                    base0_deg = r + 360.0 * ((start - r) / 360.0 + 0.5).floor();
+                    posture = Posture {
+                        theta1_deg,
+                        theta2_deg,
+                        roll_deg,
+                        direction: if (theta1_deg, theta2_deg) == (0.0, 0.0) {
+                            posture.direction
+                        } else {
+                            planned.direction
+                        },
+                        ..planned
+                    };
+                    robot.report(RobotReport::PostureSet {
+                        depth_mm: 0.0,
+                        base_deg: base0_deg,
+                    });
+                }
+                Ok(RobotCommand::Steps { count }) => {
+                    let steps = robot
+                        .steps(count)
+                        .context("the host's step list broke off")?;
+                    return Ok((posture, base0_deg, Some(steps)));
+                }
+                Ok(RobotCommand::Stop) => {
+                    // A host that gave up before steering (no registration came, a posture
+                    // refused) hears it stopped.
+                    robot.report(RobotReport::Stopped);
+                    return Ok((posture, base0_deg, None));
+                }
+                Ok(_) => {}
+                Err(_) => bail!("the host sent no step list"),
+            }
+        }
     }
 
     /// The error the robot adds to the depth it reports for piece `k`.

@@ -17,6 +17,7 @@ use super::slicer::Slicer;
 use super::tracker::{TrackerCounts, TrackerState};
 use super::wire::{registered_point, registered_pose, send_text, Arrival};
 use needle_igtl::{Message, Transform};
+use planner_core::execute::schedule::Posture;
 use planner_core::steer::{Command, Pose, StopReason, TipMeasurement};
 use serde_json::json;
 use std::net::TcpStream;
@@ -24,6 +25,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
+
+#[path = "start.rs"]
+mod start;
 
 /// What arrives while steering.
 pub enum Event {
@@ -69,6 +73,8 @@ pub struct SessionConfig {
     /// The tip sensor measures the roll (6-DOF); a 5-DOF sensor's roll is left out of every
     /// reading (the controller infers it from how the path bends).
     pub roll_measured: bool,
+    /// The plan's posture, the robot's first command.
+    pub posture: Posture,
 }
 
 /// Set by a Ctrl-C handler: the session stops the robot and ends.
@@ -98,6 +104,9 @@ pub struct Session<'a> {
     pending: Option<(f32, f32)>,
     /// What the robot was commanded, to check its progress against.
     commanded: Commanded,
+    /// The robot's absolute base roll once the posture was taken: the zero of the rolls the
+    /// controller is given.
+    base0_deg: f64,
     /// When the tracker was last given cause to send a new pose (a command, or the robot's
     /// report of a piece); a tip pose since then also counts.
     tracker_clock: Instant,
@@ -133,6 +142,7 @@ impl<'a> Session<'a> {
             superseded_before: 0,
             pending: None,
             commanded: Commanded::default(),
+            base0_deg: 0.0,
             tracker_clock: Instant::now(),
             robot_clock: None,
             seq: 0,
@@ -207,46 +217,11 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// With `--registration-name`: waits for the stream's first registration (nothing is sent to
-    /// the robot before it); `None` once it is in, or the ending if it does not come.
-    fn await_registration(&mut self) -> Option<Ending> {
-        let name = self.config.registration_name.clone()?;
-        let deadline = Instant::now() + self.config.registration_timeout;
-        loop {
-            self.look_at_tracker();
-            let received = self.state().registration;
-            if let Some(reg) = received {
-                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
-                self.log.write(
-                    "registration",
-                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
-                );
-                self.registration = Some(reg);
-                return None;
-            }
-            if INTERRUPTED.load(Ordering::SeqCst) {
-                return Some(Ending::Interrupted);
-            }
-            if Instant::now() > deadline {
-                let waited_ms = self.config.registration_timeout.as_millis() as u64;
-                self.log.write(
-                    "no_registration",
-                    json!({ "name": name, "waited_ms": waited_ms }),
-                );
-                return Some(Ending::NoRegistration);
-            }
-            match self.events.recv_timeout(POLL) {
-                Ok(Event::TrackerClosed) => return Some(Ending::TrackerDisconnected),
-                Ok(Event::RobotClosed) | Err(RecvTimeoutError::Disconnected) => {
-                    return Some(Ending::RobotDisconnected)
-                }
-                Ok(_) | Err(RecvTimeoutError::Timeout) => {}
-            }
-        }
-    }
-
     fn steer(&mut self, steps: &[planner_core::execute::schedule::Step]) -> Ending {
         if let Some(ending) = self.await_registration() {
+            return ending;
+        }
+        if let Some(ending) = self.set_posture() {
             return ending;
         }
         self.commanded.list_sent(steps);
@@ -290,15 +265,7 @@ impl<'a> Session<'a> {
     /// from the report. A peer that sent bytes but never one OpenIGTLink frame is named so.
     fn timed_out(&self) -> Option<Ending> {
         if let Some(t) = self.robot_clock {
-            if t.elapsed() <= self.config.robot_timeout {
-                return None;
-            }
-            let babbled = self.robot_bytes.load(Ordering::Relaxed) > 0 && self.robot_frames == 0;
-            return Some(if babbled {
-                Ending::RobotNotOpenIgtlink
-            } else {
-                Ending::RobotNotAnswering
-            });
+            return (t.elapsed() > self.config.robot_timeout).then(|| self.robot_silence());
         }
         let (last_tip, frames) = {
             let s = self.state();
@@ -337,6 +304,44 @@ impl<'a> Session<'a> {
         if frame.is_ok() {
             self.robot_frames = self.robot_frames.saturating_add(1);
         }
+        let report = self.report_of(frame)?;
+        match report {
+            RobotReport::Progress {
+                depth_mm, base_deg, ..
+            } => {
+                // The robot reports its absolute roll; the controller counts from the posture.
+                let base_deg = (base_deg - self.base0_deg) as f32;
+                self.robot_clock = None;
+                self.tracker_clock = Instant::now();
+                if let Err(why) = self.commanded.check(depth_mm, base_deg) {
+                    self.log.write("robot_disagrees", json!({ "why": why }));
+                    self.outcome.why = Some(why);
+                    return Some(Ending::RobotDisagrees);
+                }
+                self.pending = Some((depth_mm, base_deg));
+                None
+            }
+            RobotReport::Done => Some(Ending::StepsRanOut),
+            RobotReport::Holding => None,
+            RobotReport::Stopped => Some(Ending::RobotStopped),
+            RobotReport::PostureSet { .. } | RobotReport::PostureRefused { .. } => {
+                let why = format!("`{report}` after the posture was taken");
+                self.log.write("robot_disagrees", json!({ "why": why }));
+                self.outcome.why = Some(why);
+                Some(Ending::RobotDisagrees)
+            }
+        }
+    }
+
+    /// The robot's report a frame carries, if it is one; a text that is not in the grammar is
+    /// logged (`robot_refused`) and read past.
+    fn report_of(
+        &mut self,
+        frame: Result<needle_igtl::Frame, needle_igtl::Error>,
+    ) -> Option<RobotReport> {
+        if frame.is_ok() {
+            self.robot_frames = self.robot_frames.saturating_add(1);
+        }
         let text = match frame {
             Ok(f) if f.info.device_name == REPORT_DEVICE => match f.message {
                 Message::String(s) => s.text,
@@ -345,21 +350,7 @@ impl<'a> Session<'a> {
             _ => return None,
         };
         match text.parse::<RobotReport>() {
-            Ok(RobotReport::Progress {
-                depth_mm, base_deg, ..
-            }) => {
-                self.robot_clock = None;
-                self.tracker_clock = Instant::now();
-                if let Err(why) = self.commanded.check(depth_mm, base_deg) {
-                    self.log.write("robot_disagrees", json!({ "why": why }));
-                    return Some(Ending::RobotDisagrees);
-                }
-                self.pending = Some((depth_mm, base_deg));
-                None
-            }
-            Ok(RobotReport::Done) => Some(Ending::StepsRanOut),
-            Ok(RobotReport::Holding) => None,
-            Ok(RobotReport::Stopped) => Some(Ending::RobotStopped),
+            Ok(r) => Some(r),
             Err(e) => {
                 self.log.write(
                     "robot_refused",
@@ -367,6 +358,15 @@ impl<'a> Session<'a> {
                 );
                 None
             }
+        }
+    }
+
+    /// Why the robot is silent: it sent bytes but not one OpenIGTLink frame, or nothing.
+    fn robot_silence(&self) -> Ending {
+        if self.robot_bytes.load(Ordering::Relaxed) > 0 && self.robot_frames == 0 {
+            Ending::RobotNotOpenIgtlink
+        } else {
+            Ending::RobotNotAnswering
         }
     }
 

@@ -210,6 +210,29 @@ fn check_name(flag: &str, name: &str) -> Result<()> {
 /// dropouts of up to 10 mm).
 pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
 
+/// The flags of `needle simulate --closed-loop` that plan and set up the insertion as
+/// `needle steer` is told: the `--steer` keys (the lab's tracking interlock unless the scenario
+/// or a key sets it), and the device, for the same refusal (a plan bound the device cannot
+/// plan).
+fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
+    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+    let key = "tracking_lost_after_mm";
+    let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
+    let told_in_file = crate::scenario::ScenarioFile::load(&a.file)?
+        .steering
+        .is_some_and(|t| t.contains_key(key));
+    if !told_here && !told_in_file {
+        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
+    }
+    if let Some(t) = &a.tcp {
+        flags.push(format!("--tcp={t}"));
+    }
+    if let Some(p) = &a.port {
+        flags.push(format!("--port={p}"));
+    }
+    Ok(flags)
+}
+
 /// Runs `needle steer`: an insertion that does not reach the target is an error carrying its
 /// exit status ([`super::outcome::exit_code`]); with `--json` every ending prints one object.
 pub fn run_steer(a: &SteerArgs) -> Result<()> {
@@ -227,23 +250,7 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
     if let Some(name) = &a.registration_name {
         check_name("--registration-name", name)?;
     }
-    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
-    let key = "tracking_lost_after_mm";
-    let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
-    let told_in_file = crate::scenario::ScenarioFile::load(&a.file)?
-        .steering
-        .is_some_and(|t| t.contains_key(key));
-    if !told_here && !told_in_file {
-        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
-    }
-    // The same refusal as `needle simulate` (a plan bound the device cannot plan).
-    if let Some(t) = &a.tcp {
-        flags.push(format!("--tcp={t}"));
-    }
-    if let Some(p) = &a.port {
-        flags.push(format!("--port={p}"));
-    }
-    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &flags)?;
+    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_flags(a)?)?;
     let registration = a
         .registration
         .as_deref()
@@ -307,6 +314,7 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
         registration_name: a.registration_name.clone(),
         registration_timeout: Duration::from_millis(a.registration_timeout_ms),
         roll_measured: a.tracker_dof == 6,
+        posture: schedule.posture,
     };
     let inputs = Inputs {
         events: rx,
