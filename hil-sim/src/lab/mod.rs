@@ -22,19 +22,19 @@
 //! a tip flagged invalid, an outlier at its offset position. The effects' time (latency,
 //! imaging) is the world's clock, not the wall's, so lock-step reproduces them too.
 
+mod robot;
 pub mod tracker;
 
 use anyhow::{anyhow, bail, Context, Result};
-use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
-use needle_cli::lab::wire::{read_frames, send_text};
+use needle_cli::lab::robot::{RobotCommand, RobotReport};
+use needle_cli::lab::wire::now;
 use needle_cli::simulate::setup::Setup;
-use needle_igtl::Message;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
-use planner_core::execute::schedule::{Posture, Step};
+use planner_core::execute::schedule::{Op, Posture, Step};
+use robot::{Robot, Word};
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
 use std::ops::ControlFlow;
-use std::sync::mpsc::{channel, Receiver};
 use std::time::{Duration, Instant};
 pub use tracker::{TrackerClients, TrackerConfig};
 
@@ -67,6 +67,9 @@ pub struct LabConfig {
     /// The robot holds the needle in a fixed guide along the entry axis: it refuses a posture
     /// that tilts it.
     pub robot_fixed_guide: bool,
+    /// In real time: each piece takes its share of its step's duration times this factor
+    /// (none: lock-step, a piece takes no time).
+    pub time_scale: Option<f64>,
 }
 
 /// How a pose is flagged invalid.
@@ -134,93 +137,6 @@ fn unit(v: [f32; 3]) -> [f32; 3] {
         .sqrt()
         .max(f32::MIN_POSITIVE);
     v.map(|x| x / n)
-}
-
-/// What the robot heard.
-enum Word {
-    Go,
-    Replace(Vec<Step>),
-    Stop,
-    Lost,
-}
-
-/// The simulated robot of one insertion: its connection and what arrives on it.
-struct Robot {
-    conn: TcpStream,
-    commands: Receiver<RobotCommand>,
-    pieces: u32,
-    silent_after: Option<u32>,
-}
-
-impl Robot {
-    fn new(conn: TcpStream, silent_after: Option<u32>) -> Result<Robot> {
-        conn.set_nodelay(true)?;
-        let (tx, commands) = channel();
-        read_frames(
-            conn.try_clone()?,
-            move |(frame, _)| match frame {
-                Ok(f) if f.info.device_name == COMMAND_DEVICE => match f.message {
-                    Message::String(s) => match s.text.parse::<RobotCommand>() {
-                        Ok(c) => tx.send(c).is_ok(),
-                        Err(e) => {
-                            eprintln!("hil-sim lab: robot command refused: {e}");
-                            true
-                        }
-                    },
-                    _ => true,
-                },
-                _ => true,
-            },
-            || {},
-        );
-        Ok(Robot {
-            conn,
-            commands,
-            pieces: 0,
-            silent_after,
-        })
-    }
-
-    fn report(&mut self, r: RobotReport) {
-        if self.silent_after.is_some_and(|n| self.pieces > n) {
-            return;
-        }
-        // A host that left is seen when its next word does not come.
-        let _ = send_text(&mut self.conn, REPORT_DEVICE, &r.to_string());
-    }
-
-    /// The `count` steps of a list whose `steps` word has arrived.
-    fn steps(&mut self, count: usize) -> Option<Vec<Step>> {
-        let mut out = Vec::with_capacity(count);
-        while out.len() < count {
-            match self.commands.recv().ok()? {
-                RobotCommand::Step(s) => out.push(s),
-                _ => return None,
-            }
-        }
-        Some(out)
-    }
-
-    /// The host's next word; `hold` is reported and waited out.
-    fn word(&mut self) -> Word {
-        loop {
-            match self.commands.recv() {
-                Err(_) => return Word::Lost,
-                Ok(RobotCommand::Go) => return Word::Go,
-                Ok(RobotCommand::Stop) => return Word::Stop,
-                Ok(RobotCommand::Hold) => self.report(RobotReport::Holding),
-                Ok(RobotCommand::Steps { count }) => {
-                    return self.steps(count).map_or(Word::Lost, Word::Replace)
-                }
-                Ok(RobotCommand::Step(_)) => {
-                    eprintln!("hil-sim lab: a step outside a step list is ignored");
-                }
-                Ok(RobotCommand::Posture { .. }) => {
-                    eprintln!("hil-sim lab: a posture once inserting is ignored");
-                }
-            }
-        }
-    }
 }
 
 /// What the tracker reports of the world's measurement `m` once `faults` had their say: `m`
@@ -300,13 +216,16 @@ impl Lab {
         self.tracker.wait_for_one()?;
         let mut end = None;
         let mut last_piece = Instant::now();
+        let mut was = (0.0, 0.0);
         while end.is_none() {
             let mut next = None;
             for step in &steps {
                 let mut failure = None;
                 world.execute(step, |m| {
                     self.pace(&mut last_piece);
+                    self.take_time(step, m, &mut was);
                     robot.pieces += 1;
+                    let mut ended = now();
                     if self
                         .config
                         .tracker_silent_after
@@ -318,19 +237,26 @@ impl Lab {
                         } else {
                             self.flag(robot.pieces)
                         };
-                        if let Err(e) = self.tracker.publish(&m, flag, robot.pieces) {
-                            failure = Some(e);
-                            return ControlFlow::Break(());
+                        match self.tracker.publish(&m, flag, robot.pieces) {
+                            Ok(stamp) => ended = stamp,
+                            Err(e) => {
+                                failure = Some(e);
+                                return ControlFlow::Break(());
+                            }
                         }
                     } else {
                         self.tracker.silence();
                     }
                     std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
-                    robot.report(RobotReport::Progress {
-                        piece: robot.pieces,
-                        depth_mm: m.depth_mm + self.misreport(robot.pieces),
-                        base_deg: base0_deg + f64::from(m.base_deg),
-                    });
+                    // Stamped when the piece ended, as its pose was sampled.
+                    robot.report_at(
+                        RobotReport::Progress {
+                            piece: robot.pieces,
+                            depth_mm: m.depth_mm + self.misreport(robot.pieces),
+                            base_deg: base0_deg + f64::from(m.base_deg),
+                        },
+                        ended,
+                    );
                     match robot.word() {
                         Word::Go => return ControlFlow::Continue(()),
                         Word::Replace(s) => next = Some(s),
@@ -448,6 +374,25 @@ impl Lab {
                 Flag::Status
             }
         })
+    }
+
+    /// In real time, the piece takes its share of its step's duration (scaled) before it ends:
+    /// the tracker samples the tip as it was meanwhile. `was` is the depth and roll before it.
+    fn take_time(&self, step: &Step, m: &Measurement, was: &mut (f32, f32)) {
+        let moved = (m.depth_mm - was.0, m.base_deg - was.1);
+        *was = (m.depth_mm, m.base_deg);
+        let Some(scale) = self.config.time_scale else {
+            return;
+        };
+        let share = match step.op {
+            Op::Rotate { angle_deg } if angle_deg != 0.0 => (moved.1 / angle_deg).abs(),
+            op if op.inserted_mm() > 0.0 => (moved.0 / op.inserted_mm()).abs(),
+            _ => 1.0,
+        };
+        let seconds = f64::from(step.duration_s * share.min(1.0)) * scale;
+        if seconds.is_finite() && seconds > 0.0 {
+            std::thread::sleep(Duration::from_secs_f64(seconds.min(60.0)));
+        }
     }
 
     /// Waits out the rate and the latency before a piece's pose goes out.

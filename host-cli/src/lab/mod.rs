@@ -1,6 +1,7 @@
 //! The lab link: `needle steer` steering an insertion from an OpenIGTLink tracker stream and
 //! commanding a robot, and what the simulated lab (`hil-sim --lab`) shares with it.
 
+pub mod fresh;
 pub mod log;
 pub mod outcome;
 pub mod progress;

@@ -173,8 +173,31 @@ pub struct SessionOutcome {
     /// Per reading: tip pose received to the robot's command sent (ms).
     #[serde(skip)]
     pub latencies_ms: Vec<f64>,
+    /// Per reading: the program's reaction, the pose's age and the wait for a fresh pose.
+    #[serde(skip)]
+    pub times: Vec<ReadingTimes>,
+    /// The smallest `arrival - stamp` of the tracker's poses less that of the robot's reports
+    /// (ms; null without stamps on both): the tracker's lag behind the robot, or its clock's
+    /// behind the robot's, which one-way stamps cannot tell apart.
+    pub clock_offset_ms: Option<f64>,
+    /// A peer's clock was proven ahead of this program's (a frame arrived before its stamp) and
+    /// its stamps were moved back to judge the poses' freshness.
+    pub clock_offset_applied: bool,
     /// The robot confirmed the stop (`stopped`).
     pub robot_stopped: bool,
+}
+
+/// The times of one reading.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ReadingTimes {
+    /// This program's own time: from the later of the pose's and the report's arrival to the
+    /// robot's command sent (ms).
+    pub reaction_ms: f64,
+    /// From the robot's report to the arrival of the fresh pose used (0: it was in first), ms.
+    pub waited_ms: f64,
+    /// The pose's age when the command went out: from its sample time (its stamp, on this
+    /// program's clock) to the command (ms); none without a stamp.
+    pub pose_age_ms: Option<f64>,
 }
 
 /// The controller a session consults: in-process, or on a device behind the link.

@@ -2,7 +2,7 @@
 //! figure, or with `--json` exactly one JSON object, whatever the ending (a connection refused
 //! or a setup that failed too).
 
-use super::outcome::{Class, SessionOutcome, SteerEnded};
+use super::outcome::{Class, ReadingTimes, SessionOutcome, SteerEnded};
 use super::steer::SteerArgs;
 use anyhow::Result;
 use serde::Serialize;
@@ -48,6 +48,14 @@ pub struct SteerJson {
     pub exit_code: u8,
     /// Tip pose received to robot command sent.
     pub latency_ms: Option<Latency>,
+    /// This program's reaction: the later of the fresh pose's and the report's arrival to the
+    /// command sent.
+    pub reaction_ms: Option<Latency>,
+    /// The pose's age when its command went out (from its sample time): the tracker's and the
+    /// link's latency plus the reaction.
+    pub pose_age_ms: Option<Latency>,
+    /// The wait from the robot's report for a pose sampled after the piece ended.
+    pub waited_ms: Option<Latency>,
 }
 
 /// A connection `needle steer` could not open: the link is broken before anything moved.
@@ -103,12 +111,23 @@ pub fn print(a: &SteerArgs, form: String, outcome: SessionOutcome) -> Result<()>
     let (class, stop_reason, why) = (outcome.outcome, outcome.stop_reason, outcome.why.clone());
     let code = class.exit_code();
     if a.json {
+        let of = |f: fn(&ReadingTimes) -> Option<f64>| {
+            Latency::of(&outcome.times.iter().filter_map(f).collect::<Vec<_>>())
+        };
+        let (reaction_ms, pose_age_ms, waited_ms) = (
+            of(|t| Some(t.reaction_ms)),
+            of(|t| t.pose_age_ms),
+            of(|t| Some(t.waited_ms)),
+        );
         let j = SteerJson {
             seed: a.seed,
             form,
             outcome,
             exit_code: code,
             latency_ms: latency,
+            reaction_ms,
+            pose_age_ms,
+            waited_ms,
         };
         println!("{}", serde_json::to_string(&j)?);
     } else {

@@ -9,14 +9,16 @@
 //! `TransformStatus` other than `OK`, or after a `STATUS` of the tip that is not OK) is a reading
 //! without a pose, as a tracker dropout is in the simulation.
 
+use super::fresh::{seconds, HostClock, Offset};
 use super::log::InsertionLog;
+pub use super::outcome::ReadingTimes;
 pub use super::outcome::{Class, Ending, LabController, SessionOutcome};
 use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
 use super::tracker::{TrackerCounts, TrackerState};
 use super::wire::{registered_point, registered_pose, send_text, Arrival};
-use needle_igtl::{Message, Transform};
+use needle_igtl::{Message, Timestamp, Transform};
 use planner_core::execute::schedule::Posture;
 use planner_core::steer::{Command, Pose, StopReason, TipMeasurement};
 use serde_json::json;
@@ -26,8 +28,23 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
+#[path = "interlocks.rs"]
+mod interlocks;
 #[path = "start.rs"]
 mod start;
+
+/// A piece the robot reported, waiting for a fresh pose.
+#[derive(Clone, Copy, Debug)]
+struct Reported {
+    /// Commanded depth (mm).
+    depth_mm: f32,
+    /// Commanded base roll from the posture's (degrees).
+    base_deg: f32,
+    /// When the piece ended, by the robot's clock (its report's header timestamp).
+    end_s: Option<f64>,
+    /// When the report arrived.
+    at: Instant,
+}
 
 /// What arrives while steering.
 pub enum Event {
@@ -100,8 +117,12 @@ pub struct Session<'a> {
     registration: Option<Transform>,
     /// Superseded poses counted at the previous reading.
     superseded_before: u32,
-    /// The robot reported a piece that is not answered yet: (depth, base roll).
-    pending: Option<(f32, f32)>,
+    /// The robot reported a piece that is not answered yet.
+    pending: Option<Reported>,
+    /// This program's clock, the tracker's reader's too.
+    clock: HostClock,
+    /// The robot clock's offset from this program's, from its stamped reports.
+    robot_offset: Offset,
     /// What the robot was commanded, to check its progress against.
     commanded: Commanded,
     /// The robot's absolute base roll once the posture was taken: the zero of the rolls the
@@ -127,6 +148,10 @@ impl<'a> Session<'a> {
         inputs: Inputs,
     ) -> Self {
         let steering = controller.stats().unwrap_or_default();
+        let clock = inputs
+            .tracker
+            .lock()
+            .map_or_else(|p| p.into_inner().clock, |s| s.clock);
         Session {
             registration: config.registration,
             config,
@@ -141,6 +166,8 @@ impl<'a> Session<'a> {
             robot_frames: 0,
             superseded_before: 0,
             pending: None,
+            clock,
+            robot_offset: Offset::default(),
             commanded: Commanded::default(),
             base0_deg: 0.0,
             tracker_clock: Instant::now(),
@@ -154,6 +181,9 @@ impl<'a> Session<'a> {
                 steering,
                 tracker: TrackerCounts::default(),
                 latencies_ms: Vec::new(),
+                times: Vec::new(),
+                clock_offset_ms: None,
+                clock_offset_applied: false,
                 robot_stopped: false,
             },
         }
@@ -176,6 +206,11 @@ impl<'a> Session<'a> {
         self.outcome.stop_reason = ending.stop_reason();
         self.outcome.outcome = ending.class();
         self.look_at_tracker();
+        let tracker = self.state().offset;
+        let delays = tracker.get().zip(self.robot_offset.get());
+        self.outcome.clock_offset_ms = delays.map(|(t, r)| (t - r) * 1e3);
+        self.outcome.clock_offset_applied =
+            tracker.correction() != 0.0 || self.robot_offset.correction() != 0.0;
         let counts = self.outcome.tracker;
         self.log.write(
             "stop",
@@ -192,6 +227,8 @@ impl<'a> Session<'a> {
                 "repeated_poses": counts.repeated_poses,
                 "ignored_frames": counts.ignored_frames,
                 "registrations_refused": counts.registrations_refused,
+                "stale_poses": counts.stale_poses,
+                "clock_offset_ms": self.outcome.clock_offset_ms,
             }),
         );
         self.slicer.state(self.outcome.stop_reason, true);
@@ -251,36 +288,13 @@ impl<'a> Session<'a> {
                     return Ending::RobotDisconnected
                 }
                 Ok(Event::Robot(arrival)) => {
-                    if let Some(ending) = self.on_robot(arrival.0) {
+                    let (frame, at) = *arrival;
+                    if let Some(ending) = self.on_robot(frame, at) {
                         return ending;
                     }
                 }
             }
         }
-    }
-
-    /// The interlocks of time. While the robot owes a report, only the robot's timeout runs: a
-    /// robot that does not answer leaves a lock-step tracker nothing to send, and its silence
-    /// must not be blamed on the tracker. Once the robot reported, the tracker's timeout runs
-    /// from the report. A peer that sent bytes but never one OpenIGTLink frame is named so.
-    fn timed_out(&self) -> Option<Ending> {
-        if let Some(t) = self.robot_clock {
-            return (t.elapsed() > self.config.robot_timeout).then(|| self.robot_silence());
-        }
-        let (last_tip, frames) = {
-            let s = self.state();
-            (s.last_tip_at, s.frames_decoded)
-        };
-        let heard = last_tip.map_or(self.tracker_clock, |t| t.max(self.tracker_clock));
-        if heard.elapsed() <= self.config.tracking_timeout {
-            return None;
-        }
-        let babbled = self.tracker_bytes.load(Ordering::Relaxed) > 0 && frames == 0;
-        Some(if babbled {
-            Ending::TrackerNotOpenIgtlink
-        } else {
-            Ending::TrackingLost
-        })
     }
 
     fn registered(&self, pose: Pose) -> Pose {
@@ -300,11 +314,9 @@ impl<'a> Session<'a> {
     fn on_robot(
         &mut self,
         frame: Result<needle_igtl::Frame, needle_igtl::Error>,
+        at: Instant,
     ) -> Option<Ending> {
-        if frame.is_ok() {
-            self.robot_frames = self.robot_frames.saturating_add(1);
-        }
-        let report = self.report_of(frame)?;
+        let (report, stamp) = self.report_of(frame)?;
         match report {
             RobotReport::Progress {
                 depth_mm, base_deg, ..
@@ -318,7 +330,16 @@ impl<'a> Session<'a> {
                     self.outcome.why = Some(why);
                     return Some(Ending::RobotDisagrees);
                 }
-                self.pending = Some((depth_mm, base_deg));
+                let end_s = seconds(stamp);
+                if let Some(e) = end_s {
+                    self.robot_offset.observe(self.clock.unix(at), e);
+                }
+                self.pending = Some(Reported {
+                    depth_mm,
+                    base_deg,
+                    end_s,
+                    at,
+                });
                 None
             }
             RobotReport::Done => Some(Ending::StepsRanOut),
@@ -338,19 +359,19 @@ impl<'a> Session<'a> {
     fn report_of(
         &mut self,
         frame: Result<needle_igtl::Frame, needle_igtl::Error>,
-    ) -> Option<RobotReport> {
+    ) -> Option<(RobotReport, Timestamp)> {
         if frame.is_ok() {
             self.robot_frames = self.robot_frames.saturating_add(1);
         }
-        let text = match frame {
+        let (text, stamp) = match frame {
             Ok(f) if f.info.device_name == REPORT_DEVICE => match f.message {
-                Message::String(s) => s.text,
+                Message::String(s) => (s.text, f.info.timestamp),
                 _ => return None,
             },
             _ => return None,
         };
         match text.parse::<RobotReport>() {
-            Ok(r) => Some(r),
+            Ok(r) => Some((r, stamp)),
             Err(e) => {
                 self.log.write(
                     "robot_refused",
@@ -361,23 +382,16 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// Why the robot is silent: it sent bytes but not one OpenIGTLink frame, or nothing.
-    fn robot_silence(&self) -> Ending {
-        if self.robot_bytes.load(Ordering::Relaxed) > 0 && self.robot_frames == 0 {
-            Ending::RobotNotOpenIgtlink
-        } else {
-            Ending::RobotNotAnswering
-        }
-    }
-
     /// Answers the reported piece once a new tip pose is in.
     fn answer_if_ready(&mut self) -> Option<Ending> {
-        let (depth_mm, base_deg) = self.pending?;
-        let (tip, target, superseded) = {
+        let reported = self.pending?;
+        let (depth_mm, base_deg) = (reported.depth_mm, reported.base_deg);
+        let robot_offset = self.robot_offset;
+        let (tip, target, superseded, tracker_offset) = {
             let mut s = self.state();
-            let tip = s.take_tip()?;
+            let tip = s.take_fresh_tip(reported.end_s, robot_offset)?;
             // An image of the target is used once: a reading after none new carries none.
-            (tip, s.take_target(), s.counts.superseded_poses)
+            (tip, s.take_target(), s.counts.superseded_poses, s.offset)
         };
         let superseded_poses = superseded.saturating_sub(self.superseded_before);
         self.superseded_before = superseded;
@@ -426,8 +440,16 @@ impl<'a> Session<'a> {
                 return Some(Ending::RobotDisconnected);
             }
         }
-        let latency_ms = at.elapsed().as_secs_f64() * 1e3;
+        let sent = Instant::now();
+        let latency_ms = ms(sent.duration_since(at));
+        let times = ReadingTimes {
+            reaction_ms: ms(sent.duration_since(at.max(reported.at))),
+            waited_ms: ms(at.saturating_duration_since(reported.at)),
+            pose_age_ms: seconds(tip.stamp)
+                .map(|s| (self.clock.unix(sent) - (s + tracker_offset.correction())) * 1e3),
+        };
         self.outcome.latencies_ms.push(latency_ms);
+        self.outcome.times.push(times);
         // After the commands it caused, with the time from the pose to them.
         self.log.write(
             "reading",
@@ -435,6 +457,11 @@ impl<'a> Session<'a> {
                 "measurement": m,
                 "reply": reply,
                 "latency_ms": latency_ms,
+                "reaction_ms": times.reaction_ms,
+                "waited_ms": times.waited_ms,
+                "pose_age_ms": times.pose_age_ms,
+                "pose_sampled_s": seconds(tip.stamp),
+                "piece_ended_s": reported.end_s,
                 "superseded_poses": superseded_poses,
             }),
         );
@@ -450,41 +477,8 @@ impl<'a> Session<'a> {
         self.tracker_clock = Instant::now();
         ending
     }
+}
 
-    /// Tells the robot to stop (holding first when tracking was lost) and waits for its word.
-    fn stop_robot(&mut self, ending: Ending) {
-        if ending == Ending::RobotStopped {
-            self.outcome.robot_stopped = true;
-            return;
-        }
-        if ending == Ending::RobotDisconnected {
-            return;
-        }
-        if ending == Ending::TrackingLost {
-            let _ = self.command(RobotCommand::Hold);
-        }
-        // The controller's stop went out with its answer.
-        let sent = matches!(ending, Ending::Controller(_));
-        if !sent && self.command(RobotCommand::Stop).is_err() {
-            return;
-        }
-        let deadline = Instant::now() + self.config.robot_timeout;
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.events.recv_timeout(left) {
-                Ok(Event::Robot(arrival)) => {
-                    if let (Ok(f), _) = *arrival {
-                        let Message::String(s) = f.message else {
-                            continue;
-                        };
-                        if s.text.parse() == Ok(RobotReport::Stopped) {
-                            self.outcome.robot_stopped = true;
-                            return;
-                        }
-                    }
-                }
-                Ok(_) => {}
-                Err(_) => return,
-            }
-        }
-    }
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
 }

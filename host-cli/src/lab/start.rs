@@ -71,7 +71,7 @@ impl Session<'_> {
             };
             match self.events.recv_timeout(left.min(POLL)) {
                 Ok(Event::Robot(arrival)) => {
-                    if let Some(report) = self.report_of(arrival.0) {
+                    if let Some((report, _)) = self.report_of(arrival.0) {
                         return self.posture_answer(report);
                     }
                 }
