@@ -20,6 +20,9 @@ pub struct PlanJson {
     /// The share the scenario asked for: more than `curvature_reserve` where no path kept it
     /// (within the collision bound, or at all).
     pub curvature_reserve_asked: f32,
+    /// The bound on the predicted collision probability the plan was made under; null when the
+    /// scenario opted out (`"off"`: unbounded).
+    pub max_collision_probability: Option<f32>,
 }
 
 impl PlanJson {
@@ -31,6 +34,7 @@ impl PlanJson {
             length_mm: outcome.length,
             curvature_reserve: setup.scenario.options.curvature_reserve,
             curvature_reserve_asked: setup.reserve_asked,
+            max_collision_probability: setup.bound.map(|b| b.max_collision_probability),
         }
     }
 }
