@@ -146,17 +146,52 @@ fn load(args: &PlanArgs) -> Result<Scenario> {
 /// no schedule), with the predictions when there are any.
 fn print_plan(args: &PlanArgs, made: &LocalPlan, execution: &Execution) -> Result<()> {
     let schedule = made.schedule()?;
+    let clearance = label_map_clearance(args, made)?;
     let mut out = std::io::stdout();
     if args.json {
-        writeln!(out, "{}", made.json(execution))?;
+        let mut json = made.json(execution);
+        if let Some(best) = json.best.as_mut() {
+            best.label_map_clearance_mm = clearance;
+        }
+        writeln!(out, "{json}")?;
         return Ok(());
     }
     write!(out, "{}", made.table(execution))?;
+    let file = needle_cli::scenario::file::ScenarioFile::load(&args.file)?;
+    for line in file.target_lines()? {
+        writeln!(out, "{line}")?;
+    }
+    if let Some(c) = clearance {
+        writeln!(
+            out,
+            "label-map clearance {c:.2} mm: the best path to the nearest voxel centre of the \
+             covered segments, on the label map (the table's clearances are to the spheres)"
+        )?;
+    }
     if let Some(schedule) = schedule.filter(|_| args.schedule) {
         let driver = &made.scenario.driver;
         write!(out, "{}", schedule_table(schedule, driver))?;
     }
     Ok(())
+}
+
+/// Says on stderr which files `--export` wrote (stdout stays the report).
+fn wrote(files: &[PathBuf]) {
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    eprintln!("wrote {}", names.join(", "));
+}
+
+/// With `[[anatomy]]`: the best path's least distance (mm) to the covered segments' voxels,
+/// measured on the label maps themselves.
+fn label_map_clearance(args: &PlanArgs, made: &LocalPlan) -> Result<Option<f64>> {
+    let Some(best) = made.report().best() else {
+        return Ok(None);
+    };
+    let file = needle_cli::scenario::file::ScenarioFile::load(&args.file)?;
+    if file.anatomy.is_empty() {
+        return Ok(None);
+    }
+    file.label_map_clearance(&made.scenario, best)
 }
 
 /// A printed report without a best form is still a failed plan: the command says why on stderr
@@ -179,7 +214,7 @@ fn plan(args: &PlanArgs) -> Result<()> {
         analysis::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
     }
     if let Some(dir) = &args.export {
-        needle_cli::report::slicer::export(dir, scenario, report)?;
+        wrote(&needle_cli::report::slicer::export(dir, scenario, report)?);
     }
     made.verdict()
 }
@@ -197,7 +232,11 @@ fn send(args: &SendArgs) -> Result<()> {
         return reachable(report);
     }
     if let Some(dir) = &args.plan.export {
-        needle_cli::report::slicer::export(dir, &made.scenario, report)?;
+        wrote(&needle_cli::report::slicer::export(
+            dir,
+            &made.scenario,
+            report,
+        )?);
     }
     made.verdict()
 }

@@ -256,23 +256,26 @@ def cover(
     labels: Optional[Sequence[int]] = None,
     segments: Optional[Sequence[str]] = None,
     margin: float = 0.0,
-    max_spheres: int = 32,
-    tightness: float = 3.0,
-    voxel: float = 0.5,
+    max_spheres: Optional[int] = None,
+    tightness: Optional[float] = None,
+    voxel: Optional[float] = None,
+    unit: Optional[str] = None,
 ) -> Dict[str, Any]:
     """Covers the segments of a label map (``.nrrd``, Slicer's ``.seg.nrrd``, ``.nii``,
     ``.nii.gz``) or a closed mesh (``.stl``) with spheres, as ``needle cover`` does, and returns its
     ``--json`` report: ``segments``, each with its ``spheres`` (``center``, ``radius``, RAS mm),
     ``outside_ratio`` and ``farthest_mm``. Bad files and selections raise ``ScenarioError`` with
-    the command's message."""
+    the command's message. ``max_spheres``, ``tightness``, ``voxel`` and ``unit`` default to the
+    command's defaults."""
     return _native.cover(
         str(image),
         None if labels is None else [int(l) for l in labels],
         None if segments is None else [str(s) for s in segments],
         float(margin),
-        int(max_spheres),
-        float(tightness),
-        float(voxel),
+        None if max_spheres is None else int(max_spheres),
+        None if tightness is None else float(tightness),
+        None if voxel is None else float(voxel),
+        None if unit is None else str(unit),
     )
 
 

@@ -65,9 +65,10 @@ def cover(
     labels: Optional[List[int]] = None,
     segments: Optional[List[str]] = None,
     margin: float = 0.0,
-    max_spheres: int = 32,
-    tightness: float = 3.0,
-    voxel: float = 0.5,
+    max_spheres: Optional[int] = None,
+    tightness: Optional[float] = None,
+    voxel: Optional[float] = None,
+    unit: Optional[str] = None,
 ) -> Dict[str, Any]: ...
 def sweep(
     scenario: Scenario,

@@ -4,12 +4,17 @@
 use crate::convert::python_value;
 use crate::errors::{guarded, scenario_error};
 use needle_cli::anatomy::command::{cover_json, CoverArgs};
+use needle_cli::anatomy::cover::DEFAULT_TIGHTNESS;
+use needle_cli::anatomy::mesh::DEFAULT_VOXEL_MM;
+use planner_core::MAX_OBSTACLES;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
-/// Covers the segments of `image` as `needle cover` does, with its defaults.
+/// Covers the segments of `image` as `needle cover` does, with its defaults. `labels` and
+/// `segments` together, an empty list, or a label given twice are refused, as the command and a
+/// scenario's `[[anatomy]]` refuse them.
 #[pyfunction]
-#[pyo3(signature = (image, labels=None, segments=None, margin=0.0, max_spheres=32, tightness=3.0, voxel=0.5))]
+#[pyo3(signature = (image, labels=None, segments=None, margin=0.0, max_spheres=None, tightness=None, voxel=None, unit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn cover<'py>(
     py: Python<'py>,
@@ -17,18 +22,20 @@ pub fn cover<'py>(
     labels: Option<Vec<i64>>,
     segments: Option<Vec<String>>,
     margin: f64,
-    max_spheres: usize,
-    tightness: f64,
-    voxel: f64,
+    max_spheres: Option<usize>,
+    tightness: Option<f64>,
+    voxel: Option<f64>,
+    unit: Option<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let args = CoverArgs {
         image,
-        voxel,
-        labels: labels.unwrap_or_default(),
-        segments: segments.unwrap_or_default(),
+        voxel: voxel.unwrap_or(DEFAULT_VOXEL_MM),
+        unit,
+        labels,
+        segments,
         margin,
-        max_spheres,
-        tightness,
+        max_spheres: max_spheres.unwrap_or(MAX_OBSTACLES),
+        tightness: tightness.unwrap_or(DEFAULT_TIGHTNESS),
         json: true,
         out: None,
         scenario: None,

@@ -30,3 +30,27 @@ def test_a_label_not_in_the_map_raises_the_commands_message():
     with pytest.raises(npl.ScenarioError) as raised:
         npl.cover(ROOT / "examples" / "paper.toml")
     assert "not a label map or mesh this reads" in str(raised.value)
+
+
+def test_labels_and_segments_together_or_empty_are_refused():
+    # Together they silently dropped the segments; an empty list covered everything.
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.cover(MAP, labels=[1], segments=["rib"])
+    assert "labels and segments are both given" in str(raised.value)
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.cover(MAP, labels=[])
+    assert "the labels list is empty" in str(raised.value)
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.cover(MAP, labels=[1, 1])
+    assert "1 is given twice in labels" in str(raised.value)
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.cover(MAP, max_spheres=0)
+    assert "at least 1, not 0" in str(raised.value)
+
+
+def test_the_defaults_are_the_commands():
+    # The wrapper's own defaults (32 spheres, tightness 3) once gave another cover than the
+    # command's (512, 1.5).
+    got = npl.cover(MAP, margin=1.0)
+    want = needle_json("cover", str(MAP), "--margin", "1")
+    assert got == want

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
+pub mod anatomy_family;
 pub mod label_files;
 pub mod readme;
 pub mod reference;

@@ -241,3 +241,29 @@ fn simulate_export_writes_every_path() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `needle plan --export DIR` says on stderr which files it wrote (it said nothing), and leaves
+/// stdout the report.
+#[test]
+fn export_says_what_it_wrote() {
+    let dir = scratch("export-says");
+    let file = example("anatomy");
+    let out = needle()
+        .args([
+            "plan",
+            file.to_str().unwrap(),
+            "--export",
+            dir.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    for name in ["plan.mrk.json", "entry-target.mrk.json", "obstacles.vtk"] {
+        let path = dir.join(name);
+        assert!(path.exists(), "{name}");
+        assert!(err.contains(&path.display().to_string()), "{name}: {err}");
+    }
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("wrote"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -65,11 +65,9 @@ pub fn slice_maps(file: &ScenarioFile) -> Result<Vec<SliceMap>> {
         .map(|(n, a)| {
             let path = file.relative(&a.file);
             let voxel = a.voxel_mm.unwrap_or(crate::anatomy::mesh::DEFAULT_VOXEL_MM);
-            let map =
-                LabelMap::read_with(&path, voxel).with_context(|| format!("in anatomy[{n}]"))?;
-            let labels = a.labels.clone().unwrap_or_default();
-            let names = a.segments.clone().unwrap_or_default();
-            let chosen = selected(&map, &labels, &names)
+            let map = LabelMap::read_with(&path, voxel, a.unit.as_deref())
+                .with_context(|| format!("in anatomy[{n}]"))?;
+            let chosen = selected(&map, a.labels.as_deref(), a.segments.as_deref())
                 .map_err(|e| anyhow!("in anatomy[{n}]: {}: {e:#}", path.display()))?;
             Ok(SliceMap {
                 file: path.display().to_string(),

@@ -15,23 +15,33 @@ pub struct CoverArgs {
     /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`; or a
     /// closed surface mesh (`.stl`, `.obj`), covered as the solid it bounds.
     pub image: PathBuf,
-    /// The voxel edge a mesh is voxelised at (mm).
-    #[arg(long, default_value_t = DEFAULT_VOXEL_MM)]
+    /// The voxel edge a mesh is voxelised at (mm, above 0 and at most 10).
+    #[arg(long, default_value_t = DEFAULT_VOXEL_MM, allow_negative_numbers = true)]
     pub voxel: f64,
+    /// The unit a mesh's coordinates are in: mm (the default), cm, m or um. A mesh whose extent
+    /// is implausible for millimetres (under 1 mm or over 2 m) is refused unless this is given.
+    #[arg(long, value_name = "UNIT")]
+    pub unit: Option<String>,
     /// Cover these label values only (comma-separated; default: every label but 0).
-    #[arg(long, value_delimiter = ',', conflicts_with = "segments")]
-    pub labels: Vec<i64>,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        conflicts_with = "segments",
+        allow_negative_numbers = true
+    )]
+    pub labels: Option<Vec<i64>>,
     /// Cover these segments only, by the names the file gives them (a `.seg.nrrd`).
     #[arg(long, value_delimiter = ',')]
-    pub segments: Vec<String>,
-    /// Grow every sphere by this much (mm): the segment dilated by it is covered.
-    #[arg(long, default_value_t = 0.0)]
+    pub segments: Option<Vec<String>>,
+    /// Grow every sphere by this much (mm, 0 to 100): the segment dilated by it is covered.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub margin: f64,
-    /// The most spheres one segment's cover may take.
+    /// The most spheres one segment's cover may take (at least 1).
     #[arg(long, default_value_t = MAX_OBSTACLES)]
     pub max_spheres: usize,
-    /// Split a sphere while it holds more than this many times its voxels' volume (and a split
-    /// makes the cover smaller). A cube in its sphere is 2.7 times.
+    /// The cover's volume at most this many times the segment's (dilated by the margin): the
+    /// fewest spheres that tight are taken. Where spheres holding whole voxels cannot be that
+    /// tight (a segment a voxel or two thin), the tightest cover tried, and the command says so.
     #[arg(long, default_value_t = DEFAULT_TIGHTNESS)]
     pub tightness: f64,
     /// Print one JSON object instead of the table.
@@ -57,85 +67,106 @@ struct CoverReport<'a> {
 }
 
 /// The segments of `map` that `labels` or `segments` (names) select; every segment present when
-/// both are empty.
-pub fn selected(map: &LabelMap, labels: &[i64], segments: &[String]) -> Result<Vec<Segment>> {
+/// neither is given. Both at once, an empty list and a label or name given twice are refused:
+/// each would otherwise cover something other than what was asked.
+pub fn selected(
+    map: &LabelMap,
+    labels: Option<&[i64]>,
+    segments: Option<&[String]>,
+) -> Result<Vec<Segment>> {
     let present = map.segments();
-    let label_list = || {
-        present
-            .iter()
-            .map(|s| s.label.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
     if present.is_empty() {
         bail!("the map has no labelled voxels (every voxel is 0)");
     }
-    // A segment the file names but no voxel holds (Slicer keeps a segment emptied by editing).
-    let empty = |s: &Segment| {
-        anyhow!(
-            "segment {:?} (label {}) is empty: the file names it, but no voxel holds label {}",
-            s.name,
-            s.label,
-            s.label
-        )
-    };
-    if !labels.is_empty() {
-        return labels
-            .iter()
-            .map(|&l| {
-                if let Some(s) = present.iter().find(|s| s.label == l) {
-                    return Ok(s.clone());
-                }
-                match map.named.iter().find(|s| s.label == l) {
-                    Some(s) => Err(empty(s)),
-                    None => Err(anyhow!(
-                        "label {l} is not in the map (its labels: {})",
-                        label_list()
-                    )),
-                }
-            })
-            .collect();
-    }
-    if !segments.is_empty() {
-        if map.named.is_empty() {
-            bail!("the map names no segments (only a .seg.nrrd does): select by --labels");
+    match (labels, segments) {
+        (Some(_), Some(_)) => bail!(
+            "labels and segments are both given: select by one of them (labels are the voxel \
+             values, segments the names a .seg.nrrd gives them)"
+        ),
+        (Some(l), None) => {
+            no_repeats(l, "labels", |x| x.to_string())?;
+            l.iter().map(|&l| by_label(map, &present, l)).collect()
         }
-        let names = || {
-            present
-                .iter()
-                .map(|s| format!("{:?}", s.name))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        return segments
-            .iter()
-            .map(|n| {
-                if let Some(s) = present.iter().find(|s| &s.name == n) {
-                    return Ok(s.clone());
-                }
-                match map.named.iter().find(|s| &s.name == n) {
-                    Some(s) => Err(empty(s)),
-                    None => Err(anyhow!(
-                        "no segment is named {n:?} (segments with voxels: {})",
-                        names()
-                    )),
-                }
-            })
-            .collect();
+        (None, Some(n)) => {
+            no_repeats(n, "segments", |x| format!("{x:?}"))?;
+            if map.named.is_empty() {
+                bail!("the map names no segments (only a .seg.nrrd does): select by labels");
+            }
+            n.iter().map(|n| by_name(map, &present, n)).collect()
+        }
+        (None, None) => Ok(present),
     }
-    Ok(present)
+}
+
+/// `list` (the `what` selected) is not empty and names nothing twice.
+fn no_repeats<T: PartialEq>(list: &[T], what: &str, show: impl Fn(&T) -> String) -> Result<()> {
+    if list.is_empty() {
+        bail!(
+            "the {what} list is empty, so it selects nothing: leave {what} out to cover every \
+             segment, or list the ones to cover"
+        );
+    }
+    for (n, x) in list.iter().enumerate() {
+        if list[..n].contains(x) {
+            bail!("{} is given twice in {what}: each is covered once", show(x));
+        }
+    }
+    Ok(())
+}
+
+/// A segment the file names but no voxel holds (Slicer keeps a segment emptied by editing).
+fn empty(s: &Segment) -> anyhow::Error {
+    anyhow!(
+        "segment {:?} (label {}) is empty: the file names it, but no voxel holds label {}",
+        s.name,
+        s.label,
+        s.label
+    )
+}
+
+fn by_label(map: &LabelMap, present: &[Segment], l: i64) -> Result<Segment> {
+    if let Some(s) = present.iter().find(|s| s.label == l) {
+        return Ok(s.clone());
+    }
+    match map.named.iter().find(|s| s.label == l) {
+        Some(s) => Err(empty(s)),
+        None => {
+            let list: Vec<String> = present.iter().map(|s| s.label.to_string()).collect();
+            Err(anyhow!(
+                "label {l} is not in the map (its labels: {})",
+                list.join(", ")
+            ))
+        }
+    }
+}
+
+fn by_name(map: &LabelMap, present: &[Segment], n: &str) -> Result<Segment> {
+    if let Some(s) = present.iter().find(|s| s.name == n) {
+        return Ok(s.clone());
+    }
+    match map.named.iter().find(|s| s.name == n) {
+        Some(s) => Err(empty(s)),
+        None => {
+            let names: Vec<String> = present.iter().map(|s| format!("{:?}", s.name)).collect();
+            Err(anyhow!(
+                "no segment is named {n:?} (segments with voxels: {})",
+                names.join(", ")
+            ))
+        }
+    }
 }
 
 /// The covers `a` asks for.
 pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
-    let map = LabelMap::read_with(&a.image, a.voxel)?;
-    let at = |e: anyhow::Error| anyhow!("{}: {e}", a.image.display());
     let options = CoverOptions {
         margin_mm: a.margin,
-        max_spheres: a.max_spheres.max(1),
+        max_spheres: a.max_spheres,
         tightness: a.tightness,
-    };
-    selected(&map, &a.labels, &a.segments)
+    }
+    .validated()?;
+    let map = LabelMap::read_with(&a.image, a.voxel, a.unit.as_deref())?;
+    let at = |e: anyhow::Error| anyhow!("{}: {e}", a.image.display());
+    selected(&map, a.labels.as_deref(), a.segments.as_deref())
         .map_err(at)?
         .iter()
         .map(|s| cover_segment(&map, s, &options).map_err(at))
@@ -206,6 +237,17 @@ fn table(a: &CoverArgs, covers: &[SegmentCover], total: usize) -> String {
         out,
         "{total} spheres; every voxel of each segment lies inside its cover (checked corner by corner)"
     );
+    for c in covers.iter().filter(|c| !c.tight_enough) {
+        let _ = writeln!(
+            out,
+            "{} (label {}): no cover of whole voxels tried is within a tightness of {}; this is \
+             the tightest ({:.2} times its dilated volume)",
+            c.name,
+            c.label,
+            a.tightness,
+            1.0 + c.outside_dilated_ratio
+        );
+    }
     out
 }
 

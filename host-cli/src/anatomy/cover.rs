@@ -1,20 +1,28 @@
-//! Conservative sphere covers of a label map's segments.
+//! Conservative sphere covers of a label map's segments that follow their shape.
 //!
-//! Every voxel of a segment (the whole cube, its eight corners) lies inside one sphere of its
-//! cover, and the cover is dilated by the margin. The cover is a bounding-sphere hierarchy, the
-//! seed paper's "segmented" circles in 3-D: one sphere around the whole segment (centred on the
-//! box of its voxels' corners, its radius the farthest corner), then the sphere that encloses
-//! the most volume beyond its own voxels is split in two (its voxels halved at the median along
-//! their longest extent) for as long as a sphere is looser than `tightness` times the volume of
-//! its voxels and splitting it makes the cover smaller. A ball stays one sphere; a thin tube
-//! becomes a chain.
+//! Every voxel of a segment (the whole cube: its eight corners in one sphere) lies inside a
+//! sphere of its cover, and every sphere is grown by the margin, so the segment dilated by the
+//! margin is covered. The spheres are medial balls (`medial.rs`): placed greedily on the
+//! segment's medial axis from an exact Euclidean distance transform, each reaching at most an
+//! overshoot `k` beyond the segment. The tightness asked, a ratio of volumes, picks `k`: the
+//! cover is the one with the fewest spheres whose volume outside the dilated segment is at most
+//! `tightness − 1` times the dilated segment's volume, tried from one sphere around the whole
+//! segment, then medial balls from a loose overshoot to a tight one.
 
+use super::block::Block;
 use super::label_map::{LabelMap, Segment};
+use super::measure::{dilated, tightness, Dilated, Tightness};
+use super::medial::{deepest_first, depths, medial_cover, Fit};
+pub use super::reach::Reach;
 use anyhow::{bail, Result};
 use serde::Serialize;
 
-/// The tightness a cover keeps when none is given: a cube in its sphere is 2.7 times its volume.
-pub const DEFAULT_TIGHTNESS: f64 = 3.0;
+/// The tightness a cover keeps when none is given: its volume at most 1.5 times the dilated
+/// segment's (half of it again outside).
+pub const DEFAULT_TIGHTNESS: f64 = 1.5;
+
+/// The overshoots tried (in half voxel diagonals), loosest first.
+const OVERSHOOTS: [f64; 9] = [8.0, 5.6, 4.0, 2.8, 2.0, 1.4, 1.0, 0.7, 0.5];
 
 /// A sphere of a cover (RAS, mm).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -29,21 +37,50 @@ impl Sphere {
     fn volume(&self) -> f64 {
         4.0 / 3.0 * std::f64::consts::PI * self.radius.powi(3)
     }
-
-    fn contains(&self, p: [f64; 3]) -> bool {
-        dist(self.center, p) <= self.radius
-    }
 }
 
 /// How a cover is made.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CoverOptions {
-    /// Every sphere grows by this (mm, ≥ 0): the voxels dilated by it are covered.
+    /// Every sphere grows by this (mm, 0 to [`MAX_MARGIN_MM`]): the voxels dilated by it are
+    /// covered.
     pub margin_mm: f64,
-    /// The most spheres one segment's cover may have.
+    /// The most spheres one segment's cover may have (at least 1).
     pub max_spheres: usize,
-    /// A sphere looser than this many times its voxels' volume is split while that helps.
+    /// The cover's volume is at most this many times the dilated segment's, where spheres that
+    /// hold whole voxels can be that tight.
     pub tightness: f64,
+}
+
+/// The largest margin a cover takes (mm): beyond it the dilated segment says little of the
+/// organ, and the cover's cost grows with the margin's cube.
+pub const MAX_MARGIN_MM: f64 = 100.0;
+
+impl CoverOptions {
+    /// `self` when every option is in its range, else an error naming the option.
+    pub fn validated(self) -> Result<CoverOptions> {
+        let m = self.margin_mm;
+        if !m.is_finite() || m < 0.0 {
+            bail!(
+                "the margin must be 0 to {MAX_MARGIN_MM} mm, not {m}: a cover holds every voxel \
+                 of the segment, so a negative margin cannot shrink it (give 0, the default, to \
+                 cover the segment itself)"
+            );
+        }
+        if m > MAX_MARGIN_MM {
+            bail!("the margin must be 0 to {MAX_MARGIN_MM} mm, not {m}");
+        }
+        if self.max_spheres == 0 {
+            bail!("the most spheres a segment may take must be at least 1, not 0");
+        }
+        if !(self.tightness > 1.0 && self.tightness.is_finite()) {
+            bail!(
+                "the tightness must be a number above 1, not {}",
+                self.tightness
+            );
+        }
+        Ok(self)
+    }
 }
 
 /// One segment's cover and how tight it is.
@@ -59,9 +96,17 @@ pub struct SegmentCover {
     pub volume_mm3: f64,
     /// The cover.
     pub spheres: Vec<Sphere>,
-    /// The cover's volume outside the segment over the segment's volume (sampled at half a
-    /// voxel's spacing).
+    /// The cover's volume outside the segment over the segment's volume (sampled at eight points
+    /// a voxel).
     pub outside_ratio: f64,
+    /// The cover's volume outside the segment dilated by the margin over the dilated segment's
+    /// volume (sampled alike; `outside_ratio` without a margin).
+    pub outside_dilated_ratio: f64,
+    /// The volume of the segment dilated by the margin (mm³, sampled alike).
+    pub dilated_volume_mm3: f64,
+    /// Whether the cover is as tight as asked; when not, it is the tightest tried (a segment a
+    /// voxel or two thin cannot be held whole by spheres that tight).
+    pub tight_enough: bool,
     /// The largest distance from a point of the cover to the segment's nearest voxel centre
     /// (mm, sampled at the voxel centres).
     pub farthest_mm: f64,
@@ -85,11 +130,12 @@ fn centre_of(map: &LabelMap, v: &[i64; 3]) -> [f64; 3] {
 }
 
 /// The sphere around the corners of `voxels` (no margin), centred on their bounding box.
-fn enclosing(map: &LabelMap, voxels: &[[i64; 3]], corners: &[[f64; 3]; 8]) -> Sphere {
+fn enclosing(map: &LabelMap, voxels: &[[i64; 3]]) -> Sphere {
+    let corners = corner_offsets(map);
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for v in voxels {
         let c = centre_of(map, v);
-        for off in corners {
+        for off in &corners {
             for k in 0..3 {
                 lo[k] = lo[k].min(c[k] + off[k]);
                 hi[k] = hi[k].max(c[k] + off[k]);
@@ -100,121 +146,180 @@ fn enclosing(map: &LabelMap, voxels: &[[i64; 3]], corners: &[[f64; 3]; 8]) -> Sp
     let mut radius = 0.0f64;
     for v in voxels {
         let c = centre_of(map, v);
-        for off in corners {
+        for off in &corners {
             radius = radius.max(dist(center, [c[0] + off[0], c[1] + off[1], c[2] + off[2]]));
         }
     }
     Sphere { center, radius }
 }
 
-/// Grid coordinates of voxels.
-type Voxels = Vec<[i64; 3]>;
+/// A radius computed on the rounded grid (`block.rs`) made safe for the file's own affine, which
+/// may differ from it by float32's rounding.
+fn safe(radius: f64) -> f64 {
+    radius * (1.0 + 1e-7) + 1e-6
+}
 
-/// Relative differences below this are ties: the same anatomy in a float32 affine (NIfTI's) and
-/// a float64 one (NRRD's) must give the same cover, so no decision may hang on rounding.
-const TIE: f64 = 1e-6;
+/// The box of `voxels` grown to hold balls reaching `reach` mm beyond the segment.
+fn block_for(map: &LabelMap, voxels: &[[i64; 3]], reach: f64) -> Block {
+    let probe = Block::around(map, voxels, [1, 1, 1]);
+    let cells = probe.reach(reach + 2.0 * probe.half_diagonal());
+    Block::around(map, voxels, cells.map(|c| c as i64 + 1))
+}
 
-/// Splits `voxels` in two at the median along the grid axis of their longest world extent (the
-/// first such axis when extents tie); `None` when they cannot be split (one voxel, or all in one
-/// place along every axis).
-fn halves(map: &LabelMap, voxels: &[[i64; 3]]) -> Option<(Voxels, Voxels)> {
-    let spacing = map.spacing();
-    let mut axes: Vec<(f64, usize)> = (0..3)
-        .map(|k| {
-            let (lo, hi) = voxels
-                .iter()
-                .fold((i64::MAX, i64::MIN), |(l, h), v| (l.min(v[k]), h.max(v[k])));
-            ((hi - lo) as f64 * spacing[k], k)
+/// The tightness of `spheres` about the segment, on `b` (which must hold them).
+fn measured(
+    map: &LabelMap,
+    b: &Block,
+    d: &Dilated,
+    spheres: &[Sphere],
+    reach: Option<&Reach>,
+) -> Tightness {
+    let balls: Vec<([f64; 3], f64)> = spheres
+        .iter()
+        .map(|s| {
+            let g = map.grid(s.center);
+            ([0, 1, 2].map(|k| g[k] - b.lo[k] as f64), s.radius)
         })
         .collect();
-    let longest = axes.iter().map(|a| a.0).fold(0.0, f64::max);
-    axes.retain(|a| a.0 >= longest * (1.0 - TIE));
-    let (extent, k) = axes[0];
-    if extent == 0.0 {
-        return None;
-    }
-    let mut sorted = voxels.to_vec();
-    sorted.sort_by_key(|v| (v[k], v[0], v[1], v[2]));
-    let mid = sorted.len() / 2;
-    // Keep voxels of one grid slice together.
-    let cut = std::iter::once(mid)
-        .chain((1..sorted.len()).flat_map(|d| [mid.saturating_sub(d), mid + d]))
-        .find(|&m| m > 0 && m < sorted.len() && sorted[m - 1][k] != sorted[m][k])?;
-    let second = sorted.split_off(cut);
-    Some((sorted, second))
+    let in_reach = |c: usize| {
+        let g = b.cell(c);
+        reach.is_none_or(|r| r.holds(map.world([0, 1, 2].map(|k| (g[k] as i64 + b.lo[k]) as f64))))
+    };
+    tightness(b, d, &balls, Some(&in_reach))
 }
 
-struct Leaf {
-    voxels: Vec<[i64; 3]>,
-    sphere: Sphere,
-    /// The sphere's volume over its voxels' volume.
-    looseness: f64,
-    /// Splitting it was tried and made the cover no smaller.
-    settled: bool,
+/// A cover of a segment that its choice tried.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// The spheres (the margin included).
+    pub spheres: Vec<Sphere>,
+    /// How tight they are; `None` for one sphere around the whole segment when a looser cover
+    /// was taken (measured when chosen).
+    pub tightness: Option<Tightness>,
+    /// Their volume outside the dilated segment where a needle can reach (mm³).
+    pub outside_in_reach_mm3: f64,
+    /// Whether they are as tight as asked (within the reach, when one is given).
+    pub tight_enough: bool,
 }
 
-fn leaf(map: &LabelMap, voxels: Vec<[i64; 3]>, corners: &[[f64; 3]; 8]) -> Leaf {
-    let sphere = enclosing(map, &voxels, corners);
-    let own = voxels.len() as f64 * map.voxel_volume();
-    Leaf {
-        looseness: sphere.volume() / own,
-        sphere,
-        voxels,
-        settled: false,
-    }
+/// A segment's voxels and the covers tried, loosest first: the last is the one the options ask
+/// for (the fewest spheres as tight as asked, else the tightest tried).
+pub struct Ladder {
+    /// The segment's voxels.
+    pub voxels: Vec<[i64; 3]>,
+    /// The covers tried.
+    pub candidates: Vec<Candidate>,
 }
 
-/// The spheres (no margin) that cover `voxels`, as the module describes.
-fn hierarchy(
+/// The covers of `voxels` tried for the options, loosest first; with a `reach`, spheres beyond
+/// it take the loosest overshoot, and tightness counts only the volume within it.
+fn choose(
     map: &LabelMap,
-    voxels: Vec<[i64; 3]>,
+    voxels: &[[i64; 3]],
     o: &CoverOptions,
     name: &str,
-) -> Result<Vec<Sphere>> {
-    let corners = corner_offsets(map);
-    let mut leaves = vec![leaf(map, voxels, &corners)];
-    loop {
-        let worst = leaves
+    reach: Option<&Reach>,
+) -> Result<Vec<Candidate>> {
+    let m = o.margin_mm;
+    let probe = Block::around(map, voxels, [1, 1, 1]);
+    let hd = probe.half_diagonal();
+    let b = block_for(map, voxels, OVERSHOOTS[0] * hd + m);
+    let d = dilated(&b, m);
+    let goal = o.tightness - 1.0;
+    // One sphere around everything: its volume outside the dilated segment, which it holds whole,
+    // is its volume less the dilated segment's.
+    let mut one = enclosing(map, voxels);
+    one.radius += m;
+    let dilated_volume =
+        d.bits.iter().map(|x| x.count_ones()).sum::<u32>() as f64 / 8.0 * map.voxel_volume();
+    let one_outside = if reach.is_some_and(|r| r.misses(one.center, one.radius)) {
+        0.0
+    } else {
+        (one.volume() - dilated_volume).max(0.0)
+    };
+    let one_clear = reach.is_none_or(|x| {
+        [x.entry, x.target]
             .iter()
-            .enumerate()
-            .filter(|(_, l)| !l.settled && l.looseness > o.tightness * (1.0 + TIE))
-            .max_by(|a, b| {
-                let excess = |l: &Leaf| l.sphere.volume() * (1.0 - 1.0 / l.looseness);
-                excess(a.1).total_cmp(&excess(b.1))
-            })
-            .map(|(n, _)| n);
-        let Some(n) = worst else { break };
-        let Some((a, b)) = halves(map, &leaves[n].voxels) else {
-            leaves[n].settled = true;
-            continue;
-        };
-        let (a, b) = (leaf(map, a, &corners), leaf(map, b, &corners));
-        if a.sphere.volume() + b.sphere.volume() >= leaves[n].sphere.volume() * (1.0 - TIE) {
-            leaves[n].settled = true;
-            continue;
-        }
-        if leaves.len() == o.max_spheres {
-            bail!(
-                "covering {name} within a tightness of {} needs more than {} spheres \
-                 (--max-spheres): raise it, or loosen --tightness",
-                o.tightness,
-                o.max_spheres
-            );
-        }
-        leaves[n] = a;
-        leaves.push(b);
+            .all(|&p| dist(one.center, p) > one.radius)
+    });
+    let mut tried = vec![Candidate {
+        spheres: vec![one],
+        tightness: None,
+        outside_in_reach_mm3: one_outside,
+        tight_enough: one_clear && one_outside <= goal * dilated_volume * (1.0 + 1e-9),
+    }];
+    if tried[0].tight_enough {
+        return Ok(tried);
     }
-    Ok(leaves.into_iter().map(|l| l.sphere).collect())
+    if o.max_spheres == 1 {
+        bail!(
+            "covering {name} within a tightness of {} needs more than 1 spheres \
+             (--max-spheres): raise it, or loosen --tightness",
+            o.tightness
+        );
+    }
+    let depth = depths(&b);
+    let order = deepest_first(&b, &depth);
+    let to_world = |g: [usize; 3]| map.world([0, 1, 2].map(|a| (g[a] as i64 + b.lo[a]) as f64));
+    let beyond_reach =
+        |g: [usize; 3], r: f64| reach.is_some_and(|x| x.misses(to_world(g), safe(r) + m));
+    let holds_kept_out = |g: [usize; 3], r: f64| {
+        let c = to_world(g);
+        reach.is_some_and(|x| {
+            [x.entry, x.target]
+                .iter()
+                .any(|&p| dist(c, p) <= safe(r) + m)
+        })
+    };
+    let fit = Fit {
+        beyond_reach: &beyond_reach,
+        coarse_k: OVERSHOOTS[0] * hd,
+        holds_kept_out: &holds_kept_out,
+    };
+    for k in OVERSHOOTS.map(|x| x * hd) {
+        // Over the budget: the tightest cover within it, if a looser overshoot gave one.
+        let fit = reach.map(|_| &fit);
+        let Some(balls) = medial_cover(&b, &depth, &order, k, o.max_spheres, fit) else {
+            break;
+        };
+        let spheres: Vec<Sphere> = balls
+            .iter()
+            .map(|ball| Sphere {
+                center: to_world(ball.cell),
+                radius: safe(ball.radius) + m,
+            })
+            .collect();
+        let t = measured(map, &b, &d, &spheres, reach);
+        let tight_enough = t.outside_in_reach <= goal;
+        tried.push(Candidate {
+            spheres,
+            tightness: Some(t),
+            outside_in_reach_mm3: t.outside_in_reach * dilated_volume,
+            tight_enough,
+        });
+        if tight_enough {
+            break;
+        }
+    }
+    if tried.len() == 1 {
+        bail!(
+            "covering {name} within a tightness of {} needs more than {} spheres \
+             (--max-spheres): raise it, or loosen --tightness",
+            o.tightness,
+            o.max_spheres
+        );
+    }
+    Ok(tried)
 }
 
-/// The cover of `segment` in `map`.
-pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Result<SegmentCover> {
-    if !(o.margin_mm >= 0.0 && o.margin_mm.is_finite()) {
-        bail!("the margin must be a number of millimetres, 0 or more");
-    }
-    if !(o.tightness > 1.0 && o.tightness.is_finite()) {
-        bail!("the tightness must be a number above 1");
-    }
+/// The covers of `segment` tried for the options, loosest first (see [`Ladder`]).
+pub fn ladder(
+    map: &LabelMap,
+    segment: &Segment,
+    o: &CoverOptions,
+    reach: Option<&Reach>,
+) -> Result<Ladder> {
+    let o = &o.validated()?;
     let voxels = map.voxels_of(segment.label);
     if voxels.is_empty() {
         bail!(
@@ -223,25 +328,111 @@ pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Res
             segment.label
         );
     }
-    let name = format!("{:?} (label {})", segment.name, segment.label);
-    let mut spheres = hierarchy(map, voxels.clone(), o, &name)?;
-    for s in &mut spheres {
-        s.radius += o.margin_mm;
-    }
-    let uncovered = uncovered_corners(map, &voxels, &spheres);
+    let candidates = choose(map, &voxels, o, &name_of(segment), reach)?;
+    Ok(Ladder { voxels, candidates })
+}
+
+fn name_of(segment: &Segment) -> String {
+    format!("{:?} (label {})", segment.name, segment.label)
+}
+
+/// `segment`'s cover `c` of its ladder, checked voxel by voxel on the map's own affine.
+pub fn finish(
+    map: &LabelMap,
+    segment: &Segment,
+    ladder: &Ladder,
+    c: &Candidate,
+    o: &CoverOptions,
+) -> Result<SegmentCover> {
+    let m = o.margin_mm;
+    let voxels = &ladder.voxels;
+    let t = c.tightness.unwrap_or_else(|| {
+        let big = block_for(map, voxels, c.spheres[0].radius);
+        measured(map, &big, &dilated(&big, m), &c.spheres, None)
+    });
+    let uncovered = uncovered_voxels(map, voxels, &c.spheres, m);
     if uncovered > 0 {
-        bail!("internal error: the cover of {name} leaves {uncovered} voxel corners out");
+        bail!(
+            "internal error: the cover of {} leaves {uncovered} voxels out",
+            name_of(segment)
+        );
     }
-    let (outside_ratio, farthest_mm) = tightness(map, segment.label, &voxels, &spheres);
+    let volume = voxels.len() as f64 * map.voxel_volume();
     Ok(SegmentCover {
         name: segment.name.clone(),
         label: segment.label,
         voxels: voxels.len(),
-        volume_mm3: voxels.len() as f64 * map.voxel_volume(),
-        spheres,
-        outside_ratio,
-        farthest_mm,
+        volume_mm3: volume,
+        spheres: c.spheres.clone(),
+        outside_ratio: t.outside,
+        outside_dilated_ratio: t.outside_dilated,
+        dilated_volume_mm3: t.dilated_over_segment * volume,
+        tight_enough: c.tight_enough,
+        farthest_mm: t.farthest,
     })
+}
+
+/// The cover of `segment` in `map`.
+pub fn cover_segment(map: &LabelMap, segment: &Segment, o: &CoverOptions) -> Result<SegmentCover> {
+    let l = ladder(map, segment, o, None)?;
+    let last = l.candidates.last().expect("a ladder is never empty");
+    finish(map, segment, &l, last, o)
+}
+
+/// The voxels of `voxels` that no sphere of `spheres`, shrunk by `margin`, holds whole (all eight
+/// corners in that one sphere), on the map's own affine: a voxel held whole with the margin to
+/// spare has its dilation by the margin inside the sphere.
+pub fn uncovered_voxels(
+    map: &LabelMap,
+    voxels: &[[i64; 3]],
+    spheres: &[Sphere],
+    margin: f64,
+) -> usize {
+    let lo = [0, 1, 2].map(|k| voxels.iter().map(|v| v[k]).min().unwrap_or(0));
+    let hi = [0, 1, 2].map(|k| voxels.iter().map(|v| v[k]).max().unwrap_or(0));
+    let n = [0, 1, 2].map(|k| (hi[k] - lo[k] + 1) as usize);
+    let index = |v: [i64; 3]| {
+        let g = [0, 1, 2].map(|k| (v[k] - lo[k]) as usize);
+        g[0] + n[0] * (g[1] + n[1] * g[2])
+    };
+    // 0: not in the segment, 1: not held yet, 2: held.
+    let mut state = vec![0u8; n[0] * n[1] * n[2]];
+    for v in voxels {
+        state[index(*v)] = 1;
+    }
+    let corners = corner_offsets(map);
+    for s in spheres {
+        let r = s.radius - margin;
+        let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for m in 0..8 {
+            let p = [0, 1, 2].map(|k| s.center[k] + if m >> k & 1 == 1 { r } else { -r });
+            let g = map.grid(p);
+            for k in 0..3 {
+                a[k] = a[k].min(g[k].floor());
+                b[k] = b[k].max(g[k].ceil());
+            }
+        }
+        let a = [0, 1, 2].map(|k| (a[k] as i64).max(lo[k]));
+        let b = [0, 1, 2].map(|k| (b[k] as i64).min(hi[k]));
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    let at = index([x, y, z]);
+                    if state[at] != 1 {
+                        continue;
+                    }
+                    let c = centre_of(map, &[x, y, z]);
+                    let whole = corners
+                        .iter()
+                        .all(|o| dist(s.center, [c[0] + o[0], c[1] + o[1], c[2] + o[2]]) <= r);
+                    if whole {
+                        state[at] = 2;
+                    }
+                }
+            }
+        }
+    }
+    state.iter().filter(|&&s| s == 1).count()
 }
 
 /// The voxel corners of `voxels` inside no sphere of `spheres` (checked one by one).
@@ -253,62 +444,21 @@ pub fn uncovered_corners(map: &LabelMap, voxels: &[[i64; 3]], spheres: &[Sphere]
             let c = centre_of(map, v);
             corners.map(|off| [c[0] + off[0], c[1] + off[1], c[2] + off[2]])
         })
-        .filter(|&p| !spheres.iter().any(|s| s.contains(p)))
+        .filter(|&p| !spheres.iter().any(|s| dist(s.center, p) <= s.radius))
         .count()
 }
 
-/// The cover's volume outside the segment over the segment's volume, and the largest distance
-/// from a voxel centre inside the cover to the segment's nearest voxel centre.
-fn tightness(map: &LabelMap, label: i64, voxels: &[[i64; 3]], spheres: &[Sphere]) -> (f64, f64) {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for s in spheres {
-        for n in 0..8 {
-            let corner =
-                [0, 1, 2].map(|k| s.center[k] + if n >> k & 1 == 1 { s.radius } else { -s.radius });
-            let g = map.grid(corner);
-            for k in 0..3 {
-                lo[k] = lo[k].min(g[k].floor());
-                hi[k] = hi[k].max(g[k].ceil());
-            }
-        }
-    }
-    let boundary: Vec<[f64; 3]> = voxels
+/// The half diagonal of `map`'s voxels (mm) and the distance (mm) from `p` to the nearest
+/// centre of `voxels`: a margin below their difference keeps `p` outside every cover of
+/// `voxels` a scenario makes (each voxel can be held by a sphere about its own centre).
+pub fn clear_of(map: &LabelMap, voxels: &[[i64; 3]], p: [f64; 3]) -> (f64, f64) {
+    let half_diagonal = corner_offsets(map)
         .iter()
-        .filter(|v| {
-            [[1, 0, 0], [0, 1, 0], [0, 0, 1]].iter().any(|d| {
-                map.at(v[0] + d[0], v[1] + d[1], v[2] + d[2]) != label
-                    || map.at(v[0] - d[0], v[1] - d[1], v[2] - d[2]) != label
-            })
-        })
-        .map(|v| centre_of(map, v))
-        .collect();
-    let (mut outside, mut farthest) = (0usize, 0.0f64);
-    let inside = |p: [f64; 3]| spheres.iter().any(|s| s.contains(p));
-    let (lo, hi) = (lo.map(|x| x as i64), hi.map(|x| x as i64));
-    for k in lo[2]..=hi[2] {
-        for j in lo[1]..=hi[1] {
-            for i in lo[0]..=hi[0] {
-                if map.at(i, j, k) == label {
-                    continue;
-                }
-                // Eight samples a quarter voxel from the centre, an eighth of the voxel each.
-                let g = [i, j, k].map(|x| x as f64);
-                outside += (0..8)
-                    .filter(|n| {
-                        let d = [0, 1, 2].map(|a| if n >> a & 1 == 1 { 0.25 } else { -0.25 });
-                        inside(map.world([g[0] + d[0], g[1] + d[1], g[2] + d[2]]))
-                    })
-                    .count();
-                let p = map.world(g);
-                if inside(p) {
-                    let near = boundary
-                        .iter()
-                        .map(|&q| dist(p, q))
-                        .fold(f64::INFINITY, f64::min);
-                    farthest = farthest.max(near);
-                }
-            }
-        }
-    }
-    (outside as f64 / 8.0 / voxels.len() as f64, farthest)
+        .map(|o| (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt())
+        .fold(0.0, f64::max);
+    let nearest = voxels
+        .iter()
+        .map(|v| dist(centre_of(map, v), p))
+        .fold(f64::INFINITY, f64::min);
+    (half_diagonal, nearest)
 }

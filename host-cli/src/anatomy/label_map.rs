@@ -30,14 +30,23 @@ impl LabelMap {
     /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`; or a
     /// closed mesh (`.stl`, `.obj`) as the solid it bounds, in voxels of the default size.
     pub fn read(path: &Path) -> Result<LabelMap> {
-        Self::read_with(path, super::mesh::DEFAULT_VOXEL_MM)
+        Self::read_with(path, super::mesh::DEFAULT_VOXEL_MM, None)
     }
 
-    /// [`LabelMap::read`], a mesh voxelised at `voxel_mm`.
-    pub fn read_with(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
+    /// [`LabelMap::read`], a mesh voxelised at `voxel_mm`, its coordinates in `unit` (mm, cm, m
+    /// or um; `None`: millimetres, and a mesh whose extent is implausible for them is refused).
+    pub fn read_with(path: &Path, voxel_mm: f64, unit: Option<&str>) -> Result<LabelMap> {
         let name = path.to_string_lossy().to_lowercase();
-        let map = if name.ends_with(".stl") || name.ends_with(".obj") {
-            super::mesh::read(path, voxel_mm)
+        let mesh = name.ends_with(".stl") || name.ends_with(".obj");
+        if unit.is_some() && !mesh {
+            bail!(
+                "{}: a unit is given, but only a mesh takes one (a label map's header gives its \
+                 own)",
+                path.display()
+            );
+        }
+        let map = if mesh {
+            super::mesh::read(path, voxel_mm, unit)
                 .map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?
         } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
             super::nrrd::read(path)?
@@ -129,25 +138,28 @@ impl LabelMap {
         })
     }
 
-    /// The segments present: the named ones with at least one voxel, else one per label other
-    /// than 0, in label order.
+    /// The segments present: the named ones with at least one voxel, in the file's order, then a
+    /// `label N` for every other label but 0 that voxels hold, in label order (a `.seg.nrrd`
+    /// whose voxels carry values its header does not name keeps them: nothing is dropped).
     pub fn segments(&self) -> Vec<Segment> {
         let mut present: Vec<i64> = self.labels.iter().copied().filter(|&l| l != 0).collect();
         present.sort_unstable();
         present.dedup();
-        if self.named.is_empty() {
-            return present
-                .into_iter()
-                .map(|label| Segment {
-                    name: format!("label {label}"),
-                    label,
-                })
-                .collect();
-        }
+        let named = |l: i64| self.named.iter().any(|s| s.label == l);
         self.named
             .iter()
             .filter(|s| present.binary_search(&s.label).is_ok())
             .cloned()
+            .chain(
+                present
+                    .iter()
+                    .copied()
+                    .filter(|&l| !named(l))
+                    .map(|label| Segment {
+                        name: format!("label {label}"),
+                        label,
+                    }),
+            )
             .collect()
     }
 

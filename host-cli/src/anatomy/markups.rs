@@ -65,8 +65,10 @@ pub fn read_point(path: &Path, label: Option<&str>) -> Result<[f32; 3]> {
                 Some(&[x, y, z]) if [x, y, z].iter().all(|c| c.is_finite()) => [x, y, z],
                 _ => {
                     return Err(at(anyhow!(
-                        "control point {:?} has no position of 3 finite numbers",
+                        "control point {} has no position of 3 finite numbers",
                         p.label
+                            .as_deref()
+                            .map_or("without a label".to_string(), |l| format!("{l:?}"))
                     )))
                 }
             };

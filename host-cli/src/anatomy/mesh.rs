@@ -17,15 +17,35 @@ use std::path::Path;
 /// The edge of a voxel when none is given (mm).
 pub const DEFAULT_VOXEL_MM: f64 = 0.5;
 
+/// The largest voxel a mesh is voxelised at (mm): coarser, the cover says little of the shape.
+pub const MAX_VOXEL_MM: f64 = 10.0;
+
 /// The most voxels a mesh's grid may have.
 const MAX_VOXELS: usize = 64_000_000;
 
+/// The extents (mm) a mesh in millimetres plausibly has: an anatomical structure is more than a
+/// millimetre across and less than two metres. A mesh in metres is a thousandth of that.
+const PLAUSIBLE_MM: (f64, f64) = (1.0, 2000.0);
+
+/// Millimetres per `unit`.
+fn unit_mm(unit: &str) -> Result<f64> {
+    Ok(match unit {
+        "mm" => 1.0,
+        "cm" => 10.0,
+        "m" => 1000.0,
+        "um" => 0.001,
+        other => bail!("the unit {other:?} is none of mm, cm, m, um"),
+    })
+}
+
 /// Reads the closed mesh `path` as a label map (label 1, named after the file) of voxels
-/// `voxel_mm` across.
-pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
-    if !(voxel_mm > 0.0 && voxel_mm.is_finite()) {
-        bail!("the voxel size must be a positive number of millimetres");
+/// `voxel_mm` across; its coordinates are in `unit` (see [`unit_mm`]), or millimetres when
+/// `None`, and then a mesh whose extent is implausible for millimetres is refused.
+pub fn read(path: &Path, voxel_mm: f64, unit: Option<&str>) -> Result<LabelMap> {
+    if !(voxel_mm > 0.0 && voxel_mm <= MAX_VOXEL_MM) {
+        bail!("the voxel size must be above 0 and at most {MAX_VOXEL_MM} mm, not {voxel_mm}");
     }
+    let scale = unit.map(unit_mm).transpose()?;
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(256)]).to_string();
     let ras = head.contains("SPACE=RAS");
@@ -43,12 +63,16 @@ pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
     } else {
         [-1.0, -1.0, 1.0]
     };
+    let mm = scale.unwrap_or(1.0);
     let points: Vec<[f64; 3]> = points
         .iter()
-        .map(|v| [0, 1, 2].map(|k| flip[k] * v[k]))
+        .map(|v| [0, 1, 2].map(|k| flip[k] * v[k] * mm))
         .collect();
     if points.iter().flatten().any(|c| !c.is_finite()) {
         bail!("the mesh has a vertex that is not finite");
+    }
+    if scale.is_none() {
+        plausible_in_mm(&points)?;
     }
     // Vertices at the same place are one vertex (a file may repeat them).
     let mut welded: BTreeMap<[u64; 3], usize> = BTreeMap::new();
@@ -69,6 +93,35 @@ pub fn read(path: &Path, voxel_mm: f64) -> Result<LabelMap> {
     closed(&faces_welded)?;
     let triangles: Vec<[[f64; 3]; 3]> = faces.iter().map(|f| f.map(|i| points[i])).collect();
     voxelise(&triangles, voxel_mm, path)
+}
+
+/// Refuses a mesh whose largest extent is implausible for millimetres (a mesh saved in metres
+/// would be covered as a speck, and a plan would pass where the structure is).
+fn plausible_in_mm(points: &[[f64; 3]]) -> Result<()> {
+    let extent = (0..3)
+        .map(|k| {
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                    (l.min(p[k]), h.max(p[k]))
+                });
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    let (lo, hi) = PLAUSIBLE_MM;
+    if extent < lo {
+        bail!(
+            "the mesh is {extent} across, implausible for millimetres (a mesh saved in metres?): \
+             give its unit (--unit m, or unit = \"m\" in [[anatomy]]; or mm if it is that small)"
+        );
+    }
+    if extent > hi {
+        bail!(
+            "the mesh is {extent} across, implausible for millimetres (a mesh saved in \
+             micrometres?): give its unit (--unit um, or unit = \"um\" in [[anatomy]]; or mm)"
+        );
+    }
+    Ok(())
 }
 
 /// A mesh as read: its vertices and its triangles (indices into them).

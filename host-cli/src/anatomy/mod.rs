@@ -6,14 +6,21 @@
 //! `nifti` crate; [`cover`] builds the conservative sphere cover and measures it; [`command`] is
 //! the command line.
 
+pub mod block;
+pub mod budget;
 pub mod command;
 pub mod cover;
+pub mod distance;
+pub mod edt;
 pub mod interior;
 pub mod label_map;
 pub mod markups;
+pub mod measure;
+pub mod medial;
 pub mod mesh;
 pub mod nifti_file;
 pub mod nrrd;
+pub mod reach;
 
 #[cfg(test)]
 mod tests;

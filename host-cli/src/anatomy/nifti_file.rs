@@ -5,8 +5,19 @@
 
 use super::label_map::{whole_label, LabelMap};
 use anyhow::{anyhow, bail, Result};
-use nifti::{NiftiHeader, NiftiObject, NiftiType, ReaderOptions};
+use nifti::{NiftiError, NiftiHeader, NiftiObject, NiftiType, ReaderOptions};
 use std::path::Path;
+
+/// The `nifti` crate's error in words: its I/O errors print as Rust debug text.
+fn words(e: &NiftiError) -> String {
+    match e {
+        NiftiError::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file ends before its data does (truncated?)".into()
+        }
+        NiftiError::Io(io) => io.to_string(),
+        other => other.to_string(),
+    }
+}
 
 /// Reads a NIfTI label map.
 pub fn read(path: &Path) -> Result<LabelMap> {
@@ -20,7 +31,7 @@ pub fn read(path: &Path) -> Result<LabelMap> {
     }
     let obj = ReaderOptions::new()
         .read_file(path)
-        .map_err(|e| at(anyhow!("not a NIfTI-1 file this reads: {e}")))?;
+        .map_err(|e| at(anyhow!("not a NIfTI-1 file this reads: {}", words(&e))))?;
     let h = obj.header().clone();
     let dims = dims(&h).map_err(at)?;
     let labels = labels(obj.into_volume(), &h).map_err(at)?;
@@ -44,7 +55,7 @@ fn dims(h: &NiftiHeader) -> Result<[usize; 3]> {
 }
 
 fn labels(volume: nifti::InMemNiftiVolume, h: &NiftiHeader) -> Result<Vec<i64>> {
-    let t = h.data_type().map_err(|e| anyhow!("{e}"))?;
+    let t = h.data_type().map_err(|e| anyhow!("{}", words(&e)))?;
     let ints: Vec<i64> = match t {
         NiftiType::Uint8 => widen(volume.into_nifti_typed_data::<u8>()),
         NiftiType::Int8 => widen(volume.into_nifti_typed_data::<i8>()),
@@ -54,14 +65,17 @@ fn labels(volume: nifti::InMemNiftiVolume, h: &NiftiHeader) -> Result<Vec<i64>> 
         NiftiType::Int32 => widen(volume.into_nifti_typed_data::<i32>()),
         NiftiType::Int64 => volume
             .into_nifti_typed_data::<i64>()
-            .map_err(|e| anyhow!("{e}")),
+            .map_err(|e| anyhow!("{}", words(&e))),
         NiftiType::Float32 => floats(
             volume
                 .into_nifti_typed_data::<f32>()
                 .map(|v| v.into_iter().map(f64::from).collect()),
         ),
         NiftiType::Float64 => floats(volume.into_nifti_typed_data::<f64>()),
-        other => bail!("data type {other:?} is not a label type"),
+        other => bail!(
+            "data type {} is not a label type",
+            format!("{other:?}").to_lowercase()
+        ),
     }?;
     // A scaled map holds labels only if slope and intercept keep them whole.
     let (slope, inter) = (f64::from(h.scl_slope), f64::from(h.scl_inter));
@@ -74,14 +88,14 @@ fn labels(volume: nifti::InMemNiftiVolume, h: &NiftiHeader) -> Result<Vec<i64>> 
 }
 
 fn widen<T: Into<i64>>(v: nifti::Result<Vec<T>>) -> Result<Vec<i64>> {
-    Ok(v.map_err(|e| anyhow!("{e}"))?
+    Ok(v.map_err(|e| anyhow!("{}", words(&e)))?
         .into_iter()
         .map(Into::into)
         .collect())
 }
 
 fn floats(v: nifti::Result<Vec<f64>>) -> Result<Vec<i64>> {
-    v.map_err(|e| anyhow!("{e}"))?
+    v.map_err(|e| anyhow!("{}", words(&e)))?
         .into_iter()
         .map(whole_label)
         .collect()

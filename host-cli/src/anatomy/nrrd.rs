@@ -134,7 +134,7 @@ pub fn parse(bytes: &[u8]) -> Result<LabelMap> {
     let dims: [usize; 3] = sizes.try_into().map_err(|_| anyhow!("3 sizes expected"))?;
     let (width, kind) = sample_type(field("type")?)
         .ok_or_else(|| anyhow!("unknown type {:?}", h.fields["type"]))?;
-    let big = width > 1 && h.fields.get("endian").is_some_and(|e| e == "big");
+    let big = width > 1 && big_endian(h.fields.get("endian"))?;
     let raw = &bytes[h.data_at..];
     let data = match field("encoding")? {
         "raw" => raw.to_vec(),
@@ -164,6 +164,19 @@ pub fn parse(bytes: &[u8]) -> Result<LabelMap> {
         ijk_to_ras: placement(&h)?,
         named: segments(&h.pairs)?,
     })
+}
+
+/// Whether the `endian` field says big-endian (in any case, as teem reads it); little when
+/// absent. Any other word is refused rather than guessed.
+fn big_endian(field: Option<&String>) -> Result<bool> {
+    match field.map(|e| e.trim().to_lowercase()).as_deref() {
+        None | Some("little") => Ok(false),
+        Some("big") => Ok(true),
+        Some(_) => bail!(
+            "endian {:?} is neither big nor little",
+            field.map_or("", String::as_str)
+        ),
+    }
 }
 
 /// One sample as a label: integers as they are, floats only when whole.

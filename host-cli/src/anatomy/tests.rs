@@ -1,7 +1,9 @@
 //! Covers of label maps made here: a ball, two touching boxes, a thin curved tube and a hollow
 //! shell, on isotropic, anisotropic and oblique grids.
 
-use super::cover::{cover_segment, uncovered_corners, CoverOptions};
+use super::cover::{
+    cover_segment, ladder, uncovered_corners, uncovered_voxels, CoverOptions, Reach, Sphere,
+};
 use super::label_map::{LabelMap, Segment};
 
 /// A map of `dims` voxels whose label at (i, j, k) is `f(i, j, k)`.
@@ -125,8 +127,9 @@ fn a_thin_curved_tube_becomes_a_chain() {
     assert!(err.contains("needs more than 3 spheres"), "{err}");
 }
 
-/// A hollow shell, on an oblique grid (rotated 30° about z), with a margin: every corner inside
-/// the cover, and the margin adds to every radius.
+/// A hollow shell, on an oblique grid (rotated 30° about z), with a margin: every voxel whole
+/// inside one sphere with the margin to spare, and the cover follows the shell (far tighter than
+/// the one sphere around it).
 #[test]
 fn a_hollow_shell_on_an_oblique_grid_is_covered_with_its_margin() {
     let (c30, s30) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
@@ -140,16 +143,32 @@ fn a_hollow_shell_on_an_oblique_grid_is_covered_with_its_margin() {
         let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         i64::from((8.0..=10.0).contains(&r))
     });
-    let bare = cover_segment(&map, &segment(1), &OPTIONS).unwrap();
-    assert_eq!(uncovered_corners(&map, &map.voxels_of(1), &bare.spheres), 0);
-    let grown = CoverOptions {
-        margin_mm: 1.5,
-        ..OPTIONS
-    };
-    let with = cover_segment(&map, &segment(1), &grown).unwrap();
-    assert_eq!(with.spheres.len(), bare.spheres.len());
-    for (w, b) in with.spheres.iter().zip(&bare.spheres) {
-        assert!((w.radius - b.radius - 1.5).abs() < 1e-12);
+    let voxels = map.voxels_of(1);
+    for margin in [0.0, 1.5] {
+        let o = CoverOptions {
+            margin_mm: margin,
+            max_spheres: 512,
+            ..OPTIONS
+        };
+        let c = cover_segment(&map, &segment(1), &o).unwrap();
+        assert_eq!(uncovered_voxels(&map, &voxels, &c.spheres, margin), 0);
+        assert!(c.tight_enough, "{margin}: {}", c.outside_dilated_ratio);
+        assert!(
+            c.outside_dilated_ratio <= 2.0,
+            "{}",
+            c.outside_dilated_ratio
+        );
+        // Shrunk by a little more than the margin, some voxel is no longer held: the margin is
+        // in every sphere, not more.
+        let less: Vec<_> = c
+            .spheres
+            .iter()
+            .map(|s| Sphere {
+                radius: s.radius - 0.01,
+                ..*s
+            })
+            .collect();
+        assert!(uncovered_voxels(&map, &voxels, &less, margin) > 0);
     }
 }
 
@@ -222,4 +241,74 @@ fn the_deepest_point_is_the_farthest_from_the_outside() {
     assert!((depth - brute(&boxy, 1)).abs() < 1e-9, "{depth}");
     assert!((depth - 4.0).abs() < 1e-9, "{depth}");
     assert!(deepest_point(&boxy, 3).is_err());
+}
+
+fn holds(spheres: &[Sphere], p: [f64; 3]) -> bool {
+    spheres.iter().any(|s| {
+        let d: f64 = (0..3).map(|k| (p[k] - s.center[k]).powi(2)).sum();
+        d.sqrt() <= s.radius
+    })
+}
+
+/// A bar 80 mm long whose far half no path of 40 mm can reach: that half takes coarse spheres,
+/// so the cover takes fewer than without a reach, and still holds every voxel whole.
+#[test]
+fn spheres_beyond_the_needles_reach_are_coarse() {
+    let map = map_of([80, 8, 8], scaled([1.0; 3], [0.0; 3]), |_, _, _| 1);
+    let o = CoverOptions {
+        margin_mm: 1.0,
+        max_spheres: 512,
+        tightness: 1.3,
+    };
+    let reach = Reach {
+        entry: [0.0, 20.0, 4.0],
+        target: [10.0, 20.0, 4.0],
+        length: 40.0,
+    };
+    let fine = ladder(&map, &segment(1), &o, None).unwrap();
+    let near = ladder(&map, &segment(1), &o, Some(&reach)).unwrap();
+    let (fine, near) = (
+        fine.candidates.last().unwrap(),
+        near.candidates.last().unwrap(),
+    );
+    let voxels = map.voxels_of(1);
+    assert_eq!(uncovered_voxels(&map, &voxels, &near.spheres, 1.0), 0);
+    let beyond = near
+        .spheres
+        .iter()
+        .filter(|s| reach.misses(s.center, s.radius));
+    assert!(beyond.count() > 0);
+    assert!(
+        near.spheres.len() < fine.spheres.len(),
+        "{} against {}",
+        near.spheres.len(),
+        fine.spheres.len()
+    );
+}
+
+/// A target 2.5 mm from a cube's face lies inside the one sphere a tightness of 3 allows; a
+/// scenario's cover keeps it outside, holding every voxel still.
+#[test]
+fn a_target_near_a_segment_is_kept_outside_its_cover() {
+    let map = map_of([20, 20, 20], scaled([1.0; 3], [0.0; 3]), |i, j, k| {
+        i64::from([i, j, k].iter().all(|x| (5..15).contains(x)))
+    });
+    let o = CoverOptions {
+        margin_mm: 0.5,
+        max_spheres: 512,
+        tightness: 3.0,
+    };
+    // The cube's face is at x = 14.5.
+    let target = [14.5 + 2.5, 9.5, 9.5];
+    let loose = cover_segment(&map, &segment(1), &o).unwrap();
+    assert!(holds(&loose.spheres, target));
+    let reach = Reach {
+        entry: [60.0, 9.5, 9.5],
+        target,
+        length: 200.0,
+    };
+    let l = ladder(&map, &segment(1), &o, Some(&reach)).unwrap();
+    let kept = l.candidates.last().unwrap();
+    assert!(!holds(&kept.spheres, target));
+    assert_eq!(uncovered_voxels(&map, &l.voxels, &kept.spheres, 0.5), 0);
 }

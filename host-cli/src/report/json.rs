@@ -59,6 +59,10 @@ pub struct BestPath {
     /// The driver's motor schedule for this path (absent from reports written before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub schedule: Option<ScheduleJson>,
+    /// With `[[anatomy]]`: the path's least distance (mm) to the covered segments' voxels
+    /// themselves, measured on the label maps (`anatomy::distance`), not on the spheres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label_map_clearance_mm: Option<f64>,
 }
 
 /// One form's outcome.
@@ -209,6 +213,7 @@ impl BestPath {
             penalty: finite(o.penalty),
             control_degree: o.form.len(),
             schedule: schedule.map(ScheduleJson::of),
+            label_map_clearance_mm: None,
         }
     }
 }

@@ -132,6 +132,8 @@ pub struct AnatomyFile {
     pub tightness: Option<f64>,
     /// The voxel edge a mesh (`.stl`) is voxelised at (mm), default 0.5.
     pub voxel_mm: Option<f64>,
+    /// The unit of a mesh's coordinates: "mm" (default), "cm", "m" or "um".
+    pub unit: Option<String>,
 }
 
 /// `[weights]`

@@ -11,6 +11,7 @@ mod exact;
 pub mod execution;
 pub mod file;
 pub mod geometry;
+pub mod label_clearance;
 pub mod planted;
 mod points;
 pub mod polygon;

@@ -37,7 +37,8 @@ impl ScenarioFile {
                 .with_context(|| format!("in obstacles[{index}]"))?;
             shapes.push(shape);
         }
-        shapes.extend(self.anatomy_shapes(plane)?);
+        let used = shapes.iter().map(|s| s.circles.len()).sum();
+        shapes.extend(self.anatomy_shapes(plane, used)?);
         Ok(shapes)
     }
 
