@@ -18,7 +18,8 @@ pub enum Quantity {
     Ram,
     /// Instructions of one plan of `examples/paper.toml` (`instructions.paper`).
     PaperPlan,
-    /// Instructions of one plan of `examples/space.toml` (`instructions.space`).
+    /// Instructions of one plan of `devtools/workloads/space.toml`, the 3-D example planned
+    /// unbounded (`instructions.space`).
     SpacePlan,
     /// Instructions of one plan of `examples/paper-bounded.toml`, the paper's scenario under a
     /// 1 % collision bound for a steered insertion (`instructions.paper-bounded`).

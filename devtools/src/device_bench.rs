@@ -227,9 +227,9 @@ pub fn measure_all(
 /// `needle device-bench` options.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scenario files (default: examples/paper.toml, space.toml, paper-bounded.toml and
-    /// spheres256.toml); a file's collision bound, if it sets one, is planned under on the device
-    /// too.
+    /// Scenario files (default: examples/paper.toml, devtools/workloads/space.toml — the
+    /// 3-D example planned unbounded —, examples/paper-bounded.toml and spheres256.toml); a
+    /// file's collision bound is planned under on the device too.
     files: Vec<PathBuf>,
     /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
     /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`), as a JSON
@@ -274,7 +274,7 @@ pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     let files = if args.files.is_empty() {
         vec![
             root.join("examples/paper.toml"),
-            root.join("examples/space.toml"),
+            root.join("devtools/workloads/space.toml"),
             root.join("examples/paper-bounded.toml"),
             root.join("examples/spheres256.toml"),
         ]

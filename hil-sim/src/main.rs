@@ -81,6 +81,41 @@ struct LabArgs {
     /// than it did.
     #[arg(long, requires = "lab")]
     robot_misreport_after: Option<u32>,
+    /// With --lab: run in real time, as a lab does: a free-running tracker sampling the tip at
+    /// --tracker-rate (each sample stamped when taken, a piece's pose seen once it ended) and a
+    /// robot whose pieces take their share of their step's duration times --time-scale.
+    #[arg(long, requires = "lab", conflicts_with = "stream_rate")]
+    real_time: bool,
+    /// With --real-time: the tracker's samples a second.
+    #[arg(
+        long,
+        requires = "real_time",
+        value_name = "HZ",
+        default_value_t = 40.0
+    )]
+    tracker_rate: f64,
+    /// With --real-time: the factor on the pieces' durations (1: the plan's real durations;
+    /// 0.05: twenty times faster).
+    #[arg(long, requires = "real_time", value_name = "F", default_value_t = 1.0)]
+    time_scale: f64,
+    /// With --real-time, a fault for tests: each sample goes out this long after it was taken
+    /// (a tracker lagging the robot).
+    #[arg(long, requires = "real_time", value_name = "MS", default_value_t = 0)]
+    tracker_lag_ms: u64,
+    /// With --lab: the robot's absolute base roll when an insertion begins (degrees); it turns
+    /// to the posture's roll the shorter way and reports absolute rolls.
+    #[arg(
+        long,
+        requires = "lab",
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    robot_start_roll: f64,
+    /// With --lab: the robot holds the needle in a fixed guide along the entry axis and
+    /// refuses a posture that tilts it (`posture-refused max_tilt_deg=0`).
+    #[arg(long, requires = "lab")]
+    robot_fixed_guide: bool,
     /// With --lab: the registration `needle steer --registration` is given (JSON, tracker to
     /// scenario frame); the tracker then reports in the tracker's frame.
     #[arg(long, requires = "lab")]
@@ -139,6 +174,18 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
         l.rate.is_finite() && l.rate >= 0.0,
         "--rate must be 0 or more"
     );
+    anyhow::ensure!(
+        l.tracker_rate.is_finite() && (1.0..=10_000.0).contains(&l.tracker_rate),
+        "--tracker-rate must be within 1 and 10000 Hz"
+    );
+    anyhow::ensure!(
+        l.time_scale.is_finite() && (0.0..=100.0).contains(&l.time_scale),
+        "--time-scale must be within 0 and 100"
+    );
+    anyhow::ensure!(
+        l.robot_start_roll.is_finite() && l.robot_start_roll.abs() <= 1e6,
+        "--robot-start-roll must be a finite angle within 1e6 degrees"
+    );
     if let Some(hz) = l.stream_rate {
         anyhow::ensure!(
             hz.is_finite() && (1.0..=100_000.0).contains(&hz),
@@ -170,6 +217,9 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
+            robot_start_roll_deg: l.robot_start_roll,
+            robot_fixed_guide: l.robot_fixed_guide,
+            time_scale: l.real_time.then_some(l.time_scale),
         },
         tracker: TrackerClients::new(TrackerConfig {
             registration: l
@@ -180,11 +230,16 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             registration_name: l.registration_name.clone(),
             registration_change_after: l.registration_change_after,
             bad_frames_every: l.bad_frames_every,
+            sampling: l.real_time,
         }),
     };
     lab.tracker.accept(tracker);
     if let Some(hz) = l.stream_rate {
         lab.tracker.stream(hz, l.stream_burst);
+    }
+    if l.real_time {
+        let lag = std::time::Duration::from_millis(l.tracker_lag_ms);
+        lab.tracker.sample(l.tracker_rate, lag);
     }
     lab.serve(robot, |run| {
         if let Ok(line) = serde_json::to_string(run) {

@@ -362,7 +362,8 @@ fn main() -> ExitCode {
         Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            // `needle steer` says how an insertion ended by its exit status; anything else is 1.
+            ExitCode::from(needle_cli::lab::exit_code(&e))
         }
     }
 }

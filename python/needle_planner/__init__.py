@@ -199,7 +199,12 @@ class Simulation:
         self.paths: List[np.ndarray] = per_run["paths"]
         """Each run's true tip path, an ``(n, 3)`` array of points at most 1 mm apart."""
         self.stop_reasons: Optional[List[Optional[str]]] = per_run.get("stop_reasons")
-        """Closed loop: why each run stopped before the target, ``None`` where it reached it."""
+        """Closed loop: why the controller stopped each run before the target, ``None`` where it
+        did not (the controller's own verdict; ``outcomes`` says how the run truly ended)."""
+        self.outcomes: Optional[List[str]] = per_run.get("outcomes")
+        """Closed loop: how each run ended, judged on the true tip and path: ``"reached"``,
+        ``"missed"``, ``"collided"`` (the true path entered an obstacle, whatever the controller
+        concluded) or ``"stopped"``."""
 
     def to_dict(self) -> Dict[str, Any]:
         """The output as ``json.loads(needle simulate --json)`` gives it."""

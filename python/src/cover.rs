@@ -2,7 +2,7 @@
 //! report (the segments, their spheres and how tight they are) as Python objects.
 
 use crate::convert::python_value;
-use crate::errors::{guarded, scenario_error};
+use crate::errors::{guarded, scenario_error, ScenarioError};
 use needle_cli::anatomy::command::{cover_json, CoverArgs};
 use needle_cli::anatomy::cover::DEFAULT_TIGHTNESS;
 use needle_cli::anatomy::mesh::DEFAULT_VOXEL_MM;
@@ -22,11 +22,20 @@ pub fn cover<'py>(
     labels: Option<Vec<i64>>,
     segments: Option<Vec<String>>,
     margin: f64,
-    max_spheres: Option<usize>,
+    max_spheres: Option<i64>,
     tightness: Option<f64>,
     voxel: Option<f64>,
     unit: Option<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // A negative count is refused with the command's wording, not as an OverflowError.
+    let max_spheres = match max_spheres {
+        None => MAX_OBSTACLES,
+        Some(n) => usize::try_from(n).map_err(|_| {
+            ScenarioError::new_err(format!(
+                "the most spheres a segment may take must be at least 1, not {n}"
+            ))
+        })?,
+    };
     let args = CoverArgs {
         image,
         voxel: voxel.unwrap_or(DEFAULT_VOXEL_MM),
@@ -34,7 +43,7 @@ pub fn cover<'py>(
         labels,
         segments,
         margin,
-        max_spheres: max_spheres.unwrap_or(MAX_OBSTACLES),
+        max_spheres,
         tightness: tightness.unwrap_or(DEFAULT_TIGHTNESS),
         json: true,
         out: None,

@@ -22,8 +22,11 @@ struct PerRun {
     collided: Vec<bool>,
     min_clearances: Vec<f64>,
     paths: Vec<Vec<[f32; 3]>>,
-    /// Closed loop: why the run stopped before the target (`None`: reached).
+    /// Closed loop: why the controller stopped the run before the target (`None`: it did not).
     stop_reasons: Vec<Option<&'static str>>,
+    /// Closed loop: how the run ended, judged on the true tip and path (`reached`, `missed`,
+    /// `collided`, `stopped`).
+    outcomes: Vec<&'static str>,
 }
 
 impl PerRun {
@@ -37,13 +40,17 @@ impl PerRun {
         self.paths.push(r.points.clone());
     }
 
-    fn of(results: &Results) -> PerRun {
+    /// The runs of `results`, a steered run's true tip within `tolerance_mm` counted as at the
+    /// target.
+    fn of(results: &Results, tolerance_mm: f32) -> PerRun {
         let mut out = PerRun::default();
         match (&results.closed, &results.open) {
             (Some(closed), _) => {
                 for c in closed {
                     out.push(&c.run);
                     out.stop_reasons.push(c.stop_reason.map(|s| s.name()));
+                    out.outcomes
+                        .push(needle_sim::Outcome::of(c, tolerance_mm).name());
                 }
             }
             (None, Some(open)) => open.iter().for_each(|r| out.push(r)),
@@ -130,7 +137,10 @@ pub fn simulate<'py>(
                     .then(|| setup.closed_loop(&keep, threads, || {}))
                     .transpose()?;
                 let results = Results { open, closed };
-                Ok((results_json(&setup, &results, false)?, PerRun::of(&results)))
+                Ok((
+                    results_json(&setup, &results, false)?,
+                    PerRun::of(&results, setup.config.reach_tolerance_mm),
+                ))
             })
         })
         .map_err(|f| f.into_py(plan_error))?;
@@ -155,6 +165,7 @@ pub fn simulate<'py>(
     out.set_item("paths", PyList::new(py, paths)?)?;
     if closed_loop {
         out.set_item("stop_reasons", PyList::new(py, per_run.stop_reasons)?)?;
+        out.set_item("outcomes", PyList::new(py, per_run.outcomes)?)?;
     }
     Ok((json, out))
 }

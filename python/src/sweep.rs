@@ -18,9 +18,9 @@ pub fn sweep<'py>(
     weight: &str,
     start: f64,
     stop: f64,
-    steps: usize,
+    steps: i64,
     log: bool,
-    threads: Option<usize>,
+    threads: Option<i64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let weight = Weight::parse(weight).ok_or_else(|| {
         ScenarioError::new_err(format!(
@@ -31,11 +31,25 @@ pub fn sweep<'py>(
     let range = Range {
         from: start,
         to: stop,
-        steps,
+        // A negative count is refused below with the message of zero steps, not as an
+        // OverflowError from the conversion.
+        steps: usize::try_from(steps).unwrap_or(0),
         log,
     };
+    // The range is the caller's input: refused as a ScenarioError before anything is planned.
+    range
+        .values()
+        .map_err(|e| ScenarioError::new_err(crate::errors::message(&e)))?;
     let core = scenario.core.clone();
-    let threads = threads.unwrap_or_else(parallel::default_threads).max(1);
+    let threads = match threads {
+        None => parallel::default_threads(),
+        Some(n) if n >= 1 => usize::try_from(n).unwrap_or(usize::MAX),
+        Some(n) => {
+            return Err(ScenarioError::new_err(format!(
+                "invalid value '{n}' for '--threads <THREADS>': must be at least 1"
+            )))
+        }
+    };
     let value = py
         .detach(|| {
             guarded(|| {

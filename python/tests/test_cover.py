@@ -46,6 +46,10 @@ def test_labels_and_segments_together_or_empty_are_refused():
     with pytest.raises(npl.ScenarioError) as raised:
         npl.cover(MAP, max_spheres=0)
     assert "at least 1, not 0" in str(raised.value)
+    # Once an OverflowError from the conversion, not a NeedleError.
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.cover(MAP, max_spheres=-1)
+    assert "at least 1, not -1" in str(raised.value)
 
 
 def test_the_defaults_are_the_commands():

@@ -111,6 +111,7 @@ def paper():
         ({"perturb": {"no_such_key": 1}}, ["--perturb", "no_such_key=1"]),
         ({"perturb": {"curvature_spread": [1, 2]}}, ["--perturb", "curvature_spread=[1, 2]"]),
         ({"runs": 0}, ["--runs", "0"]),
+        ({"runs": 10**12}, ["--runs", str(10**12)]),
         ({"form": "LL"}, ["--form", "LL"]),
         ({"world": "mars"}, ["--world", "mars"]),
         ({"world": " "}, ["--world", " "]),

@@ -34,6 +34,7 @@ def test_path_text_and_keywords_give_the_same_plan():
         ],
         weights={"length": 1, "risk": 1, "penalty": 1000, "control": 2},
         planner=_paper_planner(path),
+        execution={"mode": "open_loop"},
     )
     expected = report(from_path)
     assert report(from_text) == expected

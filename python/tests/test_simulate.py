@@ -105,7 +105,8 @@ def test_the_clinical_world_changed_by_perturb_and_faults_equals_the_command(pap
 def test_none_is_the_scenarios_world(tmp_path):
     text = (ROOT / "examples" / "paper.toml").read_text()
     path = tmp_path / "clinical.toml"
-    path.write_text(text + '\n[execution]\nworld = "clinical"\n')
+    # Into the example's own [execution] table: TOML refuses a second.
+    path.write_text(text.replace("[execution]\n", '[execution]\nworld = "clinical"\n', 1))
     scenario = npl.Scenario.from_toml(str(path))
     sim = npl.simulate(scenario, runs=3, seed=1)
     cli = needle_json("simulate", str(path), "--runs", "3", "--seed", "1")

@@ -28,3 +28,20 @@ def test_bad_weights_and_ranges_raise():
     assert str(raised.value) == needle_error(
         "sweep", str(PAPER), "--weight", "risk", "--from", "0", "--to", "1", "--steps", "5", "--log"
     )
+
+
+@pytest.mark.parametrize("steps", [0, -1, 10**6])
+def test_a_bad_step_count_is_a_scenario_error_with_the_commands_message(steps):
+    scenario = npl.Scenario.from_toml(PAPER)
+    with pytest.raises(npl.ScenarioError) as raised:
+        npl.sweep(scenario, "control", 0, 10, steps=steps, threads=1)
+    flag = str(max(steps, 0))
+    assert str(raised.value) == needle_error(
+        "sweep", str(PAPER), "--weight", "control", "--from", "0", "--to", "10", "--steps", flag
+    )
+
+
+def test_a_negative_thread_count_is_a_scenario_error():
+    scenario = npl.Scenario.from_toml(PAPER)
+    with pytest.raises(npl.ScenarioError, match="--threads"):
+        npl.sweep(scenario, "control", 0, 10, steps=2, threads=-1)

@@ -104,7 +104,7 @@ impl TrackerFaults {
 }
 
 /// A closed-loop run's figures: the run, why it stopped and the controller's counters.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct ClosedRun {
     /// The run (target error, deviations, clearance, points).
     #[serde(flatten)]

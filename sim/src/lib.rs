@@ -52,6 +52,7 @@ pub mod effects;
 mod executed;
 mod layered;
 mod measure;
+mod outcome;
 mod pieces;
 pub mod random;
 mod reach;
@@ -69,6 +70,7 @@ pub use effects::{
     EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, TWICE_CLINICAL_FAULT_KEYS,
     TWICE_CLINICAL_KEYS, WORLD_KEYS,
 };
+pub use outcome::{controller_verdict, Outcome};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
 };

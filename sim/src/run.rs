@@ -14,7 +14,7 @@ use std::ops::ControlFlow;
 
 /// What one simulated insertion gave (serialised without `steps`, whose JSON form is the
 /// reader's choice).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Run {
     /// The run's seed.
     pub seed: u64,

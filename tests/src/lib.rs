@@ -198,3 +198,31 @@ pub fn needle_fails_with(text: &str, args: &[&str], expected: &str) {
     assert!(err.contains(expected), "needle {args:?}: stderr: {err}");
     assert!(!err.contains("panicked"), "needle {args:?}: stderr: {err}");
 }
+
+/// Scenario `text` with `lines` added to its `[execution]` table (made when it has none):
+/// TOML refuses a second table of the same name.
+pub fn with_execution(text: &str, lines: &str) -> String {
+    match text.find("[execution]\n") {
+        Some(at) => {
+            let end = at + "[execution]\n".len();
+            format!("{}{lines}\n{}", &text[..end], &text[end..])
+        }
+        None => format!("{text}\n[execution]\n{lines}\n"),
+    }
+}
+
+/// Scenario `text` with `planner.max_collision_probability = value` (a number, or `"off"`
+/// quoted), in place of the one it has.
+pub fn with_bound(text: &str, value: &str) -> String {
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("max_collision_probability"))
+        .collect();
+    let text = kept.join("\n") + "\n";
+    let line = format!("max_collision_probability = {value}");
+    if text.contains("[planner]\n") {
+        text.replacen("[planner]\n", &format!("[planner]\n{line}\n"), 1)
+    } else {
+        format!("{text}\n[planner]\n{line}\n")
+    }
+}

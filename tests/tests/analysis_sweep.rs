@@ -165,7 +165,7 @@ fn sweep_rejects_bad_ranges_clearly() {
             vec![
                 "--weight", "risk", "--from", "1", "--to", "2", "--steps", "0",
             ],
-            "at least 1",
+            "it must be 1 to 10000",
         ),
         (
             vec!["--weight", "speed", "--from", "1", "--to", "2"],

@@ -341,7 +341,7 @@ fn plan_and_simulate_plots_slice_the_anatomy() {
             }
         }
     }
-    assert!(text.contains("closed loop, reached the target"));
+    assert!(text.contains("closed loop, not stopped"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

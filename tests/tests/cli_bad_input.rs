@@ -90,3 +90,31 @@ fn a_reader_that_closes_the_pipe_early_ends_the_command_quietly() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(first.starts_with(b"{\"runs\":400"));
 }
+
+#[test]
+fn counts_of_work_have_an_upper_bound_named_in_the_error() {
+    // Each of these once reached an allocation of the count asked and aborted the process.
+    let huge = "1000000000000";
+    needle_fails_with(
+        &paper(),
+        &["simulate", "{}", "--runs", huge],
+        "at most 1000000 runs",
+    );
+    needle_fails_with(
+        &paper(),
+        &["benchmark", "--runs", huge],
+        "must be at most 1000000",
+    );
+    needle_fails_with(
+        &paper(),
+        &["benchmark", "--scenarios", huge],
+        "must be at most 100000",
+    );
+    needle_fails_with(
+        &paper(),
+        &[
+            "sweep", "{}", "--weight", "risk", "--from", "0", "--to", "1", "--steps", huge,
+        ],
+        "it must be 1 to 10000",
+    );
+}

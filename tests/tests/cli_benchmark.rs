@@ -42,12 +42,15 @@ fn check_figures(v: &Value, runs: u64) {
         assert!((0.0..=100.0).contains(&f(rate)), "{v}");
     }
     assert!(u(&o["hits"]) <= runs);
-    assert_eq!(u(&c["reached"]) + u(&c["stops"]), runs, "{v}");
+    assert_eq!(u(&c["arrived"]) + u(&c["stops"]), runs, "{v}");
+    // Every run ends one way, judged on the true tip and path.
+    let ends = ["reached", "missed", "collided", "stopped"];
+    assert_eq!(ends.iter().map(|k| u(&c[k])).sum::<u64>(), runs, "{v}");
     let by_reason: u64 = c["stop_reasons"].as_object().unwrap().values().map(u).sum();
     assert_eq!(by_reason, u(&c["stops"]));
     assert!((f(&o["hit_percent"]) - 100.0 * u(&o["hits"]) as f64 / runs as f64).abs() < 1e-9);
     assert!(f(&o["mean_target_error"]) > 0.0);
-    if u(&c["reached"]) > 0 {
+    if u(&c["arrived"]) > 0 {
         assert!(f(&c["mean_target_error"]) <= f(&c["p95_target_error"]) + 1e-9);
     } else {
         assert!(c["mean_target_error"].is_null());
@@ -93,12 +96,9 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
         (3, rows.len() as u64, unplanned.len() as u64)
     );
     let sum = |path: [&str; 2]| -> u64 { rows.iter().map(|r| u(&r[path[0]][path[1]])).sum() };
-    for path in [
-        ["open_loop", "hits"],
-        ["closed_loop", "reached"],
-        ["closed_loop", "stops"],
-        ["closed_loop", "hits"],
-    ] {
+    let closed = ["reached", "missed", "collided", "arrived", "stops", "hits"];
+    let closed = closed.iter().map(|k| ["closed_loop", k]);
+    for path in std::iter::once(["open_loop", "hits"]).chain(closed) {
         assert_eq!(u(&t[path[0]][path[1]]), sum(path), "{path:?}");
     }
     let runs: u64 = rows.iter().map(|r| u(&r["runs"])).sum();
@@ -132,7 +132,7 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
             .sum();
         let c = &ft["closed_loop"];
         assert_eq!(u(&c["reached"]), reached, "{form}");
-        assert_eq!(u(&c["reached"]) + u(&c["stops"]), 4 * steered.len() as u64);
+        assert_eq!(u(&c["arrived"]) + u(&c["stops"]), 4 * steered.len() as u64);
     }
     let counted: u64 = by_form.values().map(|ft| u(&ft["scenarios"])).sum();
     assert_eq!(counted, rows.len() as u64);

@@ -264,6 +264,7 @@ fn assert_schedule_keys(v: &Value) -> Vec<String> {
             "rotate" => &["angle_deg", "duration_s", "op"],
             "insert" => &["duration_s", "length_mm", "op"],
             "insert_spin" => &["duration_s", "length_mm", "op", "turns"],
+            "insert_duty" => &["duration_s", "duty", "length_mm", "op"],
             other => panic!("unknown op {other}"),
         };
         assert_eq!(keys, want, "{step}");
@@ -387,4 +388,23 @@ fn a_plan_with_no_feasible_form_prints_every_form_and_no_best_and_exits_1() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("the target is unreachable"), "{err}");
+}
+
+/// `needle device-bench`'s "space" workload is the 3-D example's scene, planned unbounded at the
+/// full curvature: only those two keys differ from examples/space.toml.
+#[test]
+fn the_device_bench_space_workload_is_the_example_unbounded() {
+    let load = |p: &std::path::Path| needle_cli::scenario::load_scenario(p).unwrap();
+    let example = load(&needle_e2e::example("space"));
+    let workload = load(&needle_e2e::workspace().join("devtools/workloads/space.toml"));
+    assert_eq!(example.options.curvature_reserve, 0.2);
+    assert_eq!(workload.options.curvature_reserve, 0.0);
+    let mut same = example.clone();
+    same.options.curvature_reserve = 0.0;
+    assert_eq!(same, workload);
+    let e = needle_cli::scenario::execution::load_execution(
+        &needle_e2e::workspace().join("devtools/workloads/space.toml"),
+    )
+    .unwrap();
+    assert_eq!(e.max_collision_probability, None);
 }

@@ -159,7 +159,7 @@ fn table_and_plot() {
     );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
-        text.starts_with("simulated open-loop insertions of RL"),
+        text.starts_with("simulated open-loop insertions of R in space.toml"),
         "{text}"
     );
     assert!(text.contains("target error") && text.contains("collisions:"));
@@ -277,6 +277,9 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
     assert_eq!(runs.len(), 12);
     for r in runs {
         assert!(r["stop_reason"].is_null(), "{}", r["stop_reason"]);
+        assert_eq!(r["controller_verdict"], "reached");
+        let within = r["target_error"].as_f64().unwrap() <= 1.0;
+        assert_eq!(r["outcome"], if within { "reached" } else { "missed" });
         assert!(r["steering"]["readings"].as_u64().unwrap() > 50);
         assert!(r["predicted_miss_mm"].as_f64().unwrap() <= 1.0);
     }
@@ -407,7 +410,7 @@ fn the_plot_tells_open_closed_and_stopped_runs_apart() {
         !closed.contains("open loop"),
         "closed loop called open loop"
     );
-    assert!(closed.contains("closed loop, reached the target: 3 of 3 runs"));
+    assert!(closed.contains("closed loop, not stopped (reached, missed or collided): 3 of 3 runs"));
     assert_eq!(closed.matches(r#"class="executed""#).count(), 1);
     let compare = ["--runs", "3", "--closed-loop", "--compare-open-loop"];
     let both = svg_of(&compare, &dir, "compare.svg");
@@ -492,4 +495,59 @@ fn help_names_both_loops() {
         assert!(!line.contains("(open loop)"), "{line}");
         assert!(line.contains("closed loop"), "{line}");
     }
+}
+
+/// A run whose true path entered an obstacle is `collided`, never reached, even where the
+/// controller believed it ended at the target; the controller's verdict stays beside it.
+#[test]
+fn a_collision_is_never_reached() {
+    // Seed 137 of the paper's plan, steered in the clinical world told of a pushed target,
+    // grazes the middle obstacle; the controller ends it "at the target".
+    let v = needle_json(&[
+        "simulate",
+        &paper(),
+        "--runs",
+        "3",
+        "--seed",
+        "136",
+        "--closed-loop",
+        "--world",
+        "clinical",
+        "--steer",
+        "target_speed_walk=0.02",
+        "--json",
+        "--detail",
+    ]);
+    let runs = v["runs_detail"].as_array().unwrap();
+    let collided: Vec<&Value> = runs.iter().filter(|r| r["collided"] == true).collect();
+    assert_eq!(collided.len(), 1, "{v}");
+    assert_eq!(collided[0]["outcome"], "collided");
+    assert_eq!(collided[0]["controller_verdict"], "reached");
+    let s = &v["summary"];
+    assert_eq!(s["collisions"], 1);
+    assert_eq!(s["outcomes"]["collided"], 1);
+    assert_eq!(s["controller_reached"], 3);
+    let ends: u64 = ["reached", "missed", "collided", "stopped"]
+        .iter()
+        .map(|k| s["outcomes"][k].as_u64().unwrap())
+        .sum();
+    assert_eq!(ends, 3);
+    assert!(s["reached"].as_u64().unwrap() <= 2, "{s}");
+    // The table says the same: no line claims every run reached.
+    let out = needle()
+        .args([
+            "simulate",
+            &paper(),
+            "--runs",
+            "3",
+            "--seed",
+            "136",
+            "--closed-loop",
+        ])
+        .args(["--world", "clinical", "--steer", "target_speed_walk=0.02"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("1 collided"), "{text}");
+    assert!(!text.contains("3 of 3 runs reached"), "{text}");
 }

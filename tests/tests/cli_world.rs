@@ -95,7 +95,7 @@ fn a_scenario_names_its_world_as_the_flag_does() {
     let text = std::fs::read_to_string(paper()).unwrap();
     std::fs::write(
         &file,
-        format!("{text}\n[execution]\nworld = \"clinical\"\n"),
+        needle_e2e::with_execution(&text, "world = \"clinical\""),
     )
     .unwrap();
     let run = |path: &str, extra: &[&str]| {

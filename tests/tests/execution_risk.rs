@@ -5,7 +5,9 @@
 //! predicted one (or within a percentage point where both are under 2 %), the same for the 95th
 //! percentile of the miss.
 
-use needle_e2e::{example, needle, needle_fails_with, needle_json, TempScenario};
+use needle_e2e::{
+    example, needle, needle_fails_with, needle_json, with_bound, with_execution, TempScenario,
+};
 use serde_json::Value;
 
 fn f(v: &Value) -> f64 {
@@ -18,18 +20,16 @@ fn agree(predicted: f64, simulated: f64) -> bool {
         || (predicted <= 2.0 * simulated && simulated <= 2.0 * predicted)
 }
 
-/// An example with a bound (and an `[execution]` table) added.
+/// An example with a bound (and an `[execution]` table) added: open loop.
 fn bounded(name: &str, bound: f64) -> TempScenario {
     let text = std::fs::read_to_string(example(name)).unwrap();
-    let text = if text.contains("[planner]") {
-        text.replace(
-            "[planner]",
-            &format!("[planner]\nmax_collision_probability = {bound}"),
-        )
+    let text = with_bound(&text, &bound.to_string());
+    let text = if text.contains("mode = ") {
+        text
     } else {
-        format!("{text}\n[planner]\nmax_collision_probability = {bound}\n")
+        with_execution(&text, "mode = \"open_loop\"")
     };
-    TempScenario::new(&format!("{text}\n[execution]\nmode = \"open_loop\"\n"))
+    TempScenario::new(&text)
 }
 
 #[test]
@@ -49,10 +49,19 @@ fn a_bounded_plan_reports_its_prediction_and_keeps_the_bound() {
         let p = &form["collision_probability"];
         assert_eq!(form["feasible"] == true, !p.is_null(), "{form}");
     }
-    // Without the keys, no prediction is written (the golden plans hold that bit for bit).
+    // Opted out of the bound, the prediction is still written, and the bound is null.
     let plain = needle_json(&["plan", &example("paper").to_string_lossy(), "--json"]);
-    assert!(plain.get("execution").is_none());
-    assert!(plain["best"].get("collision_probability").is_none());
+    assert!(plain["execution"]["max_collision_probability"].is_null());
+    assert!(f(&plain["best"]["collision_probability"]) > 0.01);
+    let paper = needle()
+        .args(["plan", &example("paper").to_string_lossy()])
+        .output()
+        .unwrap();
+    let paper = String::from_utf8_lossy(&paper.stdout);
+    assert!(
+        paper.contains("unbounded: planner.max_collision_probability = \"off\""),
+        "{paper}"
+    );
     // The safe plan is no shorter than the unbounded one, and its table says the bound holds.
     assert!(f(&v["best"]["length"]) >= f(&plain["best"]["length"]));
     let table = needle().args(["plan", &path]).output().unwrap();
@@ -68,22 +77,22 @@ fn a_bounded_plan_reports_its_prediction_and_keeps_the_bound() {
 fn a_bound_no_plan_meets_is_a_clear_failure() {
     let text = std::fs::read_to_string(example("paper")).unwrap();
     // A world ten times as wild as the defaults: no path keeps one in ten thousand.
-    let wild = format!(
-        "{}\n[execution]\ncurvature_spread = 0.3\nentry_direction_deg = 5\n",
-        text.replace("[planner]", "[planner]\nmax_collision_probability = 0.0001")
+    let wild = with_execution(
+        &with_bound(&text, "0.0001"),
+        "curvature_spread = 0.3\nentry_direction_deg = 5",
     );
     needle_fails_with(
         &wild,
         &["plan", "{}"],
         "no plan keeps the predicted collision probability within 0.0001",
     );
-    let bad = text.replace("[planner]", "[planner]\nmax_collision_probability = 1.5");
+    let bad = with_bound(&text, "1.5");
     needle_fails_with(
         &bad,
         &["plan", "{}"],
         "planner.max_collision_probability = 1.5",
     );
-    let unknown = format!("{text}\n[execution]\nwobble = 1\n");
+    let unknown = with_execution(&text, "wobble = 1");
     needle_fails_with(&unknown, &["plan", "{}"], "unknown perturbation `wobble`");
 }
 

@@ -139,7 +139,11 @@ fn sigint_stops_the_robot_before_exit() {
         .expect("send SIGINT");
     assert!(status.success());
     let out = child.wait_with_output().expect("needle steer ends");
-    assert!(!out.status.success(), "an interrupted insertion fails");
+    assert_eq!(
+        out.status.code(),
+        Some(5),
+        "an interrupted insertion is stopped"
+    );
     let v: Value = serde_json::from_slice(&out.stdout).expect("the outcome is printed");
     assert_eq!(v["stop_reason"], "interrupted");
     assert_eq!(v["robot_stopped"], true);

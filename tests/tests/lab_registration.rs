@@ -107,7 +107,7 @@ fn the_streamed_registration_is_used_and_a_later_different_one_refused() {
 }
 
 /// `--registration-name` and no such TRANSFORM: after the timeout, no step list went out (the
-/// robot was only told stop), the exit status says failure with a clear message, and the JSON
+/// robot was only told stop), the exit status is 5 (stopped) with a clear message, and the JSON
 /// and the log say `no_registration`.
 #[test]
 fn steering_does_not_start_without_the_registration() {
@@ -132,7 +132,7 @@ fn steering_does_not_start_without_the_registration() {
         .output()
         .unwrap();
     assert!(started.elapsed().as_millis() >= 300);
-    assert!(!out.status.success());
+    assert_eq!(out.status.code(), Some(5), "stopped by an interlock");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("no registration TRANSFORM named ReferenceToScenario"),

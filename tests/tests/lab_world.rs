@@ -124,7 +124,7 @@ fn perturb_fault_and_the_scenario_world_are_the_simulations() {
     let clinical = temp_path("clinical-world.toml");
     std::fs::write(
         &clinical,
-        format!("{text}\n[execution]\nworld = \"clinical\"\npuncture_mm = 2\n"),
+        needle_e2e::with_execution(&text, "world = \"clinical\"\npuncture_mm = 2"),
     )
     .unwrap();
     let clinical = clinical.to_str().unwrap().to_string();

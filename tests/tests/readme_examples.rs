@@ -3,8 +3,8 @@
 //! sees the repository's `examples/` and `tests/`, the device commands against
 //! `hil-sim --tcp 127.0.0.1:7878` as the README starts it; `device-bench`'s, which runs both boards
 //! in QEMU, is run by the firmware budgets test; `needle steer` against the simulated lab the README
-//! starts), the paper table it prints is what `needle plan`
-//! prints, and the scenario it shows plans.
+//! starts), the plan tables it prints (the safe default's, then the paper's) are what `needle
+//! plan` prints, and the scenario it shows plans.
 
 mod wire_support;
 
@@ -140,22 +140,37 @@ fn every_example_in_the_readme_runs_as_written() {
 }
 
 #[test]
-fn the_readme_paper_table_is_what_plan_prints() {
-    let prompt = "$ needle plan examples/paper.toml";
-    let shown = fenced_blocks(&readme())
+fn the_readme_plan_tables_are_what_plan_prints() {
+    let blocks: Vec<Vec<String>> = fenced_blocks(&readme())
         .into_iter()
         .map(|(_, lines)| lines)
-        .find(|lines| lines.first().map(String::as_str) == Some(prompt))
-        .expect("README shows the paper's plan");
-    let printed = run_example("needle plan examples/paper.toml", &workspace());
-    let printed: Vec<&str> = printed.lines().collect();
-    assert!(shown.len() > 10, "the table and the best plan");
-    for (i, line) in shown.iter().skip(1).enumerate() {
-        assert_eq!(
-            Some(&line.as_str()),
-            printed.get(i),
-            "README's line {i} of the plan"
-        );
+        .filter(|lines| {
+            lines
+                .first()
+                .is_some_and(|l| l.starts_with("$ needle plan "))
+        })
+        .collect();
+    let shown: Vec<&str> = blocks.iter().map(|b| b[0].as_str()).collect();
+    // The safe default first, then the paper's optimum.
+    assert_eq!(
+        shown,
+        [
+            "$ needle plan examples/space.toml",
+            "$ needle plan examples/paper.toml"
+        ]
+    );
+    for block in &blocks {
+        let command = block[0].trim_start_matches("$ ");
+        let printed = run_example(command, &workspace());
+        let printed: Vec<&str> = printed.lines().collect();
+        assert!(block.len() > 10, "{command}: the table and the best plan");
+        for (i, line) in block.iter().skip(1).enumerate() {
+            assert_eq!(
+                Some(&line.as_str()),
+                printed.get(i),
+                "README's line {i} of {command}"
+            );
+        }
     }
 }
 

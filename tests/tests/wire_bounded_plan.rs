@@ -38,7 +38,7 @@ fn execution(chance: &ChanceRequest) -> Execution {
     let mut e = Execution {
         model: chance.model,
         max_collision_probability: Some(chance.bound),
-        given: true,
+        mode: ExecutionMode::OpenLoop,
         ..Execution::default()
     };
     if let Spread::Steered(noise) = chance.execution {
@@ -144,7 +144,10 @@ fn the_host_refuses_figures_that_do_not_follow_from_the_plan() {
     let without = |a: &mut DevicePlan| a.chance = None;
     assert!(tamper(&without).contains("without the collision bound"));
     // A device answering a bound it was not given.
-    let plain = Execution::default();
+    let plain = Execution {
+        max_collision_probability: None,
+        ..Execution::default()
+    };
     assert!(verified_chance(&paper, &plain, &answer)
         .unwrap_err()
         .to_string()

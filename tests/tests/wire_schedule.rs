@@ -57,7 +57,8 @@ fn the_device_sends_the_hosts_schedule_bit_for_bit() {
         assert_device_schedule_is_the_hosts(&mut client, &load("paper")),
         2
     );
-    assert!(assert_device_schedule_is_the_hosts(&mut client, &load("space")) >= 2);
+    // Planned for steering as shipped: one duty-cycled arc kept clear of the spheres.
+    assert!(assert_device_schedule_is_the_hosts(&mut client, &load("space")) >= 1);
     // A form with bevel turns between segments: rotate steps too.
     let mut lrr = load("paper");
     let mut only = FormSet::default();

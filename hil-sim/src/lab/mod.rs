@@ -22,19 +22,19 @@
 //! a tip flagged invalid, an outlier at its offset position. The effects' time (latency,
 //! imaging) is the world's clock, not the wall's, so lock-step reproduces them too.
 
+mod robot;
 pub mod tracker;
 
-use anyhow::{anyhow, Context, Result};
-use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
-use needle_cli::lab::wire::{read_frames, send_text};
+use anyhow::{anyhow, bail, Context, Result};
+use needle_cli::lab::robot::{RobotCommand, RobotReport};
+use needle_cli::lab::wire::now;
 use needle_cli::simulate::setup::Setup;
-use needle_igtl::Message;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
-use planner_core::execute::schedule::Step;
+use planner_core::execute::schedule::{Op, Posture, Step};
+use robot::{Robot, Word};
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
 use std::ops::ControlFlow;
-use std::sync::mpsc::{channel, Receiver};
 use std::time::{Duration, Instant};
 pub use tracker::{TrackerClients, TrackerConfig};
 
@@ -61,6 +61,15 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
+    /// The robot's absolute base roll when an insertion begins (degrees): it turns from there
+    /// to the posture's roll by the shorter way, and reports absolute rolls.
+    pub robot_start_roll_deg: f64,
+    /// The robot holds the needle in a fixed guide along the entry axis: it refuses a posture
+    /// that tilts it.
+    pub robot_fixed_guide: bool,
+    /// In real time: each piece takes its share of its step's duration times this factor
+    /// (none: lock-step, a piece takes no time).
+    pub time_scale: Option<f64>,
 }
 
 /// How a pose is flagged invalid.
@@ -104,88 +113,30 @@ pub struct LabRun {
     pub min_clearance: f32,
 }
 
-/// What the robot heard.
-enum Word {
-    Go,
-    Replace(Vec<Step>),
-    Stop,
-    Lost,
+impl LabRun {
+    fn of(seed: u64, end: End, pieces: u32, run: &needle_sim::Run) -> LabRun {
+        LabRun {
+            seed,
+            end,
+            pieces,
+            target_error: run.target_error,
+            path_rms: run.path_rms,
+            path_max: run.path_max,
+            collided: run.collided,
+            min_clearance: run.min_clearance,
+        }
+    }
 }
 
-/// The simulated robot of one insertion: its connection and what arrives on it.
-struct Robot {
-    conn: TcpStream,
-    commands: Receiver<RobotCommand>,
-    pieces: u32,
-    silent_after: Option<u32>,
-}
-
-impl Robot {
-    fn new(conn: TcpStream, silent_after: Option<u32>) -> Result<Robot> {
-        conn.set_nodelay(true)?;
-        let (tx, commands) = channel();
-        read_frames(
-            conn.try_clone()?,
-            move |(frame, _)| match frame {
-                Ok(f) if f.info.device_name == COMMAND_DEVICE => match f.message {
-                    Message::String(s) => match s.text.parse::<RobotCommand>() {
-                        Ok(c) => tx.send(c).is_ok(),
-                        Err(e) => {
-                            eprintln!("hil-sim lab: robot command refused: {e}");
-                            true
-                        }
-                    },
-                    _ => true,
-                },
-                _ => true,
-            },
-            || {},
-        );
-        Ok(Robot {
-            conn,
-            commands,
-            pieces: 0,
-            silent_after,
-        })
-    }
-
-    fn report(&mut self, r: RobotReport) {
-        if self.silent_after.is_some_and(|n| self.pieces > n) {
-            return;
-        }
-        // A host that left is seen when its next word does not come.
-        let _ = send_text(&mut self.conn, REPORT_DEVICE, &r.to_string());
-    }
-
-    /// The `count` steps of a list whose `steps` word has arrived.
-    fn steps(&mut self, count: usize) -> Option<Vec<Step>> {
-        let mut out = Vec::with_capacity(count);
-        while out.len() < count {
-            match self.commands.recv().ok()? {
-                RobotCommand::Step(s) => out.push(s),
-                _ => return None,
-            }
-        }
-        Some(out)
-    }
-
-    /// The host's next word; `hold` is reported and waited out.
-    fn word(&mut self) -> Word {
-        loop {
-            match self.commands.recv() {
-                Err(_) => return Word::Lost,
-                Ok(RobotCommand::Go) => return Word::Go,
-                Ok(RobotCommand::Stop) => return Word::Stop,
-                Ok(RobotCommand::Hold) => self.report(RobotReport::Holding),
-                Ok(RobotCommand::Steps { count }) => {
-                    return self.steps(count).map_or(Word::Lost, Word::Replace)
-                }
-                Ok(RobotCommand::Step(_)) => {
-                    eprintln!("hil-sim lab: a step outside a step list is ignored");
-                }
-            }
-        }
-    }
+/// A vector made unit length.
+fn unit(v: [f32; 3]) -> [f32; 3] {
+    let n = v
+        .iter()
+        .map(|x| x * x)
+        .sum::<f32>()
+        .sqrt()
+        .max(f32::MIN_POSITIVE);
+    v.map(|x| x / n)
 }
 
 /// What the tracker reports of the world's measurement `m` once `faults` had their say: `m`
@@ -250,30 +201,31 @@ impl Lab {
         let s = &self.setup;
         let schedule = &s.prepared.schedule;
         let (p, effects) = (&s.perturbation, &s.effects);
-        let mut world = World::with_effects(&s.scenario, schedule, p, effects, seed)
-            .map_err(|e| anyhow!("{e}"))?;
-        let mut faults = Tracker::new(&s.faults, seed);
         let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
-        let mut steps = match robot.commands.recv() {
-            Ok(RobotCommand::Steps { count }) => robot.steps(count),
-            Ok(RobotCommand::Stop) => {
-                // A host that gave up before steering (no registration came) hears it stopped.
-                robot.report(RobotReport::Stopped);
-                None
-            }
-            _ => None,
-        }
-        .context("the host sent no step list")?;
+        let (posture, base0_deg, steps) = self.start(&mut robot)?;
+        // The needle starts where the robot set it: the plan's posture if it was commanded.
+        let mut at = schedule.clone();
+        at.posture = posture;
+        let mut world =
+            World::with_effects(&s.scenario, &at, p, effects, seed).map_err(|e| anyhow!("{e}"))?;
+        let Some(mut steps) = steps else {
+            let run = finish(&world, &s.planned, seed);
+            return Ok(LabRun::of(seed, End::Stopped, 0, &run));
+        };
+        let mut faults = Tracker::new(&s.faults, seed);
         self.tracker.wait_for_one()?;
         let mut end = None;
         let mut last_piece = Instant::now();
+        let mut was = (0.0, 0.0);
         while end.is_none() {
             let mut next = None;
             for step in &steps {
                 let mut failure = None;
                 world.execute(step, |m| {
                     self.pace(&mut last_piece);
+                    self.take_time(step, m, &mut was);
                     robot.pieces += 1;
+                    let mut ended = now();
                     if self
                         .config
                         .tracker_silent_after
@@ -285,19 +237,26 @@ impl Lab {
                         } else {
                             self.flag(robot.pieces)
                         };
-                        if let Err(e) = self.tracker.publish(&m, flag, robot.pieces) {
-                            failure = Some(e);
-                            return ControlFlow::Break(());
+                        match self.tracker.publish(&m, flag, robot.pieces) {
+                            Ok(stamp) => ended = stamp,
+                            Err(e) => {
+                                failure = Some(e);
+                                return ControlFlow::Break(());
+                            }
                         }
                     } else {
                         self.tracker.silence();
                     }
                     std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
-                    robot.report(RobotReport::Progress {
-                        piece: robot.pieces,
-                        depth_mm: m.depth_mm + self.misreport(robot.pieces),
-                        base_deg: m.base_deg,
-                    });
+                    // Stamped when the piece ended, as its pose was sampled.
+                    robot.report_at(
+                        RobotReport::Progress {
+                            piece: robot.pieces,
+                            depth_mm: m.depth_mm + self.misreport(robot.pieces),
+                            base_deg: base0_deg + f64::from(m.base_deg),
+                        },
+                        ended,
+                    );
                     match robot.word() {
                         Word::Go => return ControlFlow::Continue(()),
                         Word::Replace(s) => next = Some(s),
@@ -330,16 +289,71 @@ impl Lab {
             robot.report(RobotReport::Stopped);
         }
         let run = finish(&world, &s.planned, seed);
-        Ok(LabRun {
-            seed,
-            end: end.unwrap_or(End::ConnectionLost),
-            pieces: robot.pieces,
-            target_error: run.target_error,
-            path_rms: run.path_rms,
-            path_max: run.path_max,
-            collided: run.collided,
-            min_clearance: run.min_clearance,
-        })
+        let end = end.unwrap_or(End::ConnectionLost);
+        Ok(LabRun::of(seed, end, robot.pieces, &run))
+    }
+
+    /// The start of an insertion: the posture (taken, or refused by a fixed guide asked to
+    /// tilt), then the first step list. Gives the posture the needle is set at (without a
+    /// `posture` command: along the entry axis at the robot's own roll), the absolute base roll
+    /// it took, and the steps (none: the host stopped before steering, and heard it stopped).
+    fn start(&self, robot: &mut Robot) -> Result<(Posture, f64, Option<Vec<Step>>)> {
+        let planned = self.setup.prepared.schedule.posture;
+        let start = self.config.robot_start_roll_deg;
+        let mut posture = Posture {
+            theta1_deg: 0.0,
+            theta2_deg: 0.0,
+            roll_deg: start as f32,
+            direction: unit(self.setup.scenario.entry.direction),
+            ..planned
+        };
+        let mut base0_deg = start;
+        loop {
+            match robot.commands.recv() {
+                Ok(RobotCommand::Posture {
+                    theta1_deg,
+                    theta2_deg,
+                    roll_deg,
+                }) => {
+                    if self.config.robot_fixed_guide && (theta1_deg, theta2_deg) != (0.0, 0.0) {
+                        robot.report(RobotReport::PostureRefused { max_tilt_deg: 0.0 });
+                        continue;
+                    }
+                    // The shorter way round from where the base is to the roll asked.
+                    let r = f64::from(roll_deg);
+                    base0_deg = r + 360.0 * ((start - r) / 360.0 + 0.5).floor();
+                    posture = Posture {
+                        theta1_deg,
+                        theta2_deg,
+                        roll_deg,
+                        direction: if (theta1_deg, theta2_deg) == (0.0, 0.0) {
+                            posture.direction
+                        } else {
+                            planned.direction
+                        },
+                        ..planned
+                    };
+                    robot.report(RobotReport::PostureSet {
+                        depth_mm: 0.0,
+                        base_deg: base0_deg,
+                    });
+                }
+                Ok(RobotCommand::Steps { count }) => {
+                    let steps = robot
+                        .steps(count)
+                        .context("the host's step list broke off")?;
+                    return Ok((posture, base0_deg, Some(steps)));
+                }
+                Ok(RobotCommand::Stop) => {
+                    // A host that gave up before steering (no registration came, a posture
+                    // refused) hears it stopped.
+                    robot.report(RobotReport::Stopped);
+                    return Ok((posture, base0_deg, None));
+                }
+                Ok(_) => {}
+                Err(_) => bail!("the host sent no step list"),
+            }
+        }
     }
 
     /// The error the robot adds to the depth it reports for piece `k`.
@@ -360,6 +374,25 @@ impl Lab {
                 Flag::Status
             }
         })
+    }
+
+    /// In real time, the piece takes its share of its step's duration (scaled) before it ends:
+    /// the tracker samples the tip as it was meanwhile. `was` is the depth and roll before it.
+    fn take_time(&self, step: &Step, m: &Measurement, was: &mut (f32, f32)) {
+        let moved = (m.depth_mm - was.0, m.base_deg - was.1);
+        *was = (m.depth_mm, m.base_deg);
+        let Some(scale) = self.config.time_scale else {
+            return;
+        };
+        let share = match step.op {
+            Op::Rotate { angle_deg } if angle_deg != 0.0 => (moved.1 / angle_deg).abs(),
+            op if op.inserted_mm() > 0.0 => (moved.0 / op.inserted_mm()).abs(),
+            _ => 1.0,
+        };
+        let seconds = f64::from(step.duration_s * share.min(1.0)) * scale;
+        if seconds.is_finite() && seconds > 0.0 {
+            std::thread::sleep(Duration::from_secs_f64(seconds.min(60.0)));
+        }
     }
 
     /// Waits out the rate and the latency before a piece's pose goes out.

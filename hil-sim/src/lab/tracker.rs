@@ -24,6 +24,7 @@ use needle_igtl::{encode_frame, Extended, FrameInfo, Message, Status, StatusCode
 use needle_igtl::{TextEncoding, Timestamp, Transform, HEADER_SIZE};
 use needle_sim::Measurement;
 use planner_core::steer::Pose;
+use std::collections::VecDeque;
 use std::io::Write;
 use std::net::{TcpListener, TcpStream};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -50,6 +51,9 @@ pub struct TrackerConfig {
     /// CRC, a wrong body size, a 20-byte name that is not UTF-8, a non-rigid matrix, and a
     /// 20-byte name one letter off the tip's).
     pub bad_frames_every: Option<u32>,
+    /// Poses go out only as the free-running sampler takes them ([`TrackerClients::sample`]),
+    /// not when a piece ends.
+    pub sampling: bool,
 }
 
 /// The newest pose, as measured, and how it is flagged.
@@ -158,16 +162,65 @@ impl TrackerClients {
         *locked(&self.latest) = None;
     }
 
-    /// Sends the pose of piece `piece` now, and keeps it as the one the stream repeats.
-    pub(super) fn publish(&self, m: &Measurement, flag: Option<Flag>, piece: u32) -> Result<()> {
-        let sample = Sample {
-            m: *m,
-            flag,
-            piece,
-            stamp: now(),
+    /// The tip is now as `m` measures it (the piece `piece` ended): gives the time it became
+    /// so. Lock-step, its pose goes out now, stamped then, and is the one the stream repeats;
+    /// sampling free-running, the stream's next sample sees it.
+    pub(super) fn publish(
+        &self,
+        m: &Measurement,
+        flag: Option<Flag>,
+        piece: u32,
+    ) -> Result<Timestamp> {
+        let sample = {
+            // Under the lock: a sample stamped from this instant on sees this pose.
+            let mut latest = locked(&self.latest);
+            let sample = Sample {
+                m: *m,
+                flag,
+                piece,
+                stamp: now(),
+            };
+            *latest = Some(sample);
+            sample
         };
-        *locked(&self.latest) = Some(sample);
-        self.send(&sample, 1, true)
+        if !self.config.sampling {
+            self.send(&sample, 1, true)?;
+        }
+        Ok(sample.stamp)
+    }
+
+    /// Samples the tip `rate_hz` times a second, free-running, as a tracker does: each sample is
+    /// the tip as it is at that instant, stamped then (between two pieces' ends the tip is
+    /// where the last one left it: a piece's pose is seen once it ended); each goes out `lag`
+    /// after it was sampled (a tracker and link that deliver late).
+    pub fn sample(&self, rate_hz: f64, lag: Duration) {
+        let tracker = self.clone();
+        let period = Duration::from_secs_f64(1.0 / rate_hz);
+        std::thread::spawn(move || {
+            let mut waiting: VecDeque<(Instant, Sample)> = VecDeque::new();
+            let mut next = Instant::now();
+            loop {
+                next += period;
+                match next.checked_duration_since(Instant::now()) {
+                    Some(wait) => std::thread::sleep(wait),
+                    None => next = Instant::now(),
+                }
+                let sampled = {
+                    let latest = locked(&tracker.latest);
+                    latest.map(|s| Sample { stamp: now(), ..s })
+                };
+                if let Some(s) = sampled {
+                    waiting.push_back((Instant::now(), s));
+                }
+                while let Some((at, s)) = waiting.front().copied() {
+                    if at.elapsed() < lag {
+                        break;
+                    }
+                    waiting.pop_front();
+                    let _ = tracker.send(&s, 1, false);
+                }
+            }
+        });
     }
 
     /// Writes `copies` groups of `sample`'s frames to every client, in one write each.

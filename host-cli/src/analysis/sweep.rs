@@ -62,6 +62,9 @@ impl fmt::Display for Weight {
     }
 }
 
+/// The most values one sweep visits: each is a whole plan, so more is a typing slip, not a study.
+pub const MAX_SWEEP_STEPS: usize = 10_000;
+
 /// The values a sweep visits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Range {
@@ -93,8 +96,8 @@ impl Range {
         if log && (from <= 0.0 || to <= 0.0) {
             bail!("a --log sweep needs --from and --to above zero");
         }
-        if steps == 0 {
-            bail!("--steps must be at least 1");
+        if steps == 0 || steps > MAX_SWEEP_STEPS {
+            bail!("--steps is {steps}: it must be 1 to {MAX_SWEEP_STEPS}");
         }
         if steps == 1 {
             return Ok(vec![from]);

@@ -29,6 +29,9 @@ pub struct Pool {
     pub arrived_errors: Vec<f32>,
     /// Closed loop: runs stopped before the target, by reason.
     pub stops: BTreeMap<&'static str, usize>,
+    /// Closed loop: how the runs ended, judged on the true tip and path
+    /// (`needle_sim::Outcome`), by name.
+    pub outcomes: BTreeMap<&'static str, usize>,
     /// Closed loop: runs whose true path entered an obstacle.
     pub closed_hits: usize,
     /// Closed loop: runs made (0 with `--open-loop-only`).
@@ -56,6 +59,7 @@ impl Pool {
                 .map(|r| r.run.target_error)
                 .collect(),
             stops: steering.stops,
+            outcomes: steering.outcomes,
             closed_hits: closed.iter().filter(|r| r.run.collided).count(),
             within_reach: steering.within_reach,
             reached_within_reach: steering.reached_within_reach,
@@ -70,6 +74,9 @@ impl Pool {
         self.arrived_errors.extend_from_slice(&other.arrived_errors);
         for (reason, n) in &other.stops {
             *self.stops.entry(reason).or_default() += n;
+        }
+        for (outcome, n) in &other.outcomes {
+            *self.outcomes.entry(outcome).or_default() += n;
         }
         self.closed_hits += other.closed_hits;
         self.closed_runs += other.closed_runs;
@@ -92,6 +99,7 @@ impl Pool {
         Pool {
             arrived_errors: self.arrived_errors.clone(),
             stops: self.stops.clone(),
+            outcomes: self.outcomes.clone(),
             closed_hits: self.closed_hits,
             closed_runs: self.closed_runs,
             within_reach: self.within_reach,
@@ -126,9 +134,15 @@ impl Pool {
         }
         let arrived = self.arrived_errors.len();
         let errors = (arrived > 0).then(|| Spread::of(self.arrived_errors.iter().copied()));
+        let outcome = |name: &str| self.outcomes.get(name).copied().unwrap_or(0);
+        let reached = outcome("reached");
         Some(ClosedFigures {
-            reached: arrived,
-            reached_percent: 100.0 * arrived as f64 / self.closed_runs as f64,
+            reached,
+            reached_percent: 100.0 * reached as f64 / self.closed_runs as f64,
+            missed: outcome("missed"),
+            collided: outcome("collided"),
+            stopped: outcome("stopped"),
+            arrived,
             stops: self.stops.values().sum(),
             stop_reasons: self.stops.clone(),
             hits: self.closed_hits,
@@ -169,10 +183,21 @@ pub struct PredictedFigures {
 /// Closed loop: the same worlds, steered from the tracker's readings.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ClosedFigures {
-    /// Runs the controller did not stop (they end where the steering ends them).
+    /// Runs that reached the target: the true path clear and the true tip within the reach
+    /// tolerance of the true target (`needle_sim::Outcome::Reached`).
     pub reached: usize,
     /// The same, in percent of the runs.
     pub reached_percent: f64,
+    /// Runs the controller let go through whose true tip ended farther than the tolerance.
+    pub missed: usize,
+    /// Runs whose true path entered an obstacle (never counted as reached or missed).
+    pub collided: usize,
+    /// Runs the controller stopped before the target (for a reason other than its own
+    /// `missed`) whose true path kept clear.
+    pub stopped: usize,
+    /// Runs the controller did not stop (they end where the steering ends them): reached,
+    /// missed, or collided on the way.
+    pub arrived: usize,
     /// Runs the controller stopped before the target.
     pub stops: usize,
     /// `stops` by reason (`no_safe_continuation`, `tracking_lost`, `bad_measurement`).
@@ -308,8 +333,8 @@ impl ScenarioRow {
         let refused = self.closed_loop_refused.as_ref();
         let closed = self.closed_loop.as_ref().map_or(String::new(), |c| {
             format!(
-                "; closed loop {} reached, {} stopped, {} hit",
-                c.reached, c.stops, c.hits
+                "; closed loop {} reached, {} missed, {} stopped, {} hit",
+                c.reached, c.missed, c.stops, c.hits
             )
         });
         format!(

@@ -21,9 +21,9 @@ use crate::scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use crate::scenario::planted::planted_scenario;
 use crate::scenario::unseen::unseen_scenario;
 use crate::scenario::write::scenario_toml;
-use crate::simulate::at_least_one;
 use crate::simulate::setup::{Keep, Setup};
 use crate::simulate::PlanBound;
+use crate::simulate::{at_least_one, run_count, scenario_count};
 use anyhow::{Context, Result};
 use needle_sim::Perturbation;
 use planner_core::execute::risk::{execution_risk, Execution};
@@ -35,15 +35,15 @@ use std::time::Instant;
 /// `needle benchmark`
 #[derive(clap::Args, Clone, Debug)]
 pub struct BenchmarkArgs {
-    /// Generated scenarios, at least 1 (seeds S, S+1, ...).
-    #[arg(long, default_value_t = 20, value_parser = at_least_one)]
+    /// Generated scenarios, 1 to 100 000 (seeds S, S+1, ...).
+    #[arg(long, default_value_t = 20, value_parser = scenario_count)]
     pub scenarios: usize,
     /// Seed of the first scenario.
     #[arg(long, default_value_t = 101)]
     pub seed: u64,
-    /// Simulated insertions per scenario, at least 1: each open loop, and the same worlds
+    /// Simulated insertions per scenario, 1 to 1 000 000: each open loop, and the same worlds
     /// closed loop.
-    #[arg(long, default_value_t = 40, value_parser = at_least_one)]
+    #[arg(long, default_value_t = 40, value_parser = run_count)]
     pub runs: usize,
     /// Threads, at least 1 (default: every core).
     #[arg(long, value_parser = at_least_one)]

@@ -186,23 +186,7 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         Some(&t.open_loop),
         t.closed_loop.as_ref(),
     );
-    let reasons: Vec<String> = t
-        .closed_loop
-        .iter()
-        .flat_map(|c| c.stop_reasons.iter())
-        .filter(|(_, n)| **n > 0)
-        .map(|(reason, n)| format!("{reason} {n}"))
-        .collect();
-    if !reasons.is_empty() {
-        let _ = writeln!(out, "closed-loop stops: {}", reasons.join(", "));
-    }
-    if let Some(c) = &t.closed_loop {
-        let _ = writeln!(
-            out,
-            "closed loop: {} runs within the tissue's reach, {} of them reached",
-            c.within_reach, c.reached_within_reach
-        );
-    }
+    closed_totals(&mut out, t.closed_loop.as_ref());
     let _ = writeln!(
         out,
         "errors in mm (closed loop: of the runs that arrived); hits: runs that entered a sphere; \
@@ -228,4 +212,30 @@ pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
         );
     }
     out
+}
+
+/// The closed loop's totals beyond the row: stops by reason, outcomes, the tissue's reach.
+fn closed_totals(out: &mut String, closed: Option<&ClosedFigures>) {
+    let reasons: Vec<String> = closed
+        .iter()
+        .flat_map(|c| c.stop_reasons.iter())
+        .filter(|(_, n)| **n > 0)
+        .map(|(reason, n)| format!("{reason} {n}"))
+        .collect();
+    if !reasons.is_empty() {
+        let _ = writeln!(out, "closed-loop stops: {}", reasons.join(", "));
+    }
+    if let Some(c) = closed {
+        let _ = writeln!(
+            out,
+            "closed-loop outcomes: {} reached, {} missed, {} collided, {} stopped (the true tip \
+             and path; reached %: of every run)",
+            c.reached, c.missed, c.collided, c.stopped
+        );
+        let _ = writeln!(
+            out,
+            "closed loop: {} runs within the tissue's reach, {} of them reached",
+            c.within_reach, c.reached_within_reach
+        );
+    }
 }

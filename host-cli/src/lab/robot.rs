@@ -8,6 +8,10 @@
 //! crosses the link unchanged.
 //!
 //! Host to robot (device name [`COMMAND_DEVICE`]):
+//! - `posture theta1_deg=A theta2_deg=B roll_deg=R`: before the first step list, set the needle
+//!   at the entry (not inserted) to the plan's posture: tilted from the entry axis by B about
+//!   the entry frame's e2, then by A about its e1, and the bevel rolled to R about the needle
+//!   (docs/lab.md, "The posture");
 //! - `steps count=N`, then N step messages: the step list to execute, replacing what is left of
 //!   the current one at the next piece boundary (N at most the planner's `MAX_STEPS`, so that a
 //!   robot can hold any list it is sent);
@@ -21,11 +25,16 @@
 //!   `stop`: stop the insertion (the robot holds and reports `stopped`).
 //!
 //! Robot to host (device name [`REPORT_DEVICE`]):
+//! - `posture-set depth_mm=X base_deg=Y`: the posture is taken; X the depth (0: at the entry),
+//!   Y the robot's absolute base roll, equal to the posture's roll up to whole turns;
+//! - `posture-refused max_tilt_deg=T`: the robot cannot tilt the needle that far (a fixed
+//!   guide: 0); nothing moved;
 //! - `progress piece=K depth_mm=X base_deg=Y`: piece K (counted from 1 over the insertion) is
-//!   done; X the commanded insertion so far, Y the commanded base roll so far (accumulated);
+//!   done; X the commanded insertion from the entry, Y the commanded absolute base roll (the
+//!   posture's `base_deg` plus the rotations since, accumulated, not wrapped);
 //! - `done`: the step list ran out; `holding`; `stopped`.
 
-use planner_core::execute::schedule::{Op, Step, MAX_STEPS};
+use planner_core::execute::schedule::{Op, Posture, Step, MAX_STEPS};
 use std::fmt;
 
 /// Device name of the host's commands.
@@ -36,6 +45,15 @@ pub const REPORT_DEVICE: &str = "NeedleRobotState";
 /// What the host tells the robot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RobotCommand {
+    /// Set the needle at the entry to the plan's posture.
+    Posture {
+        /// Tilt about the entry frame's e1 (degrees), applied after `theta2_deg`.
+        theta1_deg: f32,
+        /// Tilt about the entry frame's e2 (degrees).
+        theta2_deg: f32,
+        /// The bevel's roll about the needle (degrees).
+        roll_deg: f32,
+    },
     /// A step list of this many steps follows.
     Steps {
         /// Number of step messages that follow.
@@ -54,14 +72,28 @@ pub enum RobotCommand {
 /// What the robot tells the host.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RobotReport {
+    /// The posture is taken.
+    PostureSet {
+        /// Depth (mm): 0, at the entry.
+        depth_mm: f64,
+        /// The absolute base roll (degrees), the posture's up to whole turns.
+        base_deg: f64,
+    },
+    /// The posture cannot be taken: the robot tilts at most this much (degrees).
+    PostureRefused {
+        /// The largest tilt from the entry axis the robot can take (degrees).
+        max_tilt_deg: f32,
+    },
     /// A piece of insertion (or a rotation) is done.
     Progress {
         /// Pieces done so far in the insertion, this one included.
         piece: u32,
         /// Commanded insertion so far (mm).
         depth_mm: f32,
-        /// Commanded base roll so far (degrees, accumulated).
-        base_deg: f32,
+        /// Commanded absolute base roll (degrees, accumulated): the posture's `base_deg` plus the
+        /// rotations since. Read as an `f64`, so a large absolute roll keeps the rotations'
+        /// bits.
+        base_deg: f64,
     },
     /// The step list ran out.
     Done,
@@ -122,6 +154,14 @@ fn speed(amount: f32, duration_s: f32) -> f32 {
 impl fmt::Display for RobotCommand {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
+            RobotCommand::Posture {
+                theta1_deg,
+                theta2_deg,
+                roll_deg,
+            } => write!(
+                f,
+                "posture theta1_deg={theta1_deg} theta2_deg={theta2_deg} roll_deg={roll_deg}"
+            ),
             RobotCommand::Steps { count } => write!(f, "steps count={count}"),
             RobotCommand::Go => write!(f, "go"),
             RobotCommand::Hold => write!(f, "hold"),
@@ -166,6 +206,12 @@ impl fmt::Display for RobotReport {
                 f,
                 "progress piece={piece} depth_mm={depth_mm} base_deg={base_deg}"
             ),
+            RobotReport::PostureSet { depth_mm, base_deg } => {
+                write!(f, "posture-set depth_mm={depth_mm} base_deg={base_deg}")
+            }
+            RobotReport::PostureRefused { max_tilt_deg } => {
+                write!(f, "posture-refused max_tilt_deg={max_tilt_deg}")
+            }
             RobotReport::Done => write!(f, "done"),
             RobotReport::Holding => write!(f, "holding"),
             RobotReport::Stopped => write!(f, "stopped"),
@@ -237,6 +283,10 @@ fn finite(v: &f32) -> bool {
     v.is_finite()
 }
 
+fn finite64(v: &f64) -> bool {
+    v.is_finite()
+}
+
 fn length(v: &f32) -> bool {
     v.is_finite() && *v >= 0.0
 }
@@ -268,6 +318,14 @@ impl std::str::FromStr for RobotCommand {
                     "go" => RobotCommand::Go,
                     "hold" => RobotCommand::Hold,
                     _ => RobotCommand::Stop,
+                })
+            }
+            "posture" => {
+                let p = Pairs::of(rest, &["theta1_deg", "theta2_deg", "roll_deg"])?;
+                Ok(RobotCommand::Posture {
+                    theta1_deg: p.required("theta1_deg", finite)?,
+                    theta2_deg: p.required("theta2_deg", finite)?,
+                    roll_deg: p.required("roll_deg", finite)?,
                 })
             }
             "steps" => {
@@ -315,7 +373,21 @@ impl std::str::FromStr for RobotReport {
                 Ok(RobotReport::Progress {
                     piece: p.required("piece", |_: &u32| true)?,
                     depth_mm: p.required("depth_mm", finite)?,
-                    base_deg: p.required("base_deg", finite)?,
+                    base_deg: p.required("base_deg", finite64)?,
+                })
+            }
+            "posture-set" => {
+                let p = Pairs::of(rest, &["depth_mm", "base_deg"])?;
+                Ok(RobotReport::PostureSet {
+                    depth_mm: p.required("depth_mm", finite64)?,
+                    base_deg: p.required("base_deg", finite64)?,
+                })
+            }
+            "posture-refused" => {
+                let p = Pairs::of(rest, &["max_tilt_deg"])?;
+                Ok(RobotReport::PostureRefused {
+                    max_tilt_deg: p
+                        .required("max_tilt_deg", |t: &f32| t.is_finite() && *t >= 0.0)?,
                 })
             }
             "done" | "holding" | "stopped" => {
@@ -329,6 +401,21 @@ impl std::str::FromStr for RobotReport {
             other => Err(GrammarError::UnknownWord(other.to_string())),
         }
     }
+}
+
+/// The command that sets `posture`.
+pub fn posture_command(posture: &Posture) -> RobotCommand {
+    RobotCommand::Posture {
+        theta1_deg: posture.theta1_deg,
+        theta2_deg: posture.theta2_deg,
+        roll_deg: posture.roll_deg,
+    }
+}
+
+/// The tilt of a posture from the entry axis (degrees): cos(tilt) = cos(theta1) cos(theta2).
+pub fn tilt_deg(theta1_deg: f32, theta2_deg: f32) -> f32 {
+    let c = f64::from(theta1_deg).to_radians().cos() * f64::from(theta2_deg).to_radians().cos();
+    c.clamp(-1.0, 1.0).acos().to_degrees() as f32
 }
 
 /// The messages that send a whole step list: `steps count=N`, then each step.

@@ -51,6 +51,11 @@ fn each_step_kind_and_word_round_trips() {
         }
     }
     for c in [
+        RobotCommand::Posture {
+            theta1_deg: 28.7,
+            theta2_deg: -1.0 / 3.0,
+            roll_deg: 180.0,
+        },
         RobotCommand::Go,
         RobotCommand::Hold,
         RobotCommand::Stop,
@@ -64,6 +69,11 @@ fn each_step_kind_and_word_round_trips() {
             depth_mm: 1.0 / 3.0,
             base_deg: -540.25,
         },
+        RobotReport::PostureSet {
+            depth_mm: 0.0,
+            base_deg: 540.0 + f64::from(1.0_f32 / 3.0),
+        },
+        RobotReport::PostureRefused { max_tilt_deg: 0.0 },
         RobotReport::Done,
         RobotReport::Holding,
         RobotReport::Stopped,
@@ -149,4 +159,23 @@ fn bad_strings_are_typed_errors() {
         .parse::<RobotReport>()
         .is_err());
     assert!("stopped now=1".parse::<RobotReport>().is_err());
+}
+
+/// The absolute roll is read as an `f64`: a rotation's `f32` bits survive a large roll added to
+/// it and taken off again.
+#[test]
+fn a_large_absolute_roll_keeps_the_rotations_bits() {
+    let turned = 1.0_f32 / 3.0;
+    let report = RobotReport::Progress {
+        piece: 3,
+        depth_mm: 2.0,
+        base_deg: 900.0 + f64::from(turned),
+    };
+    let Ok(RobotReport::Progress { base_deg, .. }) = report.to_string().parse() else {
+        panic!("{report}");
+    };
+    assert_eq!(((base_deg - 900.0) as f32).to_bits(), turned.to_bits());
+    assert_eq!(tilt_deg(0.0, 0.0), 0.0);
+    assert!((tilt_deg(30.0, 0.0) - 30.0).abs() < 1e-4);
+    assert!((tilt_deg(-20.0, 20.0) - 27.990_9).abs() < 1e-3);
 }

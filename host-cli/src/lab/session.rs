@@ -9,21 +9,42 @@
 //! `TransformStatus` other than `OK`, or after a `STATUS` of the tip that is not OK) is a reading
 //! without a pose, as a tracker dropout is in the simulation.
 
+use super::fresh::{seconds, HostClock, Offset};
 use super::log::InsertionLog;
-pub use super::outcome::{Ending, LabController, SessionOutcome};
+pub use super::outcome::ReadingTimes;
+pub use super::outcome::{Class, Ending, LabController, SessionOutcome};
 use super::progress::Commanded;
 use super::robot::{step_list, RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
 use super::slicer::Slicer;
 use super::tracker::{TrackerCounts, TrackerState};
 use super::wire::{registered_point, registered_pose, send_text, Arrival};
-use needle_igtl::{Message, Transform};
+use needle_igtl::{Message, Timestamp, Transform};
+use planner_core::execute::schedule::Posture;
 use planner_core::steer::{Command, Pose, StopReason, TipMeasurement};
 use serde_json::json;
 use std::net::TcpStream;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
+
+#[path = "interlocks.rs"]
+mod interlocks;
+#[path = "start.rs"]
+mod start;
+
+/// A piece the robot reported, waiting for a fresh pose.
+#[derive(Clone, Copy, Debug)]
+struct Reported {
+    /// Commanded depth (mm).
+    depth_mm: f32,
+    /// Commanded base roll from the posture's (degrees).
+    base_deg: f32,
+    /// When the piece ended, by the robot's clock (its report's header timestamp).
+    end_s: Option<f64>,
+    /// When the report arrived.
+    at: Instant,
+}
 
 /// What arrives while steering.
 pub enum Event {
@@ -36,6 +57,19 @@ pub enum Event {
     TrackerClosed,
     /// The robot's connection ended.
     RobotClosed,
+}
+
+/// What a session reads: the events, the tracker's shared state, and the bytes each connection
+/// delivered (to tell a peer that sends no OpenIGTLink from one that sends nothing).
+pub struct Inputs {
+    /// The session's events.
+    pub events: Receiver<Event>,
+    /// The tracker's state, kept by its reader thread.
+    pub tracker: Arc<Mutex<TrackerState>>,
+    /// Bytes received from the tracker.
+    pub tracker_bytes: Arc<AtomicU64>,
+    /// Bytes received from the robot.
+    pub robot_bytes: Arc<AtomicU64>,
 }
 
 /// The names and limits of a session.
@@ -56,6 +90,8 @@ pub struct SessionConfig {
     /// The tip sensor measures the roll (6-DOF); a 5-DOF sensor's roll is left out of every
     /// reading (the controller infers it from how the path bends).
     pub roll_measured: bool,
+    /// The plan's posture, the robot's first command.
+    pub posture: Posture,
 }
 
 /// Set by a Ctrl-C handler: the session stops the robot and ends.
@@ -73,15 +109,27 @@ pub struct Session<'a> {
     slicer: &'a mut Slicer,
     events: Receiver<Event>,
     tracker: Arc<Mutex<TrackerState>>,
+    tracker_bytes: Arc<AtomicU64>,
+    robot_bytes: Arc<AtomicU64>,
+    /// Robot frames that decoded, of any name.
+    robot_frames: u32,
     /// The registration in use (the file's, or the first the stream sent).
     registration: Option<Transform>,
     /// Superseded poses counted at the previous reading.
     superseded_before: u32,
-    /// The robot reported a piece that is not answered yet: (depth, base roll).
-    pending: Option<(f32, f32)>,
+    /// The robot reported a piece that is not answered yet.
+    pending: Option<Reported>,
+    /// This program's clock, the tracker's reader's too.
+    clock: HostClock,
+    /// The robot clock's offset from this program's, from its stamped reports.
+    robot_offset: Offset,
     /// What the robot was commanded, to check its progress against.
     commanded: Commanded,
-    /// When the tracker was last given cause to move (a tip pose since then also counts).
+    /// The robot's absolute base roll once the posture was taken: the zero of the rolls the
+    /// controller is given.
+    base0_deg: f64,
+    /// When the tracker was last given cause to send a new pose (a command, or the robot's
+    /// report of a piece); a tip pose since then also counts.
     tracker_clock: Instant,
     /// When the robot was last commanded, while its report is awaited.
     robot_clock: Option<Instant>,
@@ -97,9 +145,13 @@ impl<'a> Session<'a> {
         robot: TcpStream,
         log: &'a mut InsertionLog,
         slicer: &'a mut Slicer,
-        (events, tracker): (Receiver<Event>, Arc<Mutex<TrackerState>>),
+        inputs: Inputs,
     ) -> Self {
         let steering = controller.stats().unwrap_or_default();
+        let clock = inputs
+            .tracker
+            .lock()
+            .map_or_else(|p| p.into_inner().clock, |s| s.clock);
         Session {
             registration: config.registration,
             config,
@@ -107,20 +159,31 @@ impl<'a> Session<'a> {
             robot,
             log,
             slicer,
-            events,
-            tracker,
+            events: inputs.events,
+            tracker: inputs.tracker,
+            tracker_bytes: inputs.tracker_bytes,
+            robot_bytes: inputs.robot_bytes,
+            robot_frames: 0,
             superseded_before: 0,
             pending: None,
+            clock,
+            robot_offset: Offset::default(),
             commanded: Commanded::default(),
+            base0_deg: 0.0,
             tracker_clock: Instant::now(),
             robot_clock: None,
             seq: 0,
             outcome: SessionOutcome {
+                outcome: Class::Reached,
                 stop_reason: None,
+                why: None,
                 predicted_miss_mm: None,
                 steering,
                 tracker: TrackerCounts::default(),
                 latencies_ms: Vec::new(),
+                times: Vec::new(),
+                clock_offset_ms: None,
+                clock_offset_applied: false,
                 robot_stopped: false,
             },
         }
@@ -141,11 +204,18 @@ impl<'a> Session<'a> {
         let stats = self.controller.stats().unwrap_or(self.outcome.steering);
         self.outcome.steering = stats;
         self.outcome.stop_reason = ending.stop_reason();
+        self.outcome.outcome = ending.class();
         self.look_at_tracker();
+        let tracker = self.state().offset;
+        let delays = tracker.get().zip(self.robot_offset.get());
+        self.outcome.clock_offset_ms = delays.map(|(t, r)| (t - r) * 1e3);
+        self.outcome.clock_offset_applied =
+            tracker.correction() != 0.0 || self.robot_offset.correction() != 0.0;
         let counts = self.outcome.tracker;
         self.log.write(
             "stop",
             json!({
+                "outcome": self.outcome.outcome,
                 "stop_reason": self.outcome.stop_reason,
                 "ending": format!("{ending:?}"),
                 "predicted_miss_mm": self.outcome.predicted_miss_mm,
@@ -157,6 +227,8 @@ impl<'a> Session<'a> {
                 "repeated_poses": counts.repeated_poses,
                 "ignored_frames": counts.ignored_frames,
                 "registrations_refused": counts.registrations_refused,
+                "stale_poses": counts.stale_poses,
+                "clock_offset_ms": self.outcome.clock_offset_ms,
             }),
         );
         self.slicer.state(self.outcome.stop_reason, true);
@@ -182,46 +254,11 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// With `--registration-name`: waits for the stream's first registration (nothing is sent to
-    /// the robot before it); `None` once it is in, or the ending if it does not come.
-    fn await_registration(&mut self) -> Option<Ending> {
-        let name = self.config.registration_name.clone()?;
-        let deadline = Instant::now() + self.config.registration_timeout;
-        loop {
-            self.look_at_tracker();
-            let received = self.state().registration;
-            if let Some(reg) = received {
-                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
-                self.log.write(
-                    "registration",
-                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
-                );
-                self.registration = Some(reg);
-                return None;
-            }
-            if INTERRUPTED.load(Ordering::SeqCst) {
-                return Some(Ending::Interrupted);
-            }
-            if Instant::now() > deadline {
-                let waited_ms = self.config.registration_timeout.as_millis() as u64;
-                self.log.write(
-                    "no_registration",
-                    json!({ "name": name, "waited_ms": waited_ms }),
-                );
-                return Some(Ending::NoRegistration);
-            }
-            match self.events.recv_timeout(POLL) {
-                Ok(Event::TrackerClosed) => return Some(Ending::TrackerDisconnected),
-                Ok(Event::RobotClosed) | Err(RecvTimeoutError::Disconnected) => {
-                    return Some(Ending::RobotDisconnected)
-                }
-                Ok(_) | Err(RecvTimeoutError::Timeout) => {}
-            }
-        }
-    }
-
     fn steer(&mut self, steps: &[planner_core::execute::schedule::Step]) -> Ending {
         if let Some(ending) = self.await_registration() {
+            return ending;
+        }
+        if let Some(ending) = self.set_posture() {
             return ending;
         }
         self.commanded.list_sent(steps);
@@ -251,23 +288,12 @@ impl<'a> Session<'a> {
                     return Ending::RobotDisconnected
                 }
                 Ok(Event::Robot(arrival)) => {
-                    if let Some(ending) = self.on_robot(arrival.0) {
+                    let (frame, at) = *arrival;
+                    if let Some(ending) = self.on_robot(frame, at) {
                         return ending;
                     }
                 }
             }
-        }
-    }
-
-    fn timed_out(&self) -> Option<Ending> {
-        let last_tip = self.state().last_tip_at;
-        let heard = last_tip.map_or(self.tracker_clock, |t| t.max(self.tracker_clock));
-        if heard.elapsed() > self.config.tracking_timeout {
-            return Some(Ending::TrackingLost);
-        }
-        match self.robot_clock {
-            Some(t) if t.elapsed() > self.config.robot_timeout => Some(Ending::RobotNotAnswering),
-            _ => None,
         }
     }
 
@@ -288,29 +314,64 @@ impl<'a> Session<'a> {
     fn on_robot(
         &mut self,
         frame: Result<needle_igtl::Frame, needle_igtl::Error>,
+        at: Instant,
     ) -> Option<Ending> {
-        let text = match frame {
+        let (report, stamp) = self.report_of(frame)?;
+        match report {
+            RobotReport::Progress {
+                depth_mm, base_deg, ..
+            } => {
+                // The robot reports its absolute roll; the controller counts from the posture.
+                let base_deg = (base_deg - self.base0_deg) as f32;
+                self.robot_clock = None;
+                self.tracker_clock = Instant::now();
+                if let Err(why) = self.commanded.check(depth_mm, base_deg) {
+                    self.log.write("robot_disagrees", json!({ "why": why }));
+                    self.outcome.why = Some(why);
+                    return Some(Ending::RobotDisagrees);
+                }
+                let end_s = seconds(stamp);
+                if let Some(e) = end_s {
+                    self.robot_offset.observe(self.clock.unix(at), e);
+                }
+                self.pending = Some(Reported {
+                    depth_mm,
+                    base_deg,
+                    end_s,
+                    at,
+                });
+                None
+            }
+            RobotReport::Done => Some(Ending::StepsRanOut),
+            RobotReport::Holding => None,
+            RobotReport::Stopped => Some(Ending::RobotStopped),
+            RobotReport::PostureSet { .. } | RobotReport::PostureRefused { .. } => {
+                let why = format!("`{report}` after the posture was taken");
+                self.log.write("robot_disagrees", json!({ "why": why }));
+                self.outcome.why = Some(why);
+                Some(Ending::RobotDisagrees)
+            }
+        }
+    }
+
+    /// The robot's report a frame carries, if it is one; a text that is not in the grammar is
+    /// logged (`robot_refused`) and read past.
+    fn report_of(
+        &mut self,
+        frame: Result<needle_igtl::Frame, needle_igtl::Error>,
+    ) -> Option<(RobotReport, Timestamp)> {
+        if frame.is_ok() {
+            self.robot_frames = self.robot_frames.saturating_add(1);
+        }
+        let (text, stamp) = match frame {
             Ok(f) if f.info.device_name == REPORT_DEVICE => match f.message {
-                Message::String(s) => s.text,
+                Message::String(s) => (s.text, f.info.timestamp),
                 _ => return None,
             },
             _ => return None,
         };
         match text.parse::<RobotReport>() {
-            Ok(RobotReport::Progress {
-                depth_mm, base_deg, ..
-            }) => {
-                self.robot_clock = None;
-                if let Err(why) = self.commanded.check(depth_mm, base_deg) {
-                    self.log.write("robot_disagrees", json!({ "why": why }));
-                    return Some(Ending::RobotDisagrees);
-                }
-                self.pending = Some((depth_mm, base_deg));
-                None
-            }
-            Ok(RobotReport::Done) => Some(Ending::StepsRanOut),
-            Ok(RobotReport::Holding) => None,
-            Ok(RobotReport::Stopped) => Some(Ending::RobotStopped),
+            Ok(r) => Some((r, stamp)),
             Err(e) => {
                 self.log.write(
                     "robot_refused",
@@ -323,12 +384,14 @@ impl<'a> Session<'a> {
 
     /// Answers the reported piece once a new tip pose is in.
     fn answer_if_ready(&mut self) -> Option<Ending> {
-        let (depth_mm, base_deg) = self.pending?;
-        let (tip, target, superseded) = {
+        let reported = self.pending?;
+        let (depth_mm, base_deg) = (reported.depth_mm, reported.base_deg);
+        let robot_offset = self.robot_offset;
+        let (tip, target, superseded, tracker_offset) = {
             let mut s = self.state();
-            let tip = s.take_tip()?;
+            let tip = s.take_fresh_tip(reported.end_s, robot_offset)?;
             // An image of the target is used once: a reading after none new carries none.
-            (tip, s.take_target(), s.counts.superseded_poses)
+            (tip, s.take_target(), s.counts.superseded_poses, s.offset)
         };
         let superseded_poses = superseded.saturating_sub(self.superseded_before);
         self.superseded_before = superseded;
@@ -377,8 +440,16 @@ impl<'a> Session<'a> {
                 return Some(Ending::RobotDisconnected);
             }
         }
-        let latency_ms = at.elapsed().as_secs_f64() * 1e3;
+        let sent = Instant::now();
+        let latency_ms = ms(sent.duration_since(at));
+        let times = ReadingTimes {
+            reaction_ms: ms(sent.duration_since(at.max(reported.at))),
+            waited_ms: ms(at.saturating_duration_since(reported.at)),
+            pose_age_ms: seconds(tip.stamp)
+                .map(|s| (self.clock.unix(sent) - (s + tracker_offset.correction())) * 1e3),
+        };
         self.outcome.latencies_ms.push(latency_ms);
+        self.outcome.times.push(times);
         // After the commands it caused, with the time from the pose to them.
         self.log.write(
             "reading",
@@ -386,6 +457,11 @@ impl<'a> Session<'a> {
                 "measurement": m,
                 "reply": reply,
                 "latency_ms": latency_ms,
+                "reaction_ms": times.reaction_ms,
+                "waited_ms": times.waited_ms,
+                "pose_age_ms": times.pose_age_ms,
+                "pose_sampled_s": seconds(tip.stamp),
+                "piece_ended_s": reported.end_s,
                 "superseded_poses": superseded_poses,
             }),
         );
@@ -401,41 +477,8 @@ impl<'a> Session<'a> {
         self.tracker_clock = Instant::now();
         ending
     }
+}
 
-    /// Tells the robot to stop (holding first when tracking was lost) and waits for its word.
-    fn stop_robot(&mut self, ending: Ending) {
-        if ending == Ending::RobotStopped {
-            self.outcome.robot_stopped = true;
-            return;
-        }
-        if ending == Ending::RobotDisconnected {
-            return;
-        }
-        if ending == Ending::TrackingLost {
-            let _ = self.command(RobotCommand::Hold);
-        }
-        // The controller's stop went out with its answer.
-        let sent = matches!(ending, Ending::Controller(_));
-        if !sent && self.command(RobotCommand::Stop).is_err() {
-            return;
-        }
-        let deadline = Instant::now() + self.config.robot_timeout;
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.events.recv_timeout(left) {
-                Ok(Event::Robot(arrival)) => {
-                    if let (Ok(f), _) = *arrival {
-                        let Message::String(s) = f.message else {
-                            continue;
-                        };
-                        if s.text.parse() == Ok(RobotReport::Stopped) {
-                            self.outcome.robot_stopped = true;
-                            return;
-                        }
-                    }
-                }
-                Ok(_) => {}
-                Err(_) => return,
-            }
-        }
-    }
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
 }

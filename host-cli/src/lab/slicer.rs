@@ -56,9 +56,9 @@ impl Slicer {
         Ok(Slicer::showing(viewers))
     }
 
-    /// Serves Slicer on `port`, waiting up to `wait` for the first viewer.
-    pub fn serve(port: u16, wait: Duration) -> Result<Slicer> {
-        Ok(Slicer::showing(Viewers::serve(port, wait)?))
+    /// Serves Slicer on `at` (address, port), waiting up to `wait` for the first viewer.
+    pub fn serve(at: (std::net::IpAddr, u16), wait: Duration) -> Result<Slicer> {
+        Ok(Slicer::showing(Viewers::serve(at, wait)?))
     }
 
     fn showing(viewers: Viewers) -> Slicer {

@@ -3,22 +3,23 @@
 //! controller in between, the interlocks of [`super::session`], an insertion log.
 
 use super::log::InsertionLog;
+use super::report::{self, Unreachable};
 use super::robot::step_list;
-use super::session::{Event, LabController, Session, SessionConfig, SessionOutcome, INTERRUPTED};
+use super::session::INTERRUPTED;
+use super::session::{Event, Inputs, LabController, Session, SessionConfig, SessionOutcome};
 use super::slicer::Slicer;
 use super::tracker::{TrackerNames, TrackerState};
-use super::wire::{load_registration, read_frames, Arrival, TARGET_DEVICE, TIP_DEVICE};
+use super::wire::{load_registration, read_frames_counting, Arrival, TARGET_DEVICE, TIP_DEVICE};
 use crate::device::commands::LinkArgs;
 use crate::simulate::closed_loop_setup;
 use crate::simulate::device::{device_planning, start_steering, LinkController};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 use needle_sim::in_process;
-use serde::Serialize;
 use serde_json::json;
-use std::net::{TcpStream, ToSocketAddrs};
+use std::net::{IpAddr, Ipv4Addr, TcpStream, ToSocketAddrs};
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -54,11 +55,17 @@ pub struct SteerArgs {
     /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
     #[arg(long, conflicts_with = "serve_slicer")]
     pub slicer: Option<String>,
-    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of every interface
-    /// (Slicer's OpenIGTLinkIF connector of type Client connects to it, as to PLUS; 0 picks a
-    /// free port, printed on stderr). Viewers may join and leave during the insertion.
+    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of 127.0.0.1 (or of
+    /// --serve-slicer-bind): Slicer's OpenIGTLinkIF connector of type Client connects to it, as
+    /// to PLUS; 0 picks a free port, printed on stderr. Viewers may join and leave during the
+    /// insertion. Anyone who can connect sees the plan and the insertion (no authentication).
     #[arg(long, value_name = "PORT")]
     pub serve_slicer: Option<u16>,
+    /// With --serve-slicer: the address to serve on (default 127.0.0.1, this machine only;
+    /// 0.0.0.0 every interface, so any host that reaches this one can watch).
+    #[arg(long, value_name = "ADDR", requires = "serve_slicer",
+          default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
+    pub serve_slicer_bind: IpAddr,
     /// With --serve-slicer: wait up to this many seconds for the first viewer before steering.
     #[arg(
         long,
@@ -114,56 +121,23 @@ impl SteerArgs {
     }
 }
 
-/// Median and largest latency (ms) over the readings.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Latency {
-    /// Readings measured.
-    pub readings: usize,
-    /// Median (ms).
-    pub median: f64,
-    /// Largest (ms).
-    pub max: f64,
-}
-
-impl Latency {
-    /// Of the latencies given (`None` without any).
-    pub fn of(values: &[f64]) -> Option<Latency> {
-        let mut v = values.to_vec();
-        v.sort_by(f64::total_cmp);
-        let max = *v.last()?;
-        Some(Latency {
-            readings: v.len(),
-            median: v[v.len() / 2],
-            max,
-        })
-    }
-}
-
-/// `needle steer --json`.
-#[derive(Serialize)]
-pub struct SteerJson {
-    /// The seed given, if any.
-    pub seed: Option<u64>,
-    /// The form steered.
-    pub form: String,
-    /// Why it stopped, as `needle simulate --closed-loop --json --detail` names it per run, plus
-    /// the lab's own: `tracking_lost`, `robot_not_answering`, `interrupted`,
-    /// `robot_disconnected`, `tracker_disconnected`, `robot_stopped`, `robot_disagrees`,
-    /// `device_not_answering`, `no_registration`. Null: reached.
-    #[serde(flatten)]
-    pub outcome: SessionOutcome,
-    /// Tip pose received to robot command sent.
-    pub latency_ms: Option<Latency>,
-}
-
-fn connect(what: &str, address: &str) -> Result<TcpStream> {
+/// Connects to the tracker or the robot; failing, the link is broken before anything moved.
+fn connect(what: &'static str, address: &str) -> Result<TcpStream> {
+    let unreachable = |message: String| Unreachable {
+        reason: if what == "tracker" {
+            "tracker_unreachable"
+        } else {
+            "robot_unreachable"
+        },
+        message,
+    };
     let addr = address
         .to_socket_addrs()
-        .with_context(|| format!("{what} address {address}"))?
+        .map_err(|e| unreachable(format!("{what} address {address}: {e}")))?
         .next()
-        .ok_or_else(|| anyhow!("{what} address {address} resolves to nothing"))?;
+        .ok_or_else(|| unreachable(format!("{what} address {address} resolves to nothing")))?;
     let s = TcpStream::connect_timeout(&addr, Duration::from_secs(5))
-        .with_context(|| format!("cannot reach the {what} at {address}"))?;
+        .map_err(|e| unreachable(format!("cannot reach the {what} at {address}: {e}")))?;
     s.set_nodelay(true)?;
     Ok(s)
 }
@@ -173,16 +147,18 @@ fn connect(what: &str, address: &str) -> Result<TcpStream> {
 const EVENTS_WAITING: usize = 64;
 
 /// Reads the robot's frames into `tx`.
-fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<()> {
+fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<Arc<AtomicU64>> {
     let (frames, ended) = (tx.clone(), tx.clone());
-    read_frames(
+    let bytes = Arc::new(AtomicU64::new(0));
+    read_frames_counting(
         stream.try_clone()?,
+        bytes.clone(),
         move |a| frames.send(Event::Robot(Box::new(a))).is_ok(),
         move || {
             let _ = ended.send(Event::RobotClosed);
         },
     );
-    Ok(())
+    Ok(bytes)
 }
 
 /// Reads the tracker's frames into a shared [`TrackerState`] (bounded whatever the rate), and
@@ -191,11 +167,13 @@ fn forward_tracker(
     stream: &TcpStream,
     tx: &SyncSender<Event>,
     names: TrackerNames,
-) -> Result<Arc<Mutex<TrackerState>>> {
+) -> Result<(Arc<Mutex<TrackerState>>, Arc<AtomicU64>)> {
     let state = Arc::new(Mutex::new(TrackerState::default()));
     let (shared, notices, ended) = (state.clone(), tx.clone(), tx.clone());
-    read_frames(
+    let bytes = Arc::new(AtomicU64::new(0));
+    read_frames_counting(
         stream.try_clone()?,
+        bytes.clone(),
         move |a: Arrival| {
             let notify = {
                 let mut s = shared.lock().unwrap_or_else(|p| p.into_inner());
@@ -213,7 +191,7 @@ fn forward_tracker(
             let _ = ended.send(Event::TrackerClosed);
         },
     );
-    Ok(state)
+    Ok((state, bytes))
 }
 
 /// A device name must fit the header's 20 bytes, or no frame can ever carry it.
@@ -232,13 +210,11 @@ fn check_name(flag: &str, name: &str) -> Result<()> {
 /// dropouts of up to 10 mm).
 pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
 
-/// Runs `needle steer`.
-pub fn run_steer(a: &SteerArgs) -> Result<()> {
-    check_name("--tip-name", &a.tip_name)?;
-    check_name("--target-name", &a.target_name)?;
-    if let Some(name) = &a.registration_name {
-        check_name("--registration-name", name)?;
-    }
+/// The flags of `needle simulate --closed-loop` that plan and set up the insertion as
+/// `needle steer` is told: the `--steer` keys (the lab's tracking interlock unless the scenario
+/// or a key sets it), and the device, for the same refusal (a plan bound the device cannot
+/// plan).
+fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
     let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
     let key = "tracking_lost_after_mm";
     let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
@@ -248,14 +224,33 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
     if !told_here && !told_in_file {
         flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
     }
-    // The same refusal as `needle simulate` (a plan bound the device cannot plan).
     if let Some(t) = &a.tcp {
         flags.push(format!("--tcp={t}"));
     }
     if let Some(p) = &a.port {
         flags.push(format!("--port={p}"));
     }
-    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &flags)?;
+    Ok(flags)
+}
+
+/// Runs `needle steer`: an insertion that does not reach the target is an error carrying its
+/// exit status ([`super::outcome::exit_code`]); with `--json` every ending prints one object.
+pub fn run_steer(a: &SteerArgs) -> Result<()> {
+    let mut form = None;
+    match steer(a, &mut form) {
+        Ok(outcome) => report::print(a, form.unwrap_or_default(), outcome),
+        Err(e) => report::failed(a, form, e),
+    }
+}
+
+/// Plans, connects and steers; `form` is the form steered once it is known.
+fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutcome> {
+    check_name("--tip-name", &a.tip_name)?;
+    check_name("--target-name", &a.target_name)?;
+    if let Some(name) = &a.registration_name {
+        check_name("--registration-name", name)?;
+    }
+    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_flags(a)?)?;
     let registration = a
         .registration
         .as_deref()
@@ -280,6 +275,7 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
     };
     let mut log = InsertionLog::create(a.log.as_deref())?;
     let form = setup.prepared.outcome.form.to_string();
+    *form_steered = Some(form.clone());
     let steps: Vec<String> = step_list(&schedule.steps)
         .iter()
         .map(ToString::to_string)
@@ -292,7 +288,7 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         Some(port) => {
             let wait = Duration::try_from_secs_f64(a.wait_for_slicer)
                 .map_err(|_| anyhow::anyhow!("--wait-for-slicer must be 0 or more seconds"))?;
-            Slicer::serve(port, wait)?
+            Slicer::serve((a.serve_slicer_bind, port), wait)?
         }
         None => Slicer::connect(a.slicer.as_deref())?,
     };
@@ -305,8 +301,8 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         target: a.target_name.clone(),
         registration: a.registration_name.clone(),
     };
-    let tracker_state = forward_tracker(&tracker, &tx, names)?;
-    forward_robot(&robot, &tx)?;
+    let (tracker_state, tracker_bytes) = forward_tracker(&tracker, &tx, names)?;
+    let robot_bytes = forward_robot(&robot, &tx)?;
     drop(tx);
     // A second handler cannot be set (a test calling twice): the first one still flags.
     let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
@@ -318,70 +314,22 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
         registration_name: a.registration_name.clone(),
         registration_timeout: Duration::from_millis(a.registration_timeout_ms),
         roll_measured: a.tracker_dof == 6,
+        posture: schedule.posture,
     };
-    let events: (Receiver<Event>, _) = (rx, tracker_state);
+    let inputs = Inputs {
+        events: rx,
+        tracker: tracker_state,
+        tracker_bytes,
+        robot_bytes,
+    };
     let outcome =
-        Session::new(config, controller, robot, &mut log, &mut slicer, events).run(&schedule.steps);
+        Session::new(config, controller, robot, &mut log, &mut slicer, inputs).run(&schedule.steps);
     let _ = tracker.shutdown(std::net::Shutdown::Both);
     if let Some(e) = &slicer.failure {
         eprintln!("needle steer: Slicer was not shown everything: {e}");
     }
-    print(a, form, outcome, &log)
-}
-
-fn print(a: &SteerArgs, form: String, outcome: SessionOutcome, log: &InsertionLog) -> Result<()> {
-    let latency = Latency::of(&outcome.latencies_ms);
-    let stop_reason = outcome.stop_reason;
-    let interrupted = stop_reason == Some("interrupted");
-    if a.json {
-        let j = SteerJson {
-            seed: a.seed,
-            form,
-            outcome,
-            latency_ms: latency,
-        };
-        println!("{}", serde_json::to_string(&j)?);
-    } else {
-        match outcome.stop_reason {
-            None => println!("{form}: reached the target"),
-            Some(r) => println!("{form}: stopped: {r}"),
-        }
-        if let Some(m) = outcome.predicted_miss_mm {
-            println!("predicted miss {m:.2} mm");
-        }
-        let s = outcome.steering;
-        println!(
-            "{} readings, {} replans, robot {}",
-            s.readings,
-            s.replans,
-            if outcome.robot_stopped {
-                "stopped"
-            } else {
-                "did not confirm the stop"
-            }
-        );
-        if let Some(l) = latency {
-            println!(
-                "latency pose to command: median {:.2} ms, max {:.2} ms over {} readings",
-                l.median, l.max, l.readings
-            );
-        }
-        let t = outcome.tracker;
-        println!(
-            "tracker: {} poses superseded, {} invalid, {} frames rejected, {} ignored",
-            t.superseded_poses, t.invalid_poses, t.rejected_frames, t.ignored_frames
-        );
-    }
     if let Some(e) = &log.failure {
         eprintln!("needle steer: the insertion log is incomplete: {e}");
     }
-    anyhow::ensure!(!interrupted, "interrupted: the robot was told to stop");
-    if let (Some("no_registration"), Some(name)) = (stop_reason, &a.registration_name) {
-        anyhow::bail!(
-            "no registration TRANSFORM named {name} came from the tracker within {} ms: \
-             nothing was steered (the robot was told to stop)",
-            a.registration_timeout_ms
-        );
-    }
-    Ok(())
+    Ok(outcome)
 }

@@ -19,6 +19,7 @@
 //! the tip that is not OK, until an OK one) fills the slot as a pose-less arrival: the reading
 //! goes to the controller as a dropout.
 
+use super::fresh::{fresh, seconds, HostClock, Offset};
 use super::wire::{tip_pose, Arrival};
 use needle_igtl::{Message, StatusCode, Timestamp, Transform};
 use planner_core::steer::Pose;
@@ -64,6 +65,8 @@ pub struct TrackerCounts {
     pub ignored_frames: u32,
     /// Registration `TRANSFORM`s that differ from the first one received, not applied.
     pub registrations_refused: u32,
+    /// Tip poses sampled before the piece a reading follows ended: not used.
+    pub stale_poses: u32,
 }
 
 /// The newest tip pose not yet taken by a reading.
@@ -94,6 +97,13 @@ pub struct TrackerState {
     used_stamp: Option<Timestamp>,
     /// Counts over the session.
     pub counts: TrackerCounts,
+    /// Frames that decoded, of any name: none while bytes come is a peer that does not speak
+    /// OpenIGTLink.
+    pub frames_decoded: u32,
+    /// This program's clock, shared with the session.
+    pub clock: HostClock,
+    /// The tracker clock's offset from this program's, from the stamped tip poses.
+    pub offset: Offset,
     /// Log lines not yet written (event, fields), at most [`NOTES_KEPT`].
     pub notes: VecDeque<(&'static str, Value)>,
     tip_status_ok: bool,
@@ -111,6 +121,9 @@ impl Default for TrackerState {
             last_tip_at: None,
             used_stamp: None,
             counts: TrackerCounts::default(),
+            frames_decoded: 0,
+            clock: HostClock::default(),
+            offset: Offset::default(),
             notes: VecDeque::new(),
             tip_status_ok: true,
             notice_pending: false,
@@ -129,6 +142,7 @@ impl TrackerState {
                 return;
             }
         };
+        self.frames_decoded = self.frames_decoded.saturating_add(1);
         let name = frame.info.device_name.as_str();
         let flagged = frame
             .info
@@ -140,6 +154,9 @@ impl TrackerState {
             Message::Transform(t) if name == names.tip => {
                 let stamp = frame.info.timestamp;
                 let sent = stamp != Timestamp::default();
+                if let Some(s) = seconds(stamp) {
+                    self.offset.observe(self.clock.unix(at), s);
+                }
                 if sent && self.used_stamp == Some(stamp) {
                     self.counts.repeated_poses = self.counts.repeated_poses.saturating_add(1);
                     return;
@@ -186,6 +203,19 @@ impl TrackerState {
         let tip = self.tip.take()?;
         self.used_stamp = Some(tip.stamp);
         Some(tip)
+    }
+
+    /// Takes the newest tip pose for a reading if it was sampled once the piece that ended at
+    /// `end_s` (the robot's clock, whose offset is `robot`) had ended; a pose sampled before is
+    /// dropped and counted (`stale_poses`).
+    pub fn take_fresh_tip(&mut self, end_s: Option<f64>, robot: Offset) -> Option<TipArrival> {
+        let tip = self.tip?;
+        if fresh(seconds(tip.stamp), end_s, self.offset, robot) {
+            return self.take_tip();
+        }
+        self.tip = None;
+        self.counts.stale_poses = self.counts.stale_poses.saturating_add(1);
+        None
     }
 
     /// Takes the newest target for a reading (`None`: no new one since the last reading); a

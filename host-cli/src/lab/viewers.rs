@@ -6,7 +6,7 @@
 
 use anyhow::{anyhow, Context, Result};
 use std::io::Write;
-use std::net::{TcpListener, TcpStream, ToSocketAddrs};
+use std::net::{IpAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 /// A write to a viewer may block this long before the viewer is dropped: a stalled Slicer must
@@ -47,13 +47,19 @@ impl Viewers {
         Ok(Viewers::Connected(Some(conn)))
     }
 
-    /// Serves Slicer on `port` of every interface (0 picks a free one) and, for up to `wait`,
-    /// waits for the first viewer to connect.
-    pub fn serve(port: u16, wait: Duration) -> Result<Viewers> {
-        let listener = TcpListener::bind(("0.0.0.0", port))
-            .with_context(|| format!("cannot serve Slicer on port {port}"))?;
-        let bound = listener.local_addr()?.port();
-        eprintln!("needle steer: serving Slicer on port {bound}");
+    /// Serves Slicer on `at` (an address and a port; port 0 picks a free one) and, for up to
+    /// `wait`, waits for the first viewer to connect. Only hosts that reach the address can
+    /// connect: 127.0.0.1 is this machine alone.
+    pub fn serve(at: (IpAddr, u16), wait: Duration) -> Result<Viewers> {
+        let (ip, port) = at;
+        let listener = TcpListener::bind(at)
+            .with_context(|| format!("cannot serve Slicer on {ip} port {port}"))?;
+        let bound = listener.local_addr()?;
+        eprintln!(
+            "needle steer: serving Slicer on port {} of {}",
+            bound.port(),
+            bound.ip()
+        );
         listener.set_nonblocking(true)?;
         let mut viewers = Viewers::Served {
             listener,
@@ -79,8 +85,13 @@ impl Viewers {
 
     /// The port served on, if serving.
     pub fn port(&self) -> Option<u16> {
+        self.served_on().map(|a| a.port())
+    }
+
+    /// The address served on, if serving.
+    pub fn served_on(&self) -> Option<std::net::SocketAddr> {
         match self {
-            Viewers::Served { listener, .. } => listener.local_addr().ok().map(|a| a.port()),
+            Viewers::Served { listener, .. } => listener.local_addr().ok(),
             _ => None,
         }
     }
@@ -159,7 +170,8 @@ mod tests {
 
     #[test]
     fn a_viewer_that_joins_late_gets_the_scene_then_what_follows() {
-        let mut viewers = Viewers::serve(0, Duration::ZERO).unwrap();
+        let loopback = IpAddr::from([127, 0, 0, 1]);
+        let mut viewers = Viewers::serve((loopback, 0), Duration::ZERO).unwrap();
         let port = viewers.port().unwrap();
         viewers.deliver(b"plan;", true).unwrap();
         viewers.deliver(b"tip-1;", false).unwrap();

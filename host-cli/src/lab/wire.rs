@@ -9,6 +9,8 @@ use needle_igtl::{
 use planner_core::steer::Pose;
 use std::io::{Read, Write};
 use std::net::TcpStream;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 /// Device name of the tracked needle tip (PLUS's `NeedleTip` tool to the `Reference` tool).
@@ -146,7 +148,18 @@ pub type Arrival = (Result<Frame, Error>, Instant);
 /// `on_frame` with its arrival time until `on_frame` says `false` or the stream ends; then
 /// `on_end` runs.
 pub fn read_frames(
+    stream: TcpStream,
+    on_frame: impl FnMut(Arrival) -> bool + Send + 'static,
+    on_end: impl FnOnce() + Send + 'static,
+) -> std::thread::JoinHandle<()> {
+    read_frames_counting(stream, Arc::default(), on_frame, on_end)
+}
+
+/// [`read_frames`], adding the bytes read to `received` as they arrive: bytes that came without
+/// a single frame are a peer that does not speak OpenIGTLink.
+pub fn read_frames_counting(
     mut stream: TcpStream,
+    received: Arc<AtomicU64>,
     mut on_frame: impl FnMut(Arrival) -> bool + Send + 'static,
     on_end: impl FnOnce() + Send + 'static,
 ) -> std::thread::JoinHandle<()> {
@@ -159,6 +172,7 @@ pub fn read_frames(
                 Ok(n) => n,
             };
             let at = Instant::now();
+            received.fetch_add(n as u64, Ordering::Relaxed);
             let mut input = &buf[..n];
             while let Some(result) = decoder.feed(&mut input) {
                 if !on_frame((result, at)) {

@@ -1,5 +1,5 @@
-//! What a plan predicts about its execution, as `needle plan` shows it when the scenario has an
-//! `[execution]` table or a collision bound: each feasible form's predicted collision
+//! What a plan predicts about its execution, as `needle plan` shows it for every plan, bounded
+//! or not: each feasible form's predicted collision
 //! probability and 95th percentile of the miss (first order, open loop, re-derived here from
 //! each form's own schedule on the true obstacles, not taken from the planner's rounds), and the
 //! bound with the margins the plan kept.
@@ -125,6 +125,12 @@ pub fn execution_lines(
                 r.target_error_p95
             ));
         }
+    }
+    if execution.max_collision_probability.is_none() {
+        s.push_str(
+            "unbounded: planner.max_collision_probability = \"off\", so no plan is refused for its \
+             predicted collision probability\n",
+        );
     }
     if let (Some(bound), Some(c)) = (execution.max_collision_probability, chance) {
         let verdict = if c.within_bound {

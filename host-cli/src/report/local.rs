@@ -97,13 +97,11 @@ impl LocalPlan {
         }
     }
 
-    /// Adds this machine's predictions of each form (when the scenario has an `[execution]`
-    /// table or a bound), so the plan is printed and judged as `needle plan` prints and judges
-    /// its own.
+    /// Adds this machine's predictions of each form (every plan says how likely its execution
+    /// is to enter an obstacle, bounded or not), so the plan is printed and judged as `needle
+    /// plan` prints and judges its own.
     pub fn judge(&mut self, execution: &Execution) {
-        self.risks = execution
-            .given
-            .then(|| form_risks(&self.scenario, &self.planned.report, execution));
+        self.risks = Some(form_risks(&self.scenario, &self.planned.report, execution));
     }
 
     /// The report of every form.

@@ -23,13 +23,14 @@ pub const DEFAULT_TOLERANCE: f32 = 0.1;
 
 impl ScenarioFile {
     /// `planner.curvature_reserve` where the file says nothing of it: the closed loop's
-    /// ([`CLOSED_LOOP_CURVATURE_RESERVE`]) when `execution.mode` is `"closed_loop"`, else none.
+    /// ([`CLOSED_LOOP_CURVATURE_RESERVE`]) unless `execution.mode` is `"open_loop"` (the
+    /// closed loop is the default mode), else none.
     fn default_curvature_reserve(&self) -> f32 {
         let mode = self.execution.as_ref().and_then(|t| t.get("mode"));
-        if mode.and_then(|m| m.as_str()) == Some("closed_loop") {
-            CLOSED_LOOP_CURVATURE_RESERVE
-        } else {
+        if mode.and_then(|m| m.as_str()) == Some("open_loop") {
             0.0
+        } else {
+            CLOSED_LOOP_CURVATURE_RESERVE
         }
     }
 

@@ -20,6 +20,14 @@ use std::path::Path;
 /// otherwise leaves a target no path reaches.
 pub const CLOSED_LOOP_CURVATURE_RESERVE: f32 = 0.2;
 
+/// `planner.max_collision_probability` where the scenario says nothing of it: a plan is made
+/// to be executed, and one that enters an obstacle in more than 1 % of executions is refused
+/// unless the file opts out with `"off"` (the bound the examples set up for a lab use).
+pub const DEFAULT_MAX_COLLISION_PROBABILITY: f32 = 0.01;
+
+/// The value of `planner.max_collision_probability` that opts out of the bound.
+pub const UNBOUNDED: &str = "off";
+
 /// How the plan will be executed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExecutionMode {
@@ -44,12 +52,11 @@ impl ExecutionMode {
 pub struct Execution {
     /// The perturbation model (the simulator's defaults where the table is silent).
     pub model: Perturbation,
-    /// `execution.mode`, default open loop.
+    /// `execution.mode`, default closed loop: what a lab executes.
     pub mode: ExecutionMode,
-    /// `planner.max_collision_probability`: off unless given.
+    /// `planner.max_collision_probability`: [`DEFAULT_MAX_COLLISION_PROBABILITY`] unless the
+    /// file gives another, `None` when it says `"off"`.
     pub max_collision_probability: Option<f32>,
-    /// The scenario has an `[execution]` table or a bound: the plan reports its predicted risk.
-    pub given: bool,
     /// What the closed-loop controller is told (`[steering]`; its defaults where silent): the
     /// steering's estimator noise model also predicts the closed loop's spread.
     pub steering: SteerConfig,
@@ -64,10 +71,9 @@ impl Default for Execution {
     fn default() -> Self {
         Execution {
             model: Perturbation::default(),
-            mode: ExecutionMode::OpenLoop,
-            max_collision_probability: None,
-            given: false,
-            steering: SteerConfig::DEFAULT,
+            mode: ExecutionMode::ClosedLoop,
+            max_collision_probability: Some(DEFAULT_MAX_COLLISION_PROBABILITY),
+            steering: super::steering::ASSUMED_STEERING,
             world: WorldEffects::default(),
             faults: TrackerFaults::default(),
         }
@@ -102,7 +108,6 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
         ..Execution::default()
     };
     if let Some(table) = &file.execution {
-        out.given = true;
         // The named world first, wherever it stands: its keys are changed by the others.
         if let Some(name) = table.get("world") {
             let name = name.as_str().with_context(|| {
@@ -142,18 +147,39 @@ pub fn execution_of(file: &ScenarioFile) -> Result<Execution> {
             out.world.set_depths(depths_of(value)?);
         }
     }
-    if let Some(bound) = file
+    out.max_collision_probability = bound_of(file)?;
+    Ok(out)
+}
+
+/// `planner.max_collision_probability`: [`DEFAULT_MAX_COLLISION_PROBABILITY`] where the file is
+/// silent, `None` for `"off"`.
+fn bound_of(file: &ScenarioFile) -> Result<Option<f32>> {
+    let value = file
         .planner
         .as_ref()
-        .and_then(|p| p.max_collision_probability)
-    {
-        out.given = true;
-        if !(bound > 0.0 && bound < 1.0) {
-            bail!("planner.max_collision_probability = {bound}: allowed is more than 0 and less than 1");
-        }
-        out.max_collision_probability = Some(bound);
+        .and_then(|p| p.max_collision_probability.as_ref());
+    let Some(value) = value else {
+        return Ok(Some(DEFAULT_MAX_COLLISION_PROBABILITY));
+    };
+    if value.as_str() == Some(UNBOUNDED) {
+        return Ok(None);
     }
-    Ok(out)
+    let bound = value
+        .as_float()
+        .or_else(|| value.as_integer().map(|i| i as f64))
+        .with_context(|| {
+            format!(
+                "planner.max_collision_probability is `{value}`: allowed is a probability \
+                 (more than 0, less than 1) or \"off\""
+            )
+        })? as f32;
+    if !(bound > 0.0 && bound < 1.0) {
+        bail!(
+            "planner.max_collision_probability = {bound}: allowed is more than 0 and less than 1, \
+             or \"off\""
+        );
+    }
+    Ok(Some(bound))
 }
 
 /// `execution.layer_depths_mm = [12, 30, 55]`.
@@ -203,7 +229,7 @@ mod tests {
         let e = parse("").unwrap();
         assert_eq!(e, Execution::default());
         let e = parse("[execution]\ncurvature_spread = 0.05\ninsertion_error_mm = 1\n").unwrap();
-        assert!(e.given && e.mode == ExecutionMode::OpenLoop);
+        assert_eq!(e.mode, ExecutionMode::ClosedLoop);
         assert_eq!(e.model.curvature_spread, 0.05);
         assert_eq!(e.model.insertion_error_mm, 1.0);
         assert_eq!(
@@ -212,7 +238,38 @@ mod tests {
         );
         let e = parse("[planner]\nmax_collision_probability = 0.05\n").unwrap();
         assert_eq!(e.max_collision_probability, Some(0.05));
-        assert!(e.given);
+    }
+
+    /// A file that says nothing is planned for what a lab does with it: steered closed loop,
+    /// under a 1 % bound, told a real tracker and real tissue; opting out is explicit.
+    #[test]
+    fn a_silent_file_is_planned_safe_and_opting_out_is_explicit() {
+        let e = parse("").unwrap();
+        assert_eq!(e.mode, ExecutionMode::ClosedLoop);
+        assert_eq!(e.max_collision_probability, Some(0.01));
+        assert_eq!(e.steering, crate::scenario::steering::ASSUMED_STEERING);
+        assert!(e.steering.noise.registration_mm > 0.0);
+        let off = parse("[planner]\nmax_collision_probability = \"off\"\n").unwrap();
+        assert_eq!(off.max_collision_probability, None);
+        let open = parse("[execution]\nmode = \"open_loop\"\n").unwrap();
+        assert_eq!(open.mode, ExecutionMode::OpenLoop);
+        assert_eq!(
+            open.max_collision_probability,
+            Some(0.01),
+            "the bound stays"
+        );
+        for (extra, says) in [
+            (
+                "\"none\"",
+                "allowed is a probability (more than 0, less than 1) or \"off\"",
+            ),
+            ("0", "allowed is more than 0 and less than 1, or \"off\""),
+            ("true", "is `true`"),
+        ] {
+            let text = format!("[planner]\nmax_collision_probability = {extra}\n");
+            let e = format!("{:#}", parse(&text).unwrap_err());
+            assert!(e.contains(says), "{extra}: {e}");
+        }
     }
 
     #[test]
@@ -293,27 +350,27 @@ mod tests {
         )
         .unwrap();
         assert_eq!(e.max_collision_probability, Some(0.01));
-        assert_eq!(
-            e.predicted_as(),
-            risk::Execution::Steered(SteerConfig::DEFAULT.noise)
-        );
-        assert_eq!(parse("").unwrap().predicted_as(), risk::Execution::OpenLoop);
+        let assumed = crate::scenario::steering::ASSUMED_STEERING;
+        assert_eq!(e.predicted_as(), risk::Execution::Steered(assumed.noise));
+        let open = parse("[execution]\nmode = \"open_loop\"\n").unwrap();
+        assert_eq!(open.predicted_as(), risk::Execution::OpenLoop);
         let told =
             parse("[execution]\nmode = \"closed_loop\"\n[steering]\ntracker_position_mm = 1.5\n")
                 .unwrap();
-        let mut noise = SteerConfig::DEFAULT.noise;
+        let mut noise = assumed.noise;
         noise.position_mm = 1.5;
         assert_eq!(told.predicted_as(), risk::Execution::Steered(noise));
         assert_eq!(told.steering.noise, noise);
     }
 
-    /// A scenario steered closed loop keeps curvature in hand unless it says otherwise; one
-    /// executed open loop plans at the full curvature; a reserve out of range names its key.
+    /// A scenario steered closed loop (the default) keeps curvature in hand unless it says
+    /// otherwise; one executed open loop plans at the full curvature; a reserve out of range
+    /// names its key.
     #[test]
     fn the_closed_loop_keeps_curvature_in_hand_by_default() {
         let scenario = |extra: &str| super::super::file::minimal_with(extra)?.to_scenario();
         let reserve = |extra: &str| scenario(extra).unwrap().options.curvature_reserve;
-        assert_eq!(reserve(""), 0.0);
+        assert_eq!(reserve(""), CLOSED_LOOP_CURVATURE_RESERVE);
         assert_eq!(reserve("[execution]\nmode = \"open_loop\"\n"), 0.0);
         let closed = "[execution]\nmode = \"closed_loop\"\n";
         assert_eq!(reserve(closed), CLOSED_LOOP_CURVATURE_RESERVE);

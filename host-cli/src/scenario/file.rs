@@ -182,9 +182,10 @@ pub struct PlannerFile {
     pub curvature_reserve: Option<f32>,
     /// Reach of the risk term (mm): farther obstacles add nothing to D (off by default).
     pub risk_within_mm: Option<f32>,
-    /// Bound on the predicted probability that the executed plan enters an obstacle (off by
-    /// default).
-    pub max_collision_probability: Option<f32>,
+    /// Bound on the predicted probability that the executed plan enters an obstacle: a number,
+    /// or `"off"` (unbounded); 0.01 where the file is silent (read by
+    /// `execution::execution_of`).
+    pub max_collision_probability: Option<toml::Value>,
 }
 
 impl ScenarioFile {

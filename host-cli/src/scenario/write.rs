@@ -1,5 +1,6 @@
 //! A core [`Scenario`] written as a scenario file (the format of `examples/paper.toml`), every
-//! key explicit, so that `needle plan` reads back exactly the scenario written.
+//! key explicit, so that `needle plan` reads back exactly the scenario written and plans it as
+//! `planner_core::plan` does (unbounded, for the schedule as planned).
 
 use planner_core::model::scenario::{RiskMeasure, Workspace};
 use planner_core::Scenario;
@@ -68,19 +69,22 @@ pub fn scenario_toml(scenario: &Scenario, name: &str, header: &str) -> String {
     };
     let _ = writeln!(out, "risk = \"{risk}\"");
     let _ = writeln!(out, "min_clearance = {}", num(p.min_clearance));
-    if p.curvature_reserve > 0.0 {
-        let _ = writeln!(out, "curvature_reserve = {}", num(p.curvature_reserve));
-    }
+    // Always written: a file silent on it keeps the closed loop's default reserve.
+    let _ = writeln!(out, "curvature_reserve = {}", num(p.curvature_reserve));
     if let Some(r) = p.risk_within_mm {
         let _ = writeln!(out, "risk_within_mm = {}", num(r));
     }
     let _ = writeln!(out);
+    // The core's scenario knows no bound and no mode: it plans unbounded, for the schedule as
+    // planned, and a file silent on them would plan for steering under a bound instead.
+    let _ = writeln!(out, "max_collision_probability = \"off\"\n");
     let d = &s.driver;
     let _ = writeln!(out, "[driver]");
     let _ = writeln!(out, "insert_speed = {}", num(d.insert_speed));
     let _ = writeln!(out, "rotate_speed = {}", num(d.rotate_speed));
     let _ = writeln!(out, "spin_rate = {}", num(d.spin_rate));
     let _ = writeln!(out, "max_twist_deg = {}", num(d.max_twist_deg));
+    let _ = writeln!(out, "\n[execution]\nmode = \"open_loop\"");
     out
 }
 

@@ -13,7 +13,8 @@ pub const STEER_RETRIES: u32 = 400;
 pub struct SimulateArgs {
     /// Scenario file (TOML, see examples/paper.toml).
     pub file: PathBuf,
-    /// Simulated insertions.
+    /// Simulated insertions, 1 to 1 000 000 (checked with the scenario, so that the Python
+    /// package's `simulate` gives the same message).
     #[arg(long, default_value_t = 100)]
     pub runs: usize,
     /// Seed of the first run (run i uses seed + i).
@@ -91,6 +92,31 @@ impl SimulateArgs {
         let mut link = LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
         link.retries = self.retries;
         Some(link)
+    }
+}
+
+/// The most runs one simulation makes: each keeps a few numbers for the table, so a larger count
+/// is a typing slip that would otherwise end in an allocation abort, not in an answer.
+pub const MAX_RUNS: usize = 1_000_000;
+
+/// The most scenarios one benchmark generates.
+pub const MAX_SCENARIOS: usize = 100_000;
+
+/// A count of runs, 1 to [`MAX_RUNS`].
+pub fn run_count(s: &str) -> Result<usize, String> {
+    within(s, MAX_RUNS)
+}
+
+/// A count of scenarios, 1 to [`MAX_SCENARIOS`].
+pub fn scenario_count(s: &str) -> Result<usize, String> {
+    within(s, MAX_SCENARIOS)
+}
+
+/// A count from 1 to `max`.
+fn within(s: &str, max: usize) -> Result<usize, String> {
+    match at_least_one(s)? {
+        n if n > max => Err(format!("must be at most {max}")),
+        n => Ok(n),
     }
 }
 

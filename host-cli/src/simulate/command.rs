@@ -171,6 +171,13 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
     text.push_str(&super::table::world_line(&setup.effects));
     let planned = setup.scenario.options.curvature_reserve;
     text.push_str(&super::table::reserve_line(planned, setup.reserve_asked));
+    text.push_str(&match &setup.bound {
+        Some(b) => format!(
+            "plan: made under a bound of {} on the predicted collision probability\n",
+            b.max_collision_probability
+        ),
+        None => "plan: unbounded (planner.max_collision_probability = \"off\")\n".into(),
+    });
     write!(std::io::stdout(), "{text}")?;
     Ok(())
 }

@@ -20,6 +20,9 @@ pub struct PlanJson {
     /// The share the scenario asked for: more than `curvature_reserve` where no path kept it
     /// (within the collision bound, or at all).
     pub curvature_reserve_asked: f32,
+    /// The bound on the predicted collision probability the plan was made under; null when the
+    /// scenario opted out (`"off"`: unbounded).
+    pub max_collision_probability: Option<f32>,
 }
 
 impl PlanJson {
@@ -31,6 +34,7 @@ impl PlanJson {
             length_mm: outcome.length,
             curvature_reserve: setup.scenario.options.curvature_reserve,
             curvature_reserve_asked: setup.reserve_asked,
+            max_collision_probability: setup.bound.map(|b| b.max_collision_probability),
         }
     }
 }
@@ -190,6 +194,13 @@ pub struct ClosedRunJson<'a> {
     /// The open-loop record's keys.
     #[serde(flatten)]
     pub run: RunJson<'a>,
+    /// How the run ended, judged on the true tip and path: `reached`, `missed`, `collided` or
+    /// `stopped` (`needle_sim::Outcome`). A run whose true path entered an obstacle is
+    /// `collided`, whatever the controller concluded.
+    pub outcome: &'static str,
+    /// The controller's own verdict: `reached` (it let the insertion end at the target as it
+    /// estimated it) or its stop reason.
+    pub controller_verdict: &'static str,
     /// Why the controller stopped before the target (`no_safe_continuation`, `tracking_lost`,
     /// `bad_measurement`), or `missed` (the steps ran out with the estimate farther than the reach
     /// tolerance from the target), or null: reached.
@@ -239,6 +250,8 @@ pub fn closed_json<'a>(
             runs.iter()
                 .map(|r| ClosedRunJson {
                     run: RunJson::of(&r.run),
+                    outcome: needle_sim::Outcome::of(r, setup.config.reach_tolerance_mm).name(),
+                    controller_verdict: needle_sim::controller_verdict(r),
                     stop_reason: r.stop_reason.map(|s| s.name()),
                     predicted_miss_mm: r.predicted_miss_mm,
                     steering: r.stats,

@@ -12,7 +12,7 @@ pub mod setup;
 pub mod steering;
 pub mod table;
 
-pub use args::{at_least_one, SimulateArgs};
+pub use args::{at_least_one, run_count, scenario_count, SimulateArgs, MAX_RUNS};
 pub use command::{closed_loop_setup, run_simulate};
 
 use crate::reserve::{is_unreachable, keeping_reserve, Shortfall};

@@ -1,6 +1,6 @@
 //! The picture of a simulation: the plan, the obstacles and the executed paths as thin tubes
 //! around it (both projections in 3-D), drawn with the scenario plot of [`crate::analysis::plot`]:
-//! open-loop runs in red, or, closed loop, the runs that reached the target in red, those stopped
+//! open-loop runs in red, or, closed loop, the runs not stopped in red, those stopped
 //! before it dashed in orange and the same worlds open loop (`--compare-open-loop`) in blue, each
 //! with its legend entry. With `[[anatomy]]`, the same over slices of the label maps.
 
@@ -50,8 +50,9 @@ fn open_strands(runs: &[Run], label: &str, class: &str, colour: &str) -> Strands
     }
 }
 
-/// The closed-loop runs' strands: those that reached the target among the first
-/// [`MAX_DRAWN`], and the first [`MAX_DRAWN`] stopped before it.
+/// The closed-loop runs' strands: those the controller did not stop among the first
+/// [`MAX_DRAWN`] (each reached, missed or collided: the legend counts the collisions), and the
+/// first [`MAX_DRAWN`] stopped before the target.
 fn closed_strands(runs: &[ClosedRun]) -> [Strands; 2] {
     let reached: Vec<&Run> = runs
         .iter()
@@ -73,7 +74,7 @@ fn closed_strands(runs: &[ClosedRun]) -> [Strands; 2] {
     [
         Strands {
             label: format!(
-                "closed loop, reached the target: {} of {} runs {}",
+                "closed loop, not stopped (reached, missed or collided): {} of {} runs {}",
                 reached_drawn.len(),
                 reached.len(),
                 collided(reached.iter().copied())

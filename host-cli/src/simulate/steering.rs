@@ -1,7 +1,7 @@
 //! The closed loop's own figures over the runs: replans, stops by reason, the tracker's faults
 //! as the controller saw them.
 
-use needle_sim::ClosedRun;
+use needle_sim::{ClosedRun, Outcome};
 use planner_core::steer::StopReason;
 use std::collections::BTreeMap;
 
@@ -27,8 +27,16 @@ pub struct SteeringSummary {
     /// Readings answered again: a tracker's duplicate, or (on a device) the link sending a
     /// reading again; the one count that depends on the transport.
     pub repeated: u64,
-    /// Runs that reached the target (no stop).
+    /// How the runs ended, judged on the world's truth (`needle_sim::Outcome`): `reached`,
+    /// `missed`, `collided`, `stopped`; every name listed.
+    pub outcomes: BTreeMap<&'static str, usize>,
+    /// Runs that reached the target: the true path clear of every obstacle and the true tip
+    /// within the reach tolerance of the true target (`outcomes.reached`). A run whose true path
+    /// entered an obstacle is never counted here, whatever the controller concluded.
     pub reached: usize,
+    /// Runs the controller itself let end at the target as it estimated it (no stop): its own
+    /// verdict, beside `reached`, which is the world's.
+    pub controller_reached: usize,
     /// Target error over the runs that reached (mm; zeros when none): the accuracy of the
     /// insertions that went through, beside `target_error` over every run, which counts a
     /// stopped run's distance from where it stopped.
@@ -65,13 +73,23 @@ pub fn summarise_steering(runs: &[ClosedRun], reach_tolerance_mm: f32) -> Steeri
             *s.stops.entry(reason.name()).or_default() += 1;
         }
     }
-    let reached = runs.iter().filter(|r| r.stop_reason.is_none());
-    s.reached = reached.clone().count();
-    s.reached_target_error = super::Spread::of(reached.map(|r| r.run.target_error));
+    for name in Outcome::NAMES {
+        s.outcomes.insert(name, 0);
+    }
+    let reached = |r: &&ClosedRun| Outcome::of(r, reach_tolerance_mm) == Outcome::Reached;
+    for r in runs {
+        *s.outcomes
+            .entry(Outcome::of(r, reach_tolerance_mm).name())
+            .or_default() += 1;
+    }
+    s.reached = runs.iter().filter(reached).count();
+    s.controller_reached = runs.iter().filter(|r| r.stop_reason.is_none()).count();
+    s.reached_target_error =
+        super::Spread::of(runs.iter().filter(reached).map(|r| r.run.target_error));
     let within = runs
         .iter()
         .filter(|r| r.run.nearest_reach_mm <= reach_tolerance_mm);
     s.within_reach = within.clone().count();
-    s.reached_within_reach = within.filter(|r| r.stop_reason.is_none()).count();
+    s.reached_within_reach = within.filter(reached).count();
     s
 }

@@ -194,21 +194,7 @@ pub fn closed_table(
     }
     let _ = writeln!(out);
     rotations_line(&mut out, &s.rotations);
-    let stops: Vec<String> = steering
-        .stops
-        .iter()
-        .map(|(k, v)| format!("{k} {v}"))
-        .collect();
-    let _ = writeln!(
-        out,
-        "steering: {} of {} runs reached the target; {} replans, {} replan failures; stops \
-         before the target: {}",
-        steering.reached,
-        h.runs,
-        steering.replans,
-        steering.replan_failures,
-        stops.join(", ")
-    );
+    steering_lines(&mut out, h.runs, steering);
     let _ = writeln!(
         out,
         "within the tissue's reach: {} of {} runs (its full curvature, turned at the target from \
@@ -227,4 +213,34 @@ pub fn closed_table(
     );
     perturbation_line(&mut out, p);
     out
+}
+
+/// How the steered runs ended (the world's judgement), then the controller's own.
+fn steering_lines(out: &mut String, runs: usize, steering: &SteeringSummary) {
+    let stops: Vec<String> = steering
+        .stops
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect();
+    let outcome = |name: &str| steering.outcomes.get(name).copied().unwrap_or(0);
+    let _ = writeln!(
+        out,
+        "outcomes: {} of {} runs reached the target, {} missed, {} collided, {} stopped \
+         (judged on the true tip, within the reach tolerance, and the true path)",
+        steering.reached,
+        runs,
+        outcome("missed"),
+        outcome("collided"),
+        outcome("stopped"),
+    );
+    let _ = writeln!(
+        out,
+        "steering: the controller judged {} of {} runs at the target; {} replans, {} replan \
+         failures; stops before the target: {}",
+        steering.controller_reached,
+        runs,
+        steering.replans,
+        steering.replan_failures,
+        stops.join(", ")
+    );
 }

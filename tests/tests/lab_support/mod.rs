@@ -68,20 +68,65 @@ impl Lab {
         c
     }
 
-    /// Runs `needle steer FILE --json ARGS` against this lab and returns its JSON.
+    /// Runs `needle steer FILE --json ARGS` against this lab and returns its JSON: the
+    /// insertion ran (it may end any way but a failed setup), and the exit status is the one
+    /// its ending has.
     pub fn steer(&self, file: &str, args: &[&str]) -> Value {
         let out: Output = self
             .steer_command(file, args)
             .arg("--json")
             .output()
             .expect("run needle steer");
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+            panic!(
+                "needle steer {args:?} prints JSON ({e}): {}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+        let code = out.status.code().expect("an exit status");
+        assert_eq!(v["exit_code"], code, "needle steer {args:?}: {v}");
         assert!(
-            out.status.success(),
+            ![1, 2].contains(&code),
             "needle steer {args:?}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
-        serde_json::from_slice(&out.stdout).expect("needle steer prints JSON")
+        let expected = match v["outcome"].as_str() {
+            Some("reached") => 0,
+            Some("missed") => 3,
+            Some("collided") => 4,
+            Some("stopped") => 5,
+            _ => 6,
+        };
+        assert_eq!(code, expected, "{v}");
+        v
     }
+}
+
+impl Lab {
+    /// Runs `needle steer FILE --json ARGS` against this lab whatever its ending: the exit
+    /// status and the one JSON object it printed.
+    pub fn steer_ending(&self, file: &str, args: &[&str]) -> (i32, Value) {
+        ending(self.steer_command(file, args).arg("--json"))
+    }
+
+    /// Kills the lab now (a lab that dies mid-insertion).
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Runs a `needle steer ... --json` command: its exit status and the exactly one JSON object it
+/// printed on stdout.
+pub fn ending(c: &mut Command) -> (i32, Value) {
+    let out = c.output().expect("run needle steer");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 1, "one JSON object: {stdout}");
+    let v: Value = serde_json::from_str(lines[0]).unwrap_or_else(|e| panic!("{e}: {stdout}"));
+    let code = out.status.code().expect("an exit status");
+    assert_eq!(v["exit_code"], code, "{v}");
+    (code, v)
 }
 
 impl Drop for Lab {

@@ -9,6 +9,13 @@ fn pool(runs: usize, open: &[f32], arrived: &[f32], stops: usize) -> Pool {
         open_hits: 1,
         arrived_errors: arrived.to_vec(),
         stops: BTreeMap::from([("no_safe_continuation", stops)]),
+        // Of the arrived runs, those within 1 mm reached, the rest missed.
+        outcomes: BTreeMap::from([
+            ("reached", arrived.iter().filter(|e| **e <= 1.0).count()),
+            ("missed", arrived.iter().filter(|e| **e > 1.0).count()),
+            ("collided", 0),
+            ("stopped", stops),
+        ]),
         closed_hits: 0,
         closed_runs: runs,
         within_reach: runs - stops,
@@ -24,8 +31,10 @@ fn totals_pool_the_runs() {
     assert_eq!((all.runs, o.hits), (6, 2));
     assert_eq!(o.mean_target_error, 2.0);
     assert!((o.hit_percent - 100.0 / 3.0).abs() < 1e-12);
-    assert_eq!((c.reached, c.stops, c.hits), (5, 1, 0));
-    assert!((c.reached_percent - 500.0 / 6.0).abs() < 1e-12);
+    assert_eq!((c.arrived, c.stops, c.hits), (5, 1, 0));
+    // The 4 mm arrival is a miss, not a reach.
+    assert_eq!((c.reached, c.missed, c.collided, c.stopped), (4, 1, 0, 1));
+    assert!((c.reached_percent - 400.0 / 6.0).abs() < 1e-12);
     assert_eq!((c.within_reach, c.reached_within_reach), (5, 5));
     assert_eq!(c.mean_target_error, Some(1.5));
     assert_eq!(c.p95_target_error, Some(4.0));
