@@ -118,6 +118,7 @@ fn a_reserve_lowered_for_the_bound_is_said() {
         "curvature_reserve_asked",
         "form",
         "length_mm",
+        "max_collision_probability",
     ];
     assert_eq!(keys, expected);
     let f = |k: &str| plan[k].as_f64().unwrap();
