@@ -321,14 +321,7 @@ fn across(heading: [f32; 3]) -> [f32; 3] {
         .unwrap_or(0);
     axis[least] = 1.0;
     let along = heading[least];
-    let v: [f32; 3] = [0, 1, 2].map(|i| axis[i] - along * heading[i]);
-    let n = v
-        .iter()
-        .map(|x| x * x)
-        .sum::<f32>()
-        .sqrt()
-        .max(f32::MIN_POSITIVE);
-    v.map(|x| x / n)
+    super::unit([0, 1, 2].map(|i| axis[i] - along * heading[i]))
 }
 
 fn info(name: &str) -> Result<FrameInfo> {

@@ -26,8 +26,7 @@ impl ScenarioFile {
     /// ([`CLOSED_LOOP_CURVATURE_RESERVE`]) unless `execution.mode` is `"open_loop"` (the
     /// closed loop is the default mode), else none.
     fn default_curvature_reserve(&self) -> f32 {
-        let mode = self.execution.as_ref().and_then(|t| t.get("mode"));
-        if mode.and_then(|m| m.as_str()) == Some("open_loop") {
+        if self.planned_open_loop() {
             0.0
         } else {
             CLOSED_LOOP_CURVATURE_RESERVE

@@ -199,6 +199,14 @@ impl ScenarioFile {
         Ok(file)
     }
 
+    /// `execution.mode = "open_loop"`: the file asks for a plan executed as planned, so neither
+    /// the closed loop's curvature reserve nor its assumptions about the tracker and tissue are
+    /// its defaults.
+    pub fn planned_open_loop(&self) -> bool {
+        let mode = self.execution.as_ref().and_then(|t| t.get("mode"));
+        mode.and_then(|m| m.as_str()) == Some("open_loop")
+    }
+
     /// Parses scenario text.
     pub fn parse(text: &str) -> Result<ScenarioFile> {
         Ok(toml::from_str(text)?)

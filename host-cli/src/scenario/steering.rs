@@ -142,8 +142,7 @@ pub const ASSUMED_STEERING: SteerConfig = {
 /// and a path planned at the needle's full curvature has no bend to spare for either (the
 /// paper's optimum, steered so in the default world, reached 71 of 100 targets instead of 100).
 pub fn steering_of(file: &ScenarioFile) -> Result<SteerConfig> {
-    let mode = file.execution.as_ref().and_then(|t| t.get("mode"));
-    let mut config = if mode.and_then(|m| m.as_str()) == Some("open_loop") {
+    let mut config = if file.planned_open_loop() {
         SteerConfig::DEFAULT
     } else {
         ASSUMED_STEERING
