@@ -173,7 +173,7 @@ pub fn measure(
         };
         steer(s.name.clone(), &s.scenario, &Steered::DEFAULT)?;
         // The same scenario planned for a steered insertion: its arcs keep curvature in hand, and
-        // its replans try more forms before they give up (one end reading once took 3 M).
+        // its replans try more forms before they give up (the costliest readings: docs/firmware.md).
         let mut steered = s.scenario.clone();
         if steered.options.curvature_reserve == 0.0 {
             steered.options.curvature_reserve = STEERED_RESERVE;

@@ -47,7 +47,7 @@ use cortex_m as _;
 fn main() -> ! {
     // cortex-m-rt turns these into `&'static mut`: the service and the byte buffers live in .bss,
     // not on the stack, and there is no allocator. The service starts as `new()`, which is all
-    // zero bytes: initialised `with_identity` it would be copied from a 30 KiB image in flash.
+    // zero bytes: initialised `with_identity` it would be copied from an image of its size in flash.
     static mut SERVICE: DeviceService = DeviceService::new();
     static mut INBOX: pump::Inbox = pump::Inbox::new();
     static mut OUTBOX: pump::Outbox = pump::Outbox::new();

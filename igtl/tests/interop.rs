@@ -23,7 +23,7 @@ use std::net::{TcpListener, TcpStream};
 use std::thread;
 use std::time::{Duration, Instant};
 
-/// Every test's bound, Python's start-up (about 0.3 s with numpy) included.
+/// Every test's bound, Python's start-up (numpy's import) included.
 const TEST_TIME: Duration = Duration::from_secs(10);
 /// The helpers' timestamp, 1 700 000 000.25 s.
 const SECONDS: u32 = 1_700_000_000;

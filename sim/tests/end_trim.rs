@@ -1,8 +1,9 @@
 //! The last millimetres of an insertion are trimmed, not re-planned: within 2 mm of the end a
 //! reading tries no form (no solve), since the needle can bend there less than the tracker
 //! resolves, and each form tried costs a solve (on the device, at the end of a 256-sphere
-//! insertion steered with a reserve, one reading tried ten: 3.03 M instructions, three times the
-//! budget of a reading). The runs still end on the target.
+//! insertion steered with a reserve, one reading once tried ten, over the budget of a reading:
+//! docs/journal/2026-12-07.md, "Measurements once in code comments"). The runs still end on
+//! the target.
 
 use needle_sim::WorldEffects;
 use needle_sim::{closed_loop_in, in_process, Conditions, Perturbation, Planned, TrackerFaults};

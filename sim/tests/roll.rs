@@ -100,7 +100,7 @@ fn observing_the_roll_changes_no_run() {
     }
 }
 
-/// Measured over seeds 1 to 8: the largest error 2.5 degrees, each run's RMS at most 0.66.
+/// Over seeds 1 to 8, with room: a 6-DOF sensor shows the roll at every reading.
 #[test]
 fn a_six_dof_sensor_keeps_the_roll_within_a_few_degrees() {
     let paper = paper();
@@ -112,8 +112,8 @@ fn a_six_dof_sensor_keeps_the_roll_within_a_few_degrees() {
     }
 }
 
-/// Measured over seeds 1 to 8: 762 readings, RMS 8.8 degrees, median 3.5, largest 27.8 (before a
-/// turn brought a 5-DOF roll back to the commanded one: 809, 15.8, 3.1 and 83.5).
+/// Over seeds 1 to 8; the figures measured, before and after a turn brought a 5-DOF roll back to
+/// the commanded one: docs/journal/2026-12-07.md, "Measurements once in code comments".
 #[test]
 fn a_five_dof_sensor_leaves_the_roll_bounded() {
     let paper = paper();
@@ -160,16 +160,13 @@ fn arcs(samples: &[(Op, f32, f32)]) -> Vec<(f32, f32)> {
 
 /// A shaft with five times the default torsional play (1 degree per mm, told to the
 /// controller) leaves the roll tens of degrees off after a spun line or a rotation deep in;
-/// with a 5-DOF sensor only the arc that follows can show it. Measured over seeds 1 to 40: 6
-/// arcs start more than 3 degrees off; the 3 that start more than 15 degrees off (112, 87 and
-/// 19) are 53, 5 and 6 degrees off 3 to 6 mm in, while those starting 4 to 11 degrees off stay
-/// there (the bend shows no less over a few millimetres). Seeds 1 to 20 alone had 4 arcs, 55
-/// degrees off on average and 17.9 later, before a run that no longer reaches turned its bevel at
-/// the target (`closest_approach`), which leaves fewer arcs wrong. Since a heading the fixes
-/// keep rejecting is re-anchored (`Estimate::fuse_heading`) the arc that started 112 degrees off
-/// starts 103 off and is 56 off 3 to 6 mm in (53 before): the re-anchored heading takes part of
-/// what the roll took, so each far arc must come at least 40 % nearer (half, before), and their
-/// mean still to within 40 % of where they started.
+/// with a 5-DOF sensor only the arc that follows can show it, over seeds 1 to 40. Arcs that start
+/// far off come nearer within a few millimetres, while those a few degrees off stay there (the
+/// bend shows no less over a few millimetres). A heading the fixes keep rejecting is re-anchored
+/// (`Estimate::fuse_heading`), and the re-anchored heading takes part of what the roll took, so
+/// each far arc must come at least 40 % nearer, and their mean still to within 40 % of where they
+/// started (the arcs measured: docs/journal/2026-12-07.md, "Measurements once in code
+/// comments", and docs/journal/2026-12-05.md, "A heading the fixes keep rejecting").
 #[test]
 fn an_arc_of_a_few_millimetres_reveals_the_roll_to_a_five_dof_filter() {
     let paper = paper();
@@ -217,10 +214,9 @@ fn play_deg(depth_mm: f32) -> f32 {
 
 /// With a 5-DOF sensor, the roll after the first spun line is no worse than dead reckoning's
 /// (the play of the shaft at each reading). Before a turn of the base brought a 5-DOF roll back
-/// to the commanded one, the filter did worse than that (over 100 runs: RMS 20.7 degrees from
-/// the first spun line on; 11.8 with the rule). Measured over seeds 1 to 8: 385 readings, RMS
-/// 12.0 degrees against the play's 12.5; with the rule switched off this fails (420 readings,
-/// RMS 21.7 against 12.6).
+/// to the commanded one, the filter did worse than that; with the rule switched off this test
+/// fails (seeds 1 to 8; the figures measured: docs/journal/2026-12-07.md, "Measurements once in
+/// code comments").
 #[test]
 fn after_a_spun_line_the_five_dof_roll_beats_dead_reckoning() {
     let paper = paper();
