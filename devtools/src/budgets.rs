@@ -115,9 +115,7 @@ pub const BUDGETS: &[Budget] = &[
         limit: 1_000_000,
         protects:
             "each tracker reading answered (estimate, and a replan when needed) in about 6 ms \
-                   at 168 MHz: a quarter of the 25 ms between a 40 Hz tracker's readings (the \
-                   worst reading measured: 0.34 M among a few spheres, 0.40 M steered as a lab \
-                   would in the clinical world, 0.94 M among 256)",
+                   at 168 MHz: a quarter of the 25 ms between a 40 Hz tracker's readings",
     },
 ];
 

@@ -7,6 +7,7 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 pub mod anatomy_family;
+pub mod doc_figures;
 pub mod label_files;
 pub mod readme;
 pub mod reference;
