@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The clinical-world campaign of docs/execution.md ("The controller in the clinical world"):
+"""The clinical-world campaign of docs/journal/2026-12-05.md
+("The controller in the clinical world"):
 `needle simulate --closed-loop` in today's world, the clinical world (as is, and with the
 controller told the push), the floor that bias and registration alone leave, and twice the
 clinical world, on the two examples as they are and as a lab sets them up (examples/*-clinical.toml:

@@ -8,7 +8,7 @@
 //! tracker readings) replace the steps as the tracker reports the tip ([`closed_loop_observed`]
 //! shows each answered reading with the true tip frame, and [`roll_trace`] the in-process
 //! controller's roll error along a run); the [`Perturbation`] holds the model's parameters with
-//! their literature-motivated defaults (docs/execution.md), and the [`WorldEffects`] what the
+//! their literature-motivated defaults (docs/simulation.md), and the [`WorldEffects`] what the
 //! planner's model leaves out (a 5-DOF sensor, field bias and registration error, layered
 //! tissue, a pushed target, late imaging and tracking: all off by default,
 //! [`World::with_effects`], [`open_loop_in`], [`closed_loop_in`]).

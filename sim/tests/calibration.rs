@@ -1,7 +1,7 @@
-//! The defaults stay calibrated against the seed paper's experiment as docs/execution.md records
+//! The defaults stay calibrated against the seed paper's experiment as docs/simulation.md records
 //! it: open loop on its scenario, the pooled RMS deviation of R, RL and LRR lies in the paper's
 //! range (0.5-1.5 mm), R and RL each do, and the largest error grows with the control degree.
-//! LRR alone does not: its 3-D RMS deviation (1.78 mm over 1000 runs) is above 1.5 mm, mostly
+//! LRR alone does not: its 3-D RMS deviation (docs/simulation.md) is above 1.5 mm, mostly
 //! out of the plane; seen in the plane, as the paper's 2-D comparison of its paths does, all
 //! three lie in range. The guard keeps each of those statements true, the miss included, so a
 //! change to the model that moves any of them must update the docs. A few hundred runs (the

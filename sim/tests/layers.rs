@@ -5,8 +5,8 @@
 //! plan's share no longer reaches the target (`steer::aimed::front_loaded`), and when nothing
 //! reaches any more it turns the bevel at the target and bends as hard as it can
 //! (`steer::aimed::closest_approach`) instead of keeping a continuation that bends beside it; so
-//! it misses fewer runs (docs/execution.md, "Layers: the reserve spent on the turn first" and
-//! "When nothing reaches: the closest approach").
+//! it misses fewer runs (docs/journal/2026-12-05.md, "Layers: the reserve spent on the turn
+//! first" and "When nothing reaches: the closest approach").
 
 use needle_sim::{
     closed_loop_in, in_process, ClosedRun, Conditions, Perturbation, Planned, TrackerFaults,

@@ -1,7 +1,7 @@
 //! Twice the clinical world (every spread and effect at twice the controller's assumption, the
 //! flags of scripts/clinical-campaign.py's "clinical x2, lab-told"): the controller, told only
 //! the defaults and the target's speed walk, must touch no obstacle; a run it cannot finish
-//! safely ends in a reported stop (docs/execution.md, "Twice the world").
+//! safely ends in a reported stop (docs/journal/2026-12-05.md, "Twice the world").
 
 use needle_sim::{
     closed_loop_in, in_process, Conditions, Perturbation, Planned, TrackerFaults, WorldEffects,

@@ -183,7 +183,8 @@ fn on_generated_scenarios_the_prediction_matches_the_simulation() {
     generated("4");
 }
 
-/// The 20 scenarios of docs/execution.md (about 10 s in release).
+/// The 20 generated scenarios of docs/journal/2026-12-04.md, "Predicted against simulated (open
+/// loop)" (about 10 s in release).
 #[test]
 #[ignore]
 fn extended_generated_scenarios() {

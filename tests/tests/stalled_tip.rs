@@ -1,8 +1,8 @@
 //! A membrane that holds the tip while the needle is pushed (a stall of several millimetres,
 //! then the jump when it gives) is not a lost tip: the rejected fixes lag along the path already
 //! travelled, and the run is steered on to the target. These clinical-world runs stopped as
-//! `tracking_lost` before the estimator told a held tip from a lost one (docs/execution.md, "A tip
-//! held by a membrane").
+//! `tracking_lost` before the estimator told a held tip from a lost one
+//! (docs/journal/2026-12-05.md, "A tip held by a membrane").
 
 use needle_e2e::{example, needle_json, twice_clinical_flags};
 

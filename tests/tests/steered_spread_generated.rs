@@ -89,6 +89,6 @@ fn on_generated_scenarios_the_predicted_closed_loop_spread_holds() {
     // Since the steering spends the reserve on the turn first (a full-curvature turn, then a
     // line) the steered path strays farther from the plan than the first-order spread, which
     // models the constant arc, predicts: 0.513 against 0.643 mm here (0.598 before). A known
-    // gap, in docs/execution.md ("Layers"), until the prediction models that turn.
+    // gap, in docs/journal/2026-12-05.md ("Layers"), until the prediction models that turn.
     assert!(predicted > 0.75 * simulated && predicted < 1.6 * simulated);
 }

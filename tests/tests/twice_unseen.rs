@@ -3,7 +3,7 @@
 //! of that family where the needle touched a sphere. Both times the estimate's heading had
 //! drifted past the gate, so that every later heading fix was rejected
 //! (`Estimate::fuse_heading`); now no run touches, and every run that cannot finish ends in a
-//! reported stop (docs/execution.md, "A heading the fixes keep rejecting").
+//! reported stop (docs/journal/2026-12-05.md, "A heading the fixes keep rejecting").
 
 use needle_e2e::{needle_json, twice_clinical_flags, workspace};
 

@@ -154,7 +154,8 @@ pub const CLINICAL_REGISTRATION_PER_AXIS_MM: f32 = 0.29;
 /// spread and punctures, the push on the target, the latencies, the needle's own spreads). With
 /// [`TWICE_CLINICAL_FAULT_KEYS`] it is the world in which the controller, told only the
 /// defaults, must touch no obstacle and end every run it cannot finish in a reported stop
-/// (docs/execution.md, "Twice the world"; scripts/clinical-campaign.py's "clinical x2" row).
+/// (docs/journal/2026-12-05.md, "Twice the world"; scripts/clinical-campaign.py's "clinical x2"
+/// row).
 pub const TWICE_CLINICAL_KEYS: [&str; 17] = [
     "tracker_bias_mm=0.6",
     "registration_error_mm=0.58",
