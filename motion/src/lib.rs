@@ -75,6 +75,8 @@ pub use safety::{FaultCause, FaultRecord, Inputs, SafetyConfig, State};
 #[cfg(test)]
 mod testbench;
 #[cfg(test)]
+mod tests_inputs;
+#[cfg(test)]
 mod tests_moves;
 #[cfg(test)]
 mod tests_safety;
