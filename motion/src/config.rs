@@ -4,6 +4,8 @@ use crate::MotionError;
 
 /// The two axes of a needle driver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Axis {
     /// The insertion stage (a lead screw), in millimetres.
     Insertion = 0,
@@ -18,6 +20,8 @@ impl Axis {
 
 /// What a configuration value is wrong about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigField {
     /// The timer's tick rate.
     TickRate,

@@ -5,7 +5,7 @@
 //! [`Controller::next_step`] for each step. A fault stops both axes at once: from the call that
 //! sees it, `next_step` gives no further step.
 
-use crate::config::{Axis, MotionConfig};
+use crate::config::{Axis, MotionConfig, Rates};
 use crate::moves::{Move, Planned, Resolved, SegmentTarget};
 use crate::runner::SegmentRun;
 use crate::safety::{FaultCause, FaultRecord, Inputs, SafetyConfig, State};
@@ -63,6 +63,8 @@ pub struct Controller {
     /// Whether the watchdog made the current hold.
     watchdog_hold: bool,
     encoder: [Option<i32>; 2],
+    /// The inputs as last read.
+    inputs: Inputs,
     /// The encoder reading at commanded position zero (an incremental encoder counts from
     /// wherever it powered up; set at the first reading, again at homing and after a fault).
     encoder_zero: [Option<i32>; 2],
@@ -92,6 +94,12 @@ impl Controller {
             heard_ms: 0,
             watchdog_hold: false,
             encoder: [None; 2],
+            inputs: Inputs {
+                estop: false,
+                limit: false,
+                home: false,
+                encoder: [None; 2],
+            },
             encoder_zero: [None; 2],
         })
     }
@@ -101,9 +109,36 @@ impl Controller {
         &self.cfg
     }
 
+    /// Take a plan's rates and soft limits (insertion from 0 to the needle's length `needle_mm`,
+    /// twist within ±`max_twist_deg`): at rest only, disarmed or armed with nothing queued.
+    pub fn set_job(
+        &mut self,
+        rates: Rates,
+        needle_mm: f32,
+        max_twist_deg: f32,
+    ) -> Result<(), MotionError> {
+        self.refuse_if_faulted()?;
+        if !matches!(self.state, State::Disarmed | State::Armed) {
+            return Err(MotionError::NotAllowed(self.state));
+        }
+        let mut cfg = self.cfg;
+        cfg.rates = rates;
+        (cfg.axes[0].min, cfg.axes[0].max) = (0.0, needle_mm);
+        (cfg.axes[1].min, cfg.axes[1].max) = (-max_twist_deg, max_twist_deg);
+        cfg.validate()?;
+        self.cfg = cfg;
+        Ok(())
+    }
+
     /// The state.
     pub fn state(&self) -> State {
         self.state
+    }
+
+    /// The inputs as [`Controller::update`] last read them (for a request from afar, such as
+    /// clearing a fault).
+    pub fn inputs(&self) -> Inputs {
+        self.inputs
     }
 
     /// Commanded positions (steps).

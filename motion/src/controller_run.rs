@@ -17,6 +17,7 @@ impl Controller {
     pub fn update(&mut self, now_ms: u32, inputs: &Inputs) -> Option<FaultRecord> {
         self.now_ms = now_ms;
         self.encoder = inputs.encoder;
+        self.inputs = *inputs;
         if self.state == State::Faulted {
             return None;
         }

@@ -5,6 +5,8 @@ use crate::safety::{FaultCause, State};
 
 /// Why a request was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum MotionError {
     /// A configuration value is unusable.
     Config(ConfigField),

@@ -20,6 +20,8 @@ use crate::config::Axis;
 
 /// Where the controller is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum State {
     /// No motion: the power-up state.
     Disarmed,
@@ -37,6 +39,8 @@ pub enum State {
 
 /// Why motion stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FaultCause {
     /// The e-stop input.
     EStop,

@@ -320,3 +320,31 @@ fn soft_limits_refuse_the_whole_schedule() {
     assert_eq!(b.c.execute(&nan), Err(MotionError::BadMove));
     assert_eq!(b.c.status().moves_left, 0);
 }
+
+#[test]
+fn a_job_sets_rates_and_limits_at_rest_only() {
+    let mut b = Bench::homed();
+    let rates = crate::Rates {
+        insert_mm_s: 1.0,
+        rotate_deg_s: 90.0,
+        spin_rev_s: 2.0,
+    };
+    b.c.set_job(rates, 10.0, 720.0).unwrap();
+    assert_eq!(b.c.config().axes[0].max, 10.0);
+    assert_eq!(b.c.config().axes[1].min, -720.0);
+    assert_eq!(
+        b.c.execute(&PUSH),
+        Err(MotionError::SoftLimit(crate::Axis::Insertion))
+    );
+    assert_eq!(
+        b.c.set_job(rates, f32::NAN, 720.0),
+        Err(MotionError::Config(crate::ConfigField::SoftLimits(
+            crate::Axis::Insertion
+        )))
+    );
+    b.c.execute(&[Move::Insert { length_mm: 5.0 }]).unwrap();
+    assert_eq!(
+        b.c.set_job(rates, 20.0, 720.0),
+        Err(MotionError::NotAllowed(State::Moving))
+    );
+}
