@@ -295,5 +295,9 @@ fn the_families_planned_schedules_keep_every_limit_and_end_where_commanded() {
         check_schedule(cfg, &moves, name);
         count += 1;
     }
+    println!(
+        "{count} of {} scenarios planned and their schedules checked",
+        scenarios.len()
+    );
     assert!(count >= 20, "only {count} planned");
 }
