@@ -92,6 +92,11 @@ impl Plant {
         self.missed
     }
 
+    /// The time (timer ticks since the start).
+    pub fn ticks(&self) -> u64 {
+        self.tick
+    }
+
     /// The time (ms, wrapping).
     pub fn now_ms(&self) -> u32 {
         (self.tick * 1000 / u64::from(self.cfg.tick_hz.max(1))) as u32
