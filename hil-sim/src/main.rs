@@ -10,8 +10,8 @@
 use anyhow::{Context, Result};
 use clap::Parser;
 use hil_sim::lab::{Lab, LabConfig, TrackerClients, TrackerConfig};
-use hil_sim::serve::{serve, ServeConfig};
-use hil_sim::{DeviceService, LineConfig, IDENTITY};
+use hil_sim::serve::{serve_with_axes, ServeConfig};
+use hil_sim::{DeviceService, LineConfig, SimulatedAxes, IDENTITY};
 use std::io::Write;
 use std::net::TcpListener;
 
@@ -40,6 +40,10 @@ struct Args {
     /// Pace bytes as a UART at this baud rate would (8N1); 0 for no pacing.
     #[arg(long, default_value_t = 0)]
     baud: u32,
+    /// Drive simulated motors: the device's motion core (protocol 10's motion requests) steps
+    /// two simulated stages in real time (the bench axes of docs/motion.md).
+    #[arg(long, conflicts_with = "lab")]
+    axes: bool,
     #[command(flatten)]
     lab: LabArgs,
 }
@@ -279,6 +283,12 @@ fn main() -> Result<()> {
         baud: (a.baud > 0).then_some(a.baud),
     };
     let mut device = Box::new(DeviceService::with_identity(IDENTITY));
+    let mut axes = if a.axes {
+        let attached = SimulatedAxes::attach(&mut device);
+        Some(attached.map_err(|e| anyhow::anyhow!("cannot set up the simulated axes: {e}"))?)
+    } else {
+        None
+    };
     let mut out = std::io::stdout();
     if let Some(addr) = &a.tcp {
         let listener =
@@ -295,7 +305,7 @@ fn main() -> Result<()> {
                 to_host: line(a.seed.wrapping_add(2 * k + 1)),
                 ..config
             };
-            if let Err(e) = serve(&mut conn, &mut device, &config) {
+            if let Err(e) = serve_with_axes(&mut conn, &mut device, &config, axes.as_mut()) {
                 eprintln!("hil-sim: connection ended: {e}");
             }
         }
@@ -309,7 +319,7 @@ fn main() -> Result<()> {
     // `slave` stays open for the life of the process: without an open slave, reads on the master
     // fail (EIO) between two clients.
     loop {
-        if let Err(e) = serve(&mut master, &mut device, &config) {
+        if let Err(e) = serve_with_axes(&mut master, &mut device, &config, axes.as_mut()) {
             eprintln!("hil-sim: {e}");
             std::thread::sleep(std::time::Duration::from_millis(50));
         }

@@ -1,10 +1,11 @@
 //! Serving the simulated device on a byte stream (a pty master or a TCP connection).
 
+use crate::axes::SimulatedAxes;
 use crate::line::{FaultyLine, LineConfig, Pacer};
 use planner_core::device::DeviceService;
 use std::io::{self, ErrorKind, Read, Write};
 use std::net::TcpStream;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// A byte stream whose reads give up after a while.
 pub trait Stream: Read + Write {
@@ -60,6 +61,18 @@ pub fn serve(
     device: &mut DeviceService,
     config: &ServeConfig,
 ) -> io::Result<()> {
+    serve_with_axes(stream, device, config, None)
+}
+
+/// [`serve`], with simulated axes behind the device's motion core (`hil-sim --axes`): they
+/// move in real time, advanced by the time each turn took.
+pub fn serve_with_axes(
+    stream: &mut dyn Stream,
+    device: &mut DeviceService,
+    config: &ServeConfig,
+    mut axes: Option<&mut SimulatedAxes>,
+) -> io::Result<()> {
+    let mut clock = Instant::now();
     let mut to_device = FaultyLine::new(config.to_device);
     let mut to_host = FaultyLine::new(config.to_host);
     let (mut rx_pace, mut tx_pace) = (Pacer::new(config.baud), Pacer::new(config.baud));
@@ -97,6 +110,13 @@ pub fn serve(
         sent.clear();
         busy = device.poll(&mut |b: &[u8]| sent.extend_from_slice(b));
         send_out(stream, &mut to_host, &mut tx_pace, &sent)?;
+        if let Some(axes) = axes.as_deref_mut() {
+            let ms = clock.elapsed().as_millis();
+            if ms > 0 {
+                clock += Duration::from_millis(ms as u64);
+                axes.advance(device, u32::try_from(ms).unwrap_or(u32::MAX));
+            }
+        }
     }
 }
 

@@ -6,6 +6,7 @@
 //! that also raises `PROTOCOL_VERSION` (or, as for the schedule in the result, one made to a
 //! version not yet released).
 
+use needle_motion::{Axis, FaultCause, MotionError, State};
 use planner_core::chance::ChanceFigures;
 use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::risk::Execution;
@@ -17,6 +18,7 @@ use planner_core::wire::{
     encode_frame, ChanceRequest, Chunk, DevicePlan, Directed, Fault, Header, PlanRequest,
     PlanResult, Reply, ReplyBody, Request, RequestBody, ENCODE_SCRATCH, MAX_CHUNK,
 };
+use planner_core::wire::{MotionFault, MotionRequest, MotionStatus};
 use planner_core::{
     Form, FormOutcome, Insertion, PlanError, PlanReport, Scenario, ScheduledPlan, SegmentKind,
     SegmentPlan, SolveStatus,
@@ -120,6 +122,32 @@ fn fixed_plan() -> ScheduledPlan {
 
 /// The frames of a whole exchange for the paper's scenario, one `name hex` line each.
 // Test code: one exchange, read top to bottom as it happens on the wire.
+/// A move of the fixed plan's steps with the paper's driver.
+fn motion_move_request() -> MotionRequest {
+    MotionRequest::Move {
+        driver: Scenario::paper().driver,
+        needle_mm: 150.0,
+        steps: fixed_plan().schedule.unwrap().unwrap().steps,
+    }
+}
+
+/// A status after an e-stop, every field present.
+fn motion_status() -> MotionStatus {
+    MotionStatus {
+        state: State::Faulted,
+        homed: true,
+        position: [12.5, -90.0],
+        speed: [0.0, 0.0],
+        moves_left: 0,
+        last_fault: Some(MotionFault {
+            cause: FaultCause::EStop,
+            position: [12.5, -90.0],
+            encoder: [Some(20_000), None],
+            at_ms: 4242,
+        }),
+    }
+}
+
 #[allow(clippy::too_many_lines)]
 fn exchange() -> String {
     let scenario = Scenario::paper();
@@ -250,6 +278,25 @@ fn exchange() -> String {
         (
             "request_bounded",
             hex(&postcard::to_stdvec(&bounded_request).unwrap()),
+        ),
+        (
+            "motion_arm",
+            frame(&req(4, RequestBody::Motion(MotionRequest::Arm))),
+        ),
+        (
+            "motion_move",
+            frame(&req(5, RequestBody::Motion(motion_move_request()))),
+        ),
+        (
+            "motion_status",
+            frame(&rep(5, ReplyBody::Motion(motion_status()))),
+        ),
+        (
+            "motion_refused",
+            frame(&rep(
+                6,
+                ReplyBody::Fault(Fault::Motion(MotionError::SoftLimit(Axis::Rotation))),
+            )),
         ),
     ];
     lines.iter().fold(String::new(), |mut s, (name, hex)| {

@@ -13,6 +13,7 @@
 
 mod dispatch;
 mod job;
+mod motion;
 pub mod receive;
 mod steer;
 mod upload;
@@ -87,6 +88,8 @@ struct Core {
     /// The last steering answer, encoded, for `SteerFetch`, and its length.
     steer_answer: [u8; MAX_STEER_ANSWER],
     steer_answer_len: u16,
+    /// The board's axes, if it drives any.
+    motion: motion::Motion,
 }
 
 /// The device's request handler.
@@ -156,6 +159,7 @@ impl DeviceService {
                 steering: steer::Steered::Off,
                 steer_answer: [0; MAX_STEER_ANSWER],
                 steer_answer_len: 0,
+                motion: motion::Motion::Off,
             },
         }
     }
@@ -244,7 +248,8 @@ mod tests {
     #[test]
     fn the_service_fits_its_ram_budget() {
         let size = core::mem::size_of::<DeviceService>();
-        std::println!("DeviceService: {size} bytes");
+        let motion = core::mem::size_of::<motion::Motion>();
+        std::println!("DeviceService: {size} bytes, of which the motion core {motion}");
         // 12.7 KiB at 32 obstacles. Each obstacle of the capacity adds its place in the upload
         // buffer (two on the wire per one held), in the two scenarios held (the plan's and the
         // steering controller's), in the bound's true radii and margins and in the result:

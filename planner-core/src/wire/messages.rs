@@ -5,6 +5,7 @@
 //! line only the damaged chunk is sent again, and every frame stays small.
 
 use super::max_size::{max, MaxSize};
+use super::motion::{MotionRequest, MotionStatus};
 use crate::execute::schedule::Steps;
 use crate::model::form::Form;
 use crate::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
@@ -12,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 9;
+pub const PROTOCOL_VERSION: u8 = 10;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -114,6 +115,9 @@ pub enum RequestBody {
     },
     /// The controller's counters and stop: answered by [`ReplyBody::SteerStatus`].
     SteerStatus,
+    /// A motion or safety request: answered by [`ReplyBody::Motion`], or refused with
+    /// [`Fault::Motion`] (or [`Fault::NoMotion`] on a device without axes).
+    Motion(MotionRequest),
 }
 
 /// Device to host.
@@ -205,6 +209,8 @@ pub enum ReplyBody {
     },
     /// A protocol fault.
     Fault(Fault),
+    /// The motion core's status, after a motion request.
+    Motion(MotionStatus),
 }
 
 /// Protocol faults, reported in place of an answer.
@@ -264,6 +270,10 @@ pub enum Fault {
     /// The device hit an internal error (a firmware bug) and restarts; every request in progress
     /// is lost. Sent with id 0 by the firmware's panic handler.
     Internal,
+    /// The motion core refused the request, and why.
+    Motion(needle_motion::MotionError),
+    /// A motion request reached a device that drives no axes.
+    NoMotion,
 }
 
 impl core::fmt::Display for Fault {
@@ -295,6 +305,8 @@ impl core::fmt::Display for Fault {
             Fault::NotSteering => f.write_str("a reading arrived, but steering has not started"),
             Fault::BadSteerConfig => f.write_str("the steering settings are not finite and positive"),
             Fault::Internal => f.write_str("the device hit an internal error and restarts"),
+            Fault::Motion(e) => write!(f, "the motion core refused: {e}"),
+            Fault::NoMotion => f.write_str("the device drives no axes"),
         }
     }
 }
@@ -335,7 +347,10 @@ impl MaxSize for RequestBody {
             2 * u16::MAX_SIZE + u32::MAX_SIZE + Chunk::MAX_SIZE,
             max(
                 2 * u16::MAX_SIZE,
-                max(SteerConfig::MAX_SIZE, TipMeasurement::MAX_SIZE) + u16::MAX_SIZE,
+                max(
+                    max(SteerConfig::MAX_SIZE, TipMeasurement::MAX_SIZE) + u16::MAX_SIZE,
+                    MotionRequest::MAX_SIZE,
+                ),
             ),
         ),
     );
@@ -346,7 +361,7 @@ impl MaxSize for Request {
 }
 
 impl MaxSize for Fault {
-    const MAX_SIZE: usize = 1 + 2 * u16::MAX_SIZE;
+    const MAX_SIZE: usize = 1 + max(2 * u16::MAX_SIZE, needle_motion::MotionError::MAX_SIZE);
 }
 
 impl MaxSize for DeviceInfo {
@@ -370,7 +385,10 @@ impl MaxSize for ReplyBody {
                     max(3 + Option::<Form>::MAX_SIZE + 1, Fault::MAX_SIZE),
                     max(
                         max(Steps::MAX_SIZE, SteerReply::MAX_SIZE),
-                        SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE,
+                        max(
+                            SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE,
+                            MotionStatus::MAX_SIZE,
+                        ),
                     ),
                 ),
             ),

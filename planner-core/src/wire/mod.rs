@@ -10,6 +10,7 @@ pub mod crc;
 pub mod frame;
 pub mod max_size;
 pub mod messages;
+pub mod motion;
 pub mod obstacles;
 pub mod plan;
 pub mod steer;
@@ -23,6 +24,7 @@ pub use messages::{
     Chunk, DeviceInfo, Fault, Header, Reply, ReplyBody, Request, RequestBody, MAX_CHUNK,
     PROTOCOL_VERSION,
 };
+pub use motion::{motion_move, MotionFault, MotionRequest, MotionStatus};
 pub use obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 pub use plan::{ChanceRequest, DevicePlan, PlanRequest, PlanResult, RequestError};
 

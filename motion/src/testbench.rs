@@ -1,0 +1,81 @@
+//! A controller wired to a simulated plant, for the tests.
+
+use crate::plant::{Plant, PlantAxis, PlantConfig};
+use crate::{Controller, MotionConfig, Rates, SafetyConfig, State};
+
+pub const RATES: Rates = Rates {
+    insert_mm_s: 2.5,
+    rotate_deg_s: 360.0,
+    spin_rev_s: 4.0,
+};
+
+pub fn config() -> MotionConfig {
+    MotionConfig::bench(150.0, 360.0, RATES)
+}
+
+/// The bench's plant: the motors follow 20 % past the limits; the stage 5 mm from its home
+/// switch, the far switch 1 mm past the needle's length; encoders of 4 steps a count.
+pub fn plant_config(cfg: &MotionConfig) -> PlantConfig {
+    let axis = |i: usize| PlantAxis {
+        pull_out: 1.2 * cfg.axes[i].max_speed * cfg.axes[i].steps_per_unit,
+        torque_accel: 1.2 * cfg.axes[i].max_accel * cfg.axes[i].steps_per_unit,
+        full_step: 16.0,
+        encoder_steps: Some(4),
+    };
+    PlantConfig {
+        axes: [axis(0), axis(1)],
+        tick_hz: cfg.tick_hz,
+        start: [8000, 0],
+        end: 151 * 1600,
+    }
+}
+
+pub struct Bench {
+    pub c: Controller,
+    pub p: Plant,
+    /// Whether the host's heartbeat arrives with every event.
+    pub host: bool,
+}
+
+impl Bench {
+    pub fn new() -> Bench {
+        let cfg = config();
+        Bench::with(cfg, plant_config(&cfg))
+    }
+
+    pub fn with(cfg: MotionConfig, plant: PlantConfig) -> Bench {
+        Bench {
+            c: Controller::new(cfg, SafetyConfig::BENCH).unwrap(),
+            p: Plant::new(plant),
+            host: true,
+        }
+    }
+
+    /// Up to `n` events through the plant, the inputs read after each; how many there were.
+    pub fn drive(&mut self, n: usize) -> usize {
+        for k in 0..n {
+            let Some(e) = self.c.next_step() else {
+                return k;
+            };
+            self.p.apply(&e);
+            if self.host {
+                self.c.heartbeat();
+            }
+            let inputs = self.p.inputs();
+            self.c.update(self.p.now_ms(), &inputs);
+        }
+        n
+    }
+
+    /// Armed and homed at the switch.
+    pub fn homed() -> Bench {
+        let mut b = Bench::new();
+        b.c.arm().unwrap();
+        b.c.home().unwrap();
+        b.drive(usize::MAX);
+        assert_eq!(b.c.state(), State::Armed);
+        // The stage settles.
+        b.p.wait_ms(100);
+        b
+    }
+}
