@@ -2,7 +2,7 @@
 //! share of the curvature: the turn spent first at the needle's full (estimated) curvature and a
 //! spun line to the target, then the duty-cycled arc aimed through it.
 
-use super::replan::{sound_within, wrapped_deg, ReplanInput, Replanned};
+use super::continuation::{accepted_miss, sound_within, wrapped_deg, ReplanInput, Replanned};
 use super::turns::{dead_banded, widened_to_band};
 use crate::execute::schedule::{duty_continuation, duty_step, Steps};
 
@@ -50,7 +50,7 @@ pub(super) fn aimed_tries(
     spent: &(u32, u32),
     build: impl Fn(f32) -> Option<(Steps, f32, f32)>,
 ) -> Option<Replanned> {
-    let miss = super::turns::accepted_miss(input);
+    let miss = accepted_miss(input);
     aimed_within(input, local, miss, spent, build)
 }
 

@@ -7,7 +7,7 @@
 //! a later layer that bends less takes less away.
 
 use super::aimed::{aimed_bevels, aimed_tries, front_loaded, heading_turn};
-use super::replan::{ReplanInput, Replanned};
+use super::continuation::{ReplanInput, Replanned};
 use crate::execute::schedule::{duty_continuation, duty_step};
 use crate::model::kinematics::V3;
 use crate::model::scenario::Workspace;
