@@ -6,7 +6,9 @@
 //! and the segment parameters); every candidate is re-measured by [`check`] independently of the
 //! optimiser and becomes a [`FormOutcome`] of the [`PlanReport`] ([`report`]); a [`PlanSession`]
 //! ([`session`]) plans form by form and keeps the best; [`wire`] carries requests and reports
-//! in checked frames and [`device`] is the request handler a board runs.
+//! in checked frames and [`device`] is the request handler a board runs. During an insertion
+//! the closed loop ([`steer`]) re-plans the rest of the path from the tip that [`estimate`]
+//! filters out of each tracker reading.
 //!
 //! ```
 //! use planner_core::{plan, Scenario};
@@ -28,6 +30,7 @@ pub mod chance;
 pub mod check;
 pub mod device;
 pub mod error;
+pub mod estimate;
 pub mod execute;
 pub(crate) mod fmath;
 pub(crate) mod matmul;

@@ -45,6 +45,10 @@
 //! ```
 
 #![forbid(unsafe_code)]
+// The simulated world runs on the host only, where libm's kernels are not slow, and every
+// simulated figure (goldens, the docs' accuracies) was made with their bits: the ban of
+// clippy.toml (libm trigonometry outside planner-core's fmath) is for code the device runs.
+#![allow(clippy::disallowed_methods)]
 
 mod closed;
 mod drawn;

@@ -9,6 +9,7 @@ use std::sync::OnceLock;
 pub mod anatomy_family;
 pub mod doc_figures;
 pub mod label_files;
+pub mod module_graph;
 pub mod readme;
 pub mod reference;
 pub mod sampling;

@@ -333,7 +333,8 @@ fn a_tracker_dropout_longer_than_the_gap_stops_with_tracking_lost() {
 
 /// A closed-loop run's steps are broken off at every replan: `--detail` reports what the driver
 /// did of each (its length, and the time and turns that took), so an `insert` lasts its length at
-/// the driver's speed and the steps add up to about the insertion's time, not many times it.
+/// the driver's speed, a spin's turns stay even and the steps add up to about the insertion's
+/// time, not many times it.
 #[test]
 fn detail_reports_the_executed_part_of_a_step_broken_off() {
     let v = needle_json(&[
@@ -360,6 +361,8 @@ fn detail_reports_the_executed_part_of_a_step_broken_off() {
                 }
                 "insert_spin" => {
                     let (length, turns) = (f(&s["length_mm"]), f(&s["turns"]));
+                    // Every spin's turns are even, one broken off too: it finishes its pair.
+                    assert_eq!(turns % 2.0, 0.0, "{s}");
                     let least = (length / insert_speed).max(turns / spin_rate);
                     assert!(f(&s["duration_s"]) >= least - 1e-3, "{s}");
                     assert!(f(&s["duration_s"]) <= least + 2.0 / spin_rate + 1e-3, "{s}");

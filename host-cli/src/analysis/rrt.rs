@@ -7,6 +7,10 @@
 //! control degree N counted as the number of pieces after merging consecutive steps that need no
 //! bevel change.
 
+// A host-only baseline whose trees are compared as they are: it keeps libm's atan2f bits (the
+// clippy.toml ban of libm trigonometry is for code the device runs).
+#![allow(clippy::disallowed_methods)]
+
 use super::pieces::{merge, score, v3, Piece, Score, Segment};
 use crate::random::{seeded, Draw};
 use planner_core::model::clearance::closest;

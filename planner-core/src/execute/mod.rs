@@ -3,7 +3,9 @@
 //! the scenario independently of the planner; a finished plan carries its best form's schedule
 //! ([`ScheduledPlan`]), on the device as on the host.
 
+pub mod apriori;
 pub mod nominal;
+mod obstacle_risk;
 pub mod perturbation;
 pub mod plan_with_schedule;
 pub mod risk;

@@ -9,15 +9,16 @@
 //! target's own displacement added, its squared norm matched to a scaled χ² (Patnaik 1949) and
 //! the percentile taken by Wilson and Hilferty's cube root.
 
+use super::apriori::{estimator_profile, propagate_steered_with};
+use super::obstacle_risk::take;
+pub use super::obstacle_risk::{normal_cdf, ObstacleRisk, ObstacleRisks};
 use super::perturbation::Perturbation;
 use super::risk_kept::{shares, Point, KEEPS, KEPT};
 use super::schedule::Schedule;
 use super::spread::{propagate, TipSpread};
+use crate::estimate::{NoiseModel, STEER_MARGIN_SDS};
 use crate::model::kinematics::V3;
-use crate::model::scenario::{Obstacle, Scenario, Workspace};
-use crate::steer::apriori::{estimator_profile, propagate_steered_with};
-use crate::steer::estimate::NoiseModel;
-use crate::steer::STEER_MARGIN_SDS;
+use crate::model::scenario::{Scenario, Workspace};
 use nalgebra::Matrix3;
 
 /// Where the spread is evaluated along the path (mm between points at most).
@@ -34,53 +35,6 @@ fn sd_bound(covariance: &Matrix3<f32>) -> f32 {
     crate::fmath::sqrt(covariance.norm() * 1.001)
 }
 
-/// Offers `w` the share of `ob` at the point `tip`, where the steering keeps `margin`: taken
-/// when its chance is larger, or as large at a smaller clearance. With `quiet`, a point farther
-/// than it (where the chance is 0) is left after its distance unless `w` has no chance yet and
-/// the point is nearer than `w`'s (the same share as without).
-pub(crate) fn take(
-    w: &mut ObstacleRisk,
-    tip: &TipSpread,
-    margin: f32,
-    ob: &Obstacle,
-    plane: bool,
-    quiet: Option<f32>,
-) {
-    let mut away = tip.mean - V3::new(ob.center[0], ob.center[1], ob.center[2]);
-    if plane {
-        // A circle of the plane is a cylinder across it.
-        away.x = 0.0;
-    }
-    let distance = away.norm();
-    let clearance = distance - ob.radius - margin;
-    if let Some(q) = quiet {
-        let nearer = w.probability == 0.0 && clearance < w.clearance;
-        if clearance > q && clearance > 0.0 && !nearer {
-            return;
-        }
-    }
-    let sd = if distance > 0.0 {
-        tip.sd_along(&(away / distance))
-    } else {
-        0.0
-    };
-    let chance = if sd > 0.0 {
-        normal_cdf(-clearance / sd)
-    } else if clearance > 0.0 {
-        0.0
-    } else {
-        1.0
-    };
-    if chance > w.probability || (chance == w.probability && clearance < w.clearance) {
-        *w = ObstacleRisk {
-            probability: chance,
-            clearance,
-            sd,
-            steering_margin: margin,
-        };
-    }
-}
-
 /// The standard normal quantile of 0.95.
 const Z95: f32 = 1.644_853_6;
 
@@ -95,30 +49,6 @@ pub struct ExecutionRisk {
     /// The tip at the end of the insertion.
     pub end: TipSpread,
 }
-
-/// The standard normal cumulative distribution.
-pub fn normal_cdf(x: f32) -> f32 {
-    0.5 * libm::erfcf(-x * core::f32::consts::FRAC_1_SQRT_2)
-}
-
-/// One obstacle's share of the collision risk: where the path comes closest to it in units of
-/// the spread.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ObstacleRisk {
-    /// Probability of crossing its surface (the largest along the path).
-    pub probability: f32,
-    /// The mean path's clearance to it where that probability is largest (mm).
-    pub clearance: f32,
-    /// The spread of the tip along the direction to it there (mm).
-    pub sd: f32,
-    /// Steered: the clearance the steering keeps there by itself
-    /// ([`STEER_MARGIN_SDS`](crate::steer::STEER_MARGIN_SDS) of its estimate), counted out of
-    /// `clearance` (mm; 0 open loop).
-    pub steering_margin: f32,
-}
-
-/// Per-obstacle risks, in the scenario's order.
-pub type ObstacleRisks = [ObstacleRisk; crate::MAX_OBSTACLES];
 
 /// The predicted execution risk of `schedule` in `scenario` under `p`.
 ///
@@ -150,7 +80,7 @@ pub enum Execution {
     /// The schedule as it is.
     OpenLoop,
     /// Steered: the spread the closed loop leaves
-    /// ([`propagate_steered`](crate::steer::apriori::propagate_steered)).
+    /// ([`propagate_steered`](super::apriori::propagate_steered)).
     Steered(NoiseModel),
 }
 

@@ -4,7 +4,7 @@
 //! anywhere (whose share is then its nearest approach) only along the runs that can hold that
 //! approach. The same share bit for bit as measuring every point ([`super::risk`]'s test).
 
-use super::risk::{take, ObstacleRisk, ObstacleRisks};
+use super::obstacle_risk::{take, ObstacleRisk, ObstacleRisks};
 use super::spread::TipSpread;
 use crate::model::kinematics::V3;
 use crate::model::scenario::{Obstacle, Scenario};

@@ -2,7 +2,7 @@
 //! share of the curvature: the turn spent first at the needle's full (estimated) curvature and a
 //! spun line to the target, then the duty-cycled arc aimed through it.
 
-use super::replan::{sound_within, wrapped_deg, ReplanInput, Replanned};
+use super::continuation::{accepted_miss, sound_within, wrapped_deg, ReplanInput, Replanned};
 use super::turns::{dead_banded, widened_to_band};
 use crate::execute::schedule::{duty_continuation, duty_step, Steps};
 
@@ -50,7 +50,7 @@ pub(super) fn aimed_tries(
     spent: &(u32, u32),
     build: impl Fn(f32) -> Option<(Steps, f32, f32)>,
 ) -> Option<Replanned> {
-    let miss = super::turns::accepted_miss(input);
+    let miss = accepted_miss(input);
     aimed_within(input, local, miss, spent, build)
 }
 
@@ -107,8 +107,8 @@ fn front_loaded_at(input: &ReplanInput, duty: f32, spent: &(u32, u32)) -> Option
     let phi = heading_turn(side, ahead, r)?;
     let arc = r * phi;
     let (across, along) = (
-        side - r * (1.0 - libm::cosf(phi)),
-        ahead - r * libm::sinf(phi),
+        side - r * (1.0 - crate::fmath::cos(phi)),
+        ahead - r * crate::fmath::sin(phi),
     );
     let line = crate::fmath::sqrt(across * across + along * along);
     let driver = &input.scenario.driver;
@@ -131,7 +131,7 @@ pub(super) fn heading_turn(side: f32, ahead: f32, r: f32) -> Option<f32> {
     // is zero: s at φ = 0, at most 0 at the turn of the arc through the target, 2·atan2(s, a);
     // bisection, 24 halvings (the angle to 1e-7 rad).
     let gap = |phi: f32| {
-        let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
+        let (sin, cos) = crate::fmath::sincos(phi);
         side * cos - ahead * sin + r * (1.0 - cos)
     };
     let (mut lo, mut hi) = (0.0f32, 2.0 * crate::fmath::atan2(side, ahead));

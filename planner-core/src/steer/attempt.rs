@@ -1,7 +1,7 @@
 //! One solve of a continuation from the tip: the SQP from a start, and, when the start lies
 //! inside the margin (the tip drifted towards an obstacle), a clearing solve before it.
 
-use super::replan::{wrapped_deg, ReplanInput, Replanned};
+use super::continuation::{wrapped_deg, ReplanInput, Replanned};
 use crate::model::form::Form;
 use crate::model::scenario::Scenario;
 use crate::optim::problem::{Problem, Vars, MAX_VARS};
@@ -121,7 +121,7 @@ mod tests {
     use crate::model::form::SegmentKind;
     use crate::model::kinematics::{Frame, V3};
     use crate::model::scenario::{Obstacle, Workspace};
-    use crate::steer::replan::{form_of, sub_scenario};
+    use crate::steer::continuation::{form_of, sub_scenario};
 
     /// A continuation (R L R: two degrees of freedom beyond reaching the target) that now
     /// passes a sphere inside the margin: the SQP cannot start from it, the clearing moves it

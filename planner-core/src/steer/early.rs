@@ -7,7 +7,7 @@
 //! a later layer that bends less takes less away.
 
 use super::aimed::{aimed_bevels, aimed_tries, front_loaded, heading_turn};
-use super::replan::{ReplanInput, Replanned};
+use super::continuation::{ReplanInput, Replanned};
 use crate::execute::schedule::{duty_continuation, duty_step};
 use crate::model::kinematics::V3;
 use crate::model::scenario::Workspace;
@@ -84,8 +84,8 @@ impl Turn {
 fn whole_turn(input: &ReplanInput, turn: &Turn) -> (f32, ThenArc) {
     let (r, phi) = (input.radius, turn.phi);
     let (dx, dz) = (
-        turn.side - r * (1.0 - libm::cosf(phi)),
-        turn.local.z - r * libm::sinf(phi),
+        turn.side - r * (1.0 - crate::fmath::cos(phi)),
+        turn.local.z - r * crate::fmath::sin(phi),
     );
     let length = crate::fmath::sqrt(dx * dx + dz * dz);
     (r * phi, ThenArc { length, duty: 0.0 })
@@ -162,7 +162,7 @@ fn screened_clearance(input: &ReplanInput, turn: &Turn, arc: f32, then: ThenArc)
     let (u, z) = (V3::new(local.x / side, local.y / side, 0.0), V3::z());
     let r = input.radius;
     let phi = arc / r;
-    let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
+    let (sin, cos) = crate::fmath::sincos(phi);
     let cylinders = input.scenario.options.workspace == Workspace::PlaneYz;
     let first = Arc {
         centre: u * r,
@@ -243,7 +243,9 @@ impl Arc {
             return crate::fmath::sqrt(out_of_plane + radial * radial);
         }
         let at = |t: f32| {
-            self.centre + (self.start * libm::cosf(t) + self.heading * libm::sinf(t)) * self.radius
+            self.centre
+                + (self.start * crate::fmath::cos(t) + self.heading * crate::fmath::sin(t))
+                    * self.radius
         };
         let normal = self.start.cross(&self.heading);
         let to = |p: V3| {
@@ -296,7 +298,7 @@ struct ThenArc {
 fn part_then_arc(input: &ReplanInput, turn: &Turn, share: f32) -> Option<(f32, ThenArc)> {
     let (local, side, r) = (turn.local, turn.side, input.radius);
     let phi = share * turn.phi;
-    let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
+    let (sin, cos) = crate::fmath::sincos(phi);
     // The target from the arc's end, in the plane of the turn: across and along its heading.
     let (dx, dz) = (side - r * (1.0 - cos), local.z - r * sin);
     let (ahead, across) = (dx * sin + dz * cos, dx * cos - dz * sin);

@@ -28,22 +28,17 @@
 //! ```
 
 mod aimed;
-pub mod apriori;
 mod attempt;
+mod continuation;
 mod early;
-pub mod estimate;
-mod lost;
-mod noise;
-mod offset;
 mod predict;
 pub mod replan;
-mod slip;
 mod state;
-pub mod target;
 mod turns;
 mod warm;
 
-pub use estimate::{Estimate, NoiseModel};
+pub use crate::estimate::{self, target, Estimate, NoiseModel, STEER_MARGIN_SDS};
+pub use crate::execute::apriori;
 pub use state::Steering;
 
 use crate::execute::schedule::Steps;
@@ -209,11 +204,6 @@ pub struct SteerStats {
     /// late (so the count depends on the transport, not only on the insertion).
     pub repeated: u32,
 }
-
-/// Standard deviations of the tip's position estimate a continuation keeps clear of every
-/// obstacle on top of the scenario's floor: the true tip may be that far from where the
-/// estimate has it. A plan steered under a collision bound keeps it too.
-pub const STEER_MARGIN_SDS: f32 = 2.0;
 
 /// The miss a continuation may predict before it is re-planned grows by this much per
 /// millimetre still to insert (mm/mm; [`SteerConfig::replan_error_mm`] is the least): an error

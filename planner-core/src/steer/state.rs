@@ -1,12 +1,12 @@
 //! The steering controller's state machine: readings in, commands out.
 
-use super::estimate::Estimate;
 use super::replan::{predict_with, replan, segments_of, Prediction, ReplanInput};
-use super::target::TargetFix;
 use super::{
     Command, Reading, SteerConfig, SteerError, SteerReply, SteerStats, StopReason, TipMeasurement,
     REPLAN_DEFER_PER_MM, STEER_MARGIN_SDS,
 };
+use crate::estimate::target::TargetFix;
+use crate::estimate::Estimate;
 use crate::execute::nominal::posture_frame;
 use crate::execute::schedule::{resized_step, Op, Schedule, Step, Steps, MAX_STEPS};
 use crate::model::broad::{kept_tree, KeptTree};

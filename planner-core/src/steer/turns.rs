@@ -5,7 +5,7 @@
 //! turns held at the nearer step was tried: it changed no figure of the families, and its code
 //! did not fit the 128 KiB part.)
 
-use super::replan::{checked, ReplanInput, Replanned};
+use super::continuation::{checked, ReplanInput, Replanned};
 use crate::report::{SegmentPlan, Segments};
 
 /// `deg`, or no turn at all when it is within `band` of a whole turn.
@@ -28,18 +28,6 @@ pub(super) fn widened_to_band(deg: f32, band: f32) -> f32 {
     } else {
         whole + libm::copysignf(band, off)
     }
-}
-
-/// The miss a continuation may predict: the target's tolerance, or half of what the smallest
-/// turn the dead band allows would move the end, when that is more. Turning the bevel by θ
-/// turns the whole continuation about the tip's heading, moving its end by θ times the end's
-/// distance from that axis; a turn rounded to the band's steps (none, or the band) misses by at
-/// most half a step.
-pub(super) fn accepted_miss(input: &ReplanInput) -> f32 {
-    let local = input.tip.r.transpose() * (input.target - input.tip.p);
-    let off_axis = crate::fmath::sqrt(local.x * local.x + local.y * local.y);
-    let step = input.dead_band_deg.to_radians() * off_axis;
-    input.scenario.target.tolerance.max(0.5 * step)
 }
 
 /// `exact` as commanded, if it passes: its small turns left out, else widened to the band.

@@ -1,7 +1,7 @@
 //! Warm starts for a replan beyond the remaining segments: the same path with a degree of
 //! freedom more, and a leading line turned away from the sphere it drifted towards.
 
-use super::replan::ReplanInput;
+use super::continuation::ReplanInput;
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::report::{SegmentPlan, Segments};
@@ -108,7 +108,7 @@ mod tests {
     use crate::model::kinematics::Frame;
     use crate::model::scenario::{Obstacle, Scenario, Workspace};
     use crate::steer::attempt::attempt;
-    use crate::steer::replan::{form_of, sub_scenario};
+    use crate::steer::continuation::{form_of, sub_scenario};
 
     /// A tip whose line now passes a sphere closer than the margin: no start along the line
     /// is clear of it, the line turned away is, and the replan finds a continuation from it

@@ -71,7 +71,7 @@ fn a_single_arc_seed_is_the_short_way_round() {
     // long way round turns more than the needle's 180 degrees and is refused.
     let s = paper_with(&[]);
     let r = s.needle.curvature_radius;
-    let expected = 2.0 * r * libm::asinf(45.0 / r);
+    let expected = 2.0 * r * crate::fmath::asin(45.0 / r);
     let mut sink = Collected::new(f32::INFINITY);
     sweep_all(&s, "R", 0.0, &mut sink);
     assert_eq!(sink.offered.len(), 2, "one per side");

@@ -104,7 +104,11 @@ fn the_early_turn_makes_part_of_the_turn_near_an_obstacle() {
     };
     let r = open.needle.curvature_radius;
     let phi = arc / r;
-    let turned = V3::new(r * (1.0 - libm::cosf(phi)), 0.0, 50.0 + r * libm::sinf(phi));
+    let turned = V3::new(
+        r * (1.0 - crate::fmath::cos(phi)),
+        0.0,
+        50.0 + r * crate::fmath::sin(phi),
+    );
     let on_line = 0.5 * (turned + probe.target);
     let beside = Obstacle {
         center: [on_line.x + 1.2, 0.0, on_line.z],
@@ -173,13 +177,18 @@ fn part_of_the_turn_then_the_arc_ends_on_the_target() {
         let share = k as f32 / TURN_SHARES as f32;
         let (arc, then) = part_then_arc(&input, &turn, share).expect("reachable");
         let phi = arc / r;
-        let (sin, cos) = (libm::sinf(phi), libm::cosf(phi));
+        let (sin, cos) = crate::fmath::sincos(phi);
         let start = V3::new(r * (1.0 - cos), 0.0, 50.0 + r * sin);
         // The second arc, of radius r / duty, bending on towards +x.
         let (r2, psi) = (r / then.duty, then.length * then.duty / r);
         let centre = start + V3::new(r2 * cos, 0.0, -r2 * sin);
         let angle = phi + psi;
-        let end = centre + V3::new(-r2 * libm::cosf(angle), 0.0, r2 * libm::sinf(angle));
+        let end = centre
+            + V3::new(
+                -r2 * crate::fmath::cos(angle),
+                0.0,
+                r2 * crate::fmath::sin(angle),
+            );
         assert!((end - input.target).norm() < 1e-3, "{share}: {end:?}");
         // Less of the turn made first leaves more for the arc after it.
         assert!(then.duty > last_duty, "{share}: {then:?}");

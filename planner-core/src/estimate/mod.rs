@@ -9,20 +9,31 @@
 //! same way, from the path so far). The prediction's Jacobian is taken by finite differences of
 //! the same unicycle step the planner uses, so the filter and the planner share one model.
 
-use super::lost::{Rejected, LOST_CONSISTENCY};
-use super::offset::TrackerOffset;
-use super::target::{TargetFilter, TargetFix, PUSH_ZONE_MM};
+mod lost;
+mod noise;
+mod offset;
+mod slip;
+pub mod target;
+
 use crate::matmul::{mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::{rotate, Frame, V3};
+use lost::{Rejected, LOST_CONSISTENCY};
 use nalgebra::{Matrix3, SMatrix, SVector};
+use offset::TrackerOffset;
+use target::{TargetFilter, TargetFix, PUSH_ZONE_MM};
 
-pub use super::noise::NoiseModel;
+pub use noise::NoiseModel;
 
 /// Size of the error state.
 pub const STATES: usize = 7;
 type Cov = SMatrix<f32, STATES, STATES>;
 type ErrorState = SVector<f32, STATES>;
+
+/// Standard deviations of the tip's position estimate ([`Estimate::margin_sd`]) a continuation
+/// keeps clear of every obstacle on top of the scenario's floor: the true tip may be that far
+/// from where the estimate has it. A plan steered under a collision bound keeps it too.
+pub const STEER_MARGIN_SDS: f32 = 2.0;
 
 /// Smallest and largest curvature factor the estimate may take.
 pub const FACTOR_RANGE: (f32, f32) = (0.2, 5.0);
@@ -32,7 +43,7 @@ pub const FACTOR_RANGE: (f32, f32) = (0.2, 5.0);
 const GATE: f32 = 25.0;
 
 /// How far (mm) the fixes' progress along the heading may fall short of the insertion commanded
-/// over the last 3 mm or more ([`super::slip`]) before a rejected fix counts as a tip held back by
+/// over the last 3 mm or more ([`slip`]) before a rejected fix counts as a tip held back by
 /// a membrane rather than one the estimate has lost ([`Estimate::lost_offset`]). Why: after a
 /// stall of 4-6 mm a rejected fix stopped the run near a sphere as tracking lost, though the tip
 /// was behind on a path already cleared (space-clinical seeds 11 and 543, paper-clinical 352;
@@ -122,7 +133,7 @@ pub struct Estimate {
     /// Heading fixes rejected in a row while the positions were fused.
     headings_rejected: u8,
     /// The fused fixes' progress against the commanded insertion.
-    slip: super::slip::Slip,
+    slip: slip::Slip,
     /// The tracker's offset from the imaging frame, read near the entry.
     offset: TrackerOffset,
 }
@@ -155,7 +166,7 @@ impl Estimate {
             roll_offset: 0.0,
             rejected: Rejected::NONE,
             headings_rejected: 0,
-            slip: super::slip::Slip::NONE,
+            slip: slip::Slip::NONE,
             offset: TrackerOffset::new(tip.p, noise),
         }
     }
@@ -310,8 +321,7 @@ impl Estimate {
             let held = self.slip.slip(z, self.tip.e3()) < -HELD_BACK_MM
                 && self.consistency < HELD_CONSISTENCY;
             if !held {
-                self.rejected
-                    .rejected(super::lost::off_the_path(y, self.tip.e3()));
+                self.rejected.rejected(lost::off_the_path(y, self.tip.e3()));
             }
             return false;
         };

@@ -17,6 +17,7 @@
 //! The controller's mean path is the plan: it removes the systematic torsional lag with the
 //! rest.
 
+use crate::estimate::{Estimate, NoiseModel};
 use crate::execute::nominal::posture_frame;
 use crate::execute::perturbation::Perturbation;
 use crate::execute::schedule::{Op, Schedule, MAX_STEPS};
@@ -25,7 +26,6 @@ use crate::matmul::{add_outer, mul, sandwich};
 use crate::model::form::SegmentKind;
 use crate::model::kinematics::V3;
 use crate::model::scenario::Scenario;
-use crate::steer::estimate::{Estimate, NoiseModel};
 use nalgebra::{Matrix3, Matrix6};
 
 /// The full screws of the draws shared along the path, from a first walk.
@@ -121,7 +121,7 @@ pub struct EstimatorProfile {
 impl EstimatorProfile {
     /// The variance per axis at `depth` (mm²), the tracker's hidden error included: how far the
     /// steered tip may be from where the loop believes it, so also the margin the steering keeps
-    /// (as [`Estimate::margin_sd`](crate::steer::estimate::Estimate::margin_sd) does).
+    /// (as [`Estimate::margin_sd`](crate::estimate::Estimate::margin_sd) does).
     pub fn at(&self, depth: f32) -> f32 {
         let i = (depth / self.stretch_mm).max(0.0) as usize;
         self.variance[i.min(ESTIMATOR_STRETCHES - 1)] + self.hidden
@@ -210,8 +210,8 @@ fn estimator_walk(
 /// use planner_core::execute::perturbation::Perturbation;
 /// use planner_core::execute::schedule::schedule;
 /// use planner_core::execute::spread::propagate;
-/// use planner_core::steer::apriori::propagate_steered;
-/// use planner_core::steer::estimate::NoiseModel;
+/// use planner_core::execute::apriori::propagate_steered;
+/// use planner_core::estimate::NoiseModel;
 /// use planner_core::{plan, Scenario};
 ///
 /// let scenario = Scenario::paper();

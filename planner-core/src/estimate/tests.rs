@@ -64,7 +64,7 @@ fn normals(seed: u64) -> impl FnMut() -> f32 {
     };
     move || {
         let (u, v) = (uniform(), uniform());
-        libm::sqrtf(-2.0 * libm::logf(u)) * libm::cosf(core::f32::consts::TAU * v)
+        crate::fmath::sqrt(-2.0 * libm::logf(u)) * crate::fmath::cos(core::f32::consts::TAU * v)
     }
 }
 

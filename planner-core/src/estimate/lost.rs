@@ -100,9 +100,9 @@ mod tests {
     /// travelled (no offset to keep clear); one 6 mm across puts it that far off.
     #[test]
     fn a_stalled_tip_is_not_a_lost_one() {
+        use crate::estimate::{Estimate, NoiseModel};
         use crate::model::form::SegmentKind;
         use crate::model::kinematics::Frame;
-        use crate::steer::estimate::{Estimate, NoiseModel};
         let noise = NoiseModel::DEFAULT;
         let start = Frame {
             p: V3::zeros(),
