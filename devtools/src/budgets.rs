@@ -1,6 +1,6 @@
 //! The device budgets: what the firmware may cost on the microcontroller, in one table.
 //!
-//! `needle device-bench --check` enforces them ([`breaches`]), `needle device-bench --budgets`
+//! `cargo xtask device-bench --check` enforces them ([`breaches`]), `cargo xtask device-bench --budgets`
 //! prints them ([`markdown_table`], the table docs/firmware.md shows, checked against it by a
 //! test), and the firmware tests read them from here. The check is a pure function of the
 //! measured figures, so it is tested without QEMU.
@@ -214,11 +214,11 @@ pub fn breaches(board: &BoardFigures) -> Vec<Breach> {
 
 /// The lines around the budgets table in docs/firmware.md.
 pub const DOC_MARKERS: (&str, &str) = (
-    "<!-- `needle device-bench --budgets` prints this table; a test compares them -->",
+    "<!-- `cargo xtask device-bench --budgets` prints this table; a test compares them -->",
     "<!-- end of the budgets table -->",
 );
 
-/// The budgets as a Markdown table (`needle device-bench --budgets`, docs/firmware.md).
+/// The budgets as a Markdown table (`cargo xtask device-bench --budgets`, docs/firmware.md).
 pub fn markdown_table() -> String {
     let mut s = String::from("| budget | at most | protects |\n| --- | --- | --- |\n");
     for b in BUDGETS {
@@ -248,7 +248,7 @@ pub fn problems(figures: &BoardFigures) -> Vec<String> {
 }
 
 /// What the measured figures come to: with `check`, an error listing every problem (so
-/// `needle device-bench --check` exits non-zero on any), else the problems, to print as warnings.
+/// `cargo xtask device-bench --check` exits non-zero on any), else the problems, to print as warnings.
 pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
     let problems: Vec<String> = figures.iter().flat_map(problems).collect();
     if check && !problems.is_empty() {
@@ -290,7 +290,7 @@ pub(crate) mod tests {
         );
     }
 
-    /// The figures measured on the stm32f4 (`needle device-bench --json`), within every budget.
+    /// The figures measured on the stm32f4 (`cargo xtask device-bench --json`), within every budget.
     pub(crate) fn within() -> BoardFigures {
         BoardFigures {
             board: "stm32f4".into(),
@@ -403,7 +403,7 @@ pub(crate) mod tests {
         assert_eq!(
             block,
             Some(markdown_table().as_str()),
-            "docs/firmware.md's budgets table differs from `needle device-bench --budgets`: \
+            "docs/firmware.md's budgets table differs from `cargo xtask device-bench --budgets`: \
              paste its output between {begin} and {end}"
         );
     }

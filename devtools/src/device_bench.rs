@@ -1,4 +1,4 @@
-//! `needle device-bench`: what the planner costs on the microcontroller, measured in QEMU.
+//! `cargo xtask device-bench`: what the planner costs on the microcontroller, measured in QEMU.
 //!
 //! For each board it builds the release firmware, reads flash and static RAM from the image,
 //! boots it in QEMU (mps2-an386 for the `mps2-an386` build, netduinoplus2 for the `stm32f4`
@@ -72,7 +72,7 @@ pub struct NamedScenario {
 }
 
 /// Reads a scenario file and its collision bound (`needle`'s TOML reader; passed in, since this
-/// crate sits below `needle-cli`).
+/// crate sits below the host crates).
 pub type LoadScenario<'a> = &'a dyn Fn(&Path) -> Result<(Scenario, Option<ChanceRequest>)>;
 
 /// Loads scenario files with `load`, named by their stem.
@@ -224,7 +224,7 @@ pub fn measure_all(
         .collect()
 }
 
-/// `needle device-bench` options.
+/// `cargo xtask device-bench` options.
 #[derive(clap::Args)]
 pub struct Args {
     /// Scenario files (default: examples/paper.toml, devtools/workloads/space.toml — the
@@ -250,12 +250,13 @@ pub struct Args {
     /// of the plans alone). `replan_instructions` is then empty, so `--check` is refused with it.
     #[arg(long, conflicts_with = "check")]
     plan_only: bool,
-    /// The needle-planner checkout holding firmware/ and tools/ (default: where `needle` was built).
+    /// The needle-planner checkout holding firmware/ and tools/ (default: the one this was
+    /// built from).
     #[arg(long)]
     root: Option<PathBuf>,
 }
 
-/// Runs `needle device-bench`, reading scenario files with `load`.
+/// Runs `cargo xtask device-bench`, reading scenario files with `load`.
 pub fn run(args: &Args, load: LoadScenario) -> Result<()> {
     if args.budgets {
         write!(std::io::stdout(), "{}", budgets::markdown_table())?;

@@ -1,4 +1,4 @@
-//! The figures `needle device-bench` measures on one board, what they come to against the
+//! The figures `cargo xtask device-bench` measures on one board, what they come to against the
 //! budgets (`--check`), and their JSON and text forms. Plain data: nothing here runs QEMU.
 
 use crate::replan_bench::ReplanFigures;
@@ -25,7 +25,7 @@ pub struct BoardFigures {
 }
 
 impl BoardFigures {
-    /// The JSON object of `needle device-bench --json`.
+    /// The JSON object of `cargo xtask device-bench --json`.
     pub fn to_json(&self) -> Value {
         let map = |v: &[(String, u64)]| {
             v.iter()
@@ -60,7 +60,7 @@ impl BoardFigures {
         })
     }
 
-    /// Reads back one object of `needle device-bench --json` (what [`Self::to_json`] wrote).
+    /// Reads back one object of `cargo xtask device-bench --json` (what [`Self::to_json`] wrote).
     pub fn from_json(v: &Value) -> Result<BoardFigures> {
         let number = |v: &Value, key: &str| {
             v[key]

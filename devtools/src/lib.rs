@@ -1,22 +1,21 @@
-//! Developer tooling of needle-planner, kept out of the `needle` command's own code: what the
-//! firmware costs on the microcontroller ([`device_bench`], run as `needle device-bench`; the
-//! [`figures`] it measures) and what it may cost ([`budgets`]), the QEMU run it drives
-//! ([`qemu`]), reading the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), where the counted instructions go ([`profile`]), and the firmware
-//! and plugin builds that device-bench and the `firmware_*` tests share
-//! ([`firmware_artifacts`]).
+//! Developer tooling of needle-planner, kept out of the `needle` binary: what the firmware costs
+//! on the microcontroller ([`device_bench`], run as `cargo xtask device-bench`; the [`figures`]
+//! it measures) and what it may cost ([`budgets`]), the QEMU run it drives ([`qemu`]), reading
+//! the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), where the counted
+//! instructions go ([`profile`]), and the firmware and plugin builds that device-bench and the
+//! `firmware_*` tests share ([`firmware_artifacts`]).
 //!
 //! The crates, without a cycle:
 //!
 //! ```text
-//! needle-cli (the `needle` command) ──> needle-devtools ──> needle-link ──> planner-core
-//!            └──────────────────────────────────────────> needle-link
+//! xtask (`cargo xtask`) ──> needle-devtools ──> needle-link ──> planner-core
+//!       └─────────────────> needle-scenario
 //! ```
 //!
-//! `needle device-bench` must keep working, so `needle-cli` depends on this crate; this crate
-//! therefore cannot depend on `needle-cli`. What both need, the device client and its
-//! transports, is `needle-link`, below both. The one thing of `needle-cli`'s that device-bench
-//! uses, reading scenario files, is passed in by the caller ([`device_bench::run`]). It is a
-//! library and not an xtask binary for the same reason: its front end is `needle`.
+//! This crate reads no scenario file itself: the one thing device-bench needs of the host's
+//! crates, reading scenario files with their collision bound, is passed in by the caller
+//! ([`device_bench::run`]; the xtask passes `needle-scenario`'s reader), so the tooling stays
+//! below the host crates and none of them, nor the `needle` binary, depends on it.
 
 #![deny(missing_docs)]
 

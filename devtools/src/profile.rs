@@ -1,4 +1,4 @@
-//! `needle device-bench --profile`: where the measured instructions go, by function.
+//! `cargo xtask device-bench --profile`: where the measured instructions go, by function.
 //!
 //! The plugin attributes each executed translation block, while a region is open, to the block's
 //! start address; blocks are mapped here to the function containing them. Figures at region edges

@@ -6,7 +6,7 @@
 //! result. Received bytes reach the service a whole frame at a time ([`Inbox`]), so the poll that
 //! decodes the last chunk always finds all of it, however the line split it in time. The report marker fires when planning stops. Upload and fetch frames, idle polls and
 //! the time bytes take on the line are not counted; frames the host sends *during* planning
-//! (status queries) would be, so `needle device-bench` sends none. Each poll that answers a
+//! (status queries) would be, so `cargo xtask device-bench` sends none. Each poll that answers a
 //! steering reading is a region reported on its own: the instructions of one reading. Reply bytes are staged in
 //! [`Outbox`] and sent to the link outside the regions.
 

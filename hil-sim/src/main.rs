@@ -196,7 +196,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             "--stream-rate must be within 1 and 100000 Hz"
         );
     }
-    let setup = needle_cli::simulate::closed_loop_setup(file, a.seed, &l.world_flags())?;
+    let setup = needle_simulate::closed_loop_setup(file, a.seed, &l.world_flags())?;
     hil_sim::lab::check_faults(&setup.faults)?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
@@ -229,7 +229,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             registration: l
                 .registration
                 .as_deref()
-                .map(needle_cli::lab::wire::load_registration)
+                .map(needle_lab::wire::load_registration)
                 .transpose()?,
             registration_name: l.registration_name.clone(),
             registration_change_after: l.registration_change_after,

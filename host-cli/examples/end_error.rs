@@ -7,8 +7,8 @@
 //! `cargo run --release -p needle-cli --example end_error -- FILE RUNS [FLAGS...]` (the flags of
 //! `needle simulate`, e.g. `--world clinical`). Means in mm. Every figure is simulated.
 
-use needle_cli::simulate::{closed_loop_setup, run_seed};
 use needle_sim::{closed_loop_observed, in_process};
+use needle_simulate::{closed_loop_setup, run_seed};
 use planner_core::model::kinematics::V3;
 
 type Failure = Box<dyn std::error::Error>;

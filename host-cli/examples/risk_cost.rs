@@ -4,7 +4,7 @@
 //! spheres alone, as the host does; `walk`: the walk alone, no spheres). Run under
 //! `valgrind --tool=callgrind` to count instructions where the machine is too loaded to time.
 
-use needle_cli::scale::near_and_far;
+use needle_analysis::scale::near_and_far;
 use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::risk::{risk_culled, Culling, Execution, ObstacleRisk};
 use planner_core::execute::schedule::schedule;

@@ -8,8 +8,8 @@
 //! `cargo run --release -p needle-cli --example roll_family -- DIR [RUNS]` (every `*.toml` in DIR,
 //! default 25 runs each). Every figure is simulated.
 
-use needle_cli::simulate::{closed_loop_setup, run_seed, Spread};
 use needle_sim::{roll_trace, RollSample, RollSummary};
+use needle_simulate::{closed_loop_setup, run_seed, Spread};
 
 type Failure = Box<dyn std::error::Error>;
 

@@ -1,6 +1,6 @@
 //! The host side of the needle-planner device protocol ([`planner_core::wire`]): byte transports
 //! (serial port, TCP) and the one protocol client, used by `needle send|ping|info` and by
-//! `needle device-bench`.
+//! `cargo xtask device-bench`.
 //!
 //! It is a crate of its own so that both users can depend on it without a cycle: `needle-cli`
 //! (the `needle` command) depends on `needle-devtools` (device-bench) to run its subcommand, and

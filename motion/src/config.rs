@@ -1,43 +1,7 @@
 //! The axes and the timer: units, steps, speed and acceleration limits, soft limits.
 
+pub use crate::fields::{Axis, ConfigField};
 use crate::MotionError;
-
-/// The two axes of a needle driver.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Axis {
-    /// The insertion stage (a lead screw), in millimetres.
-    Insertion = 0,
-    /// The shaft's rotation, in degrees.
-    Rotation = 1,
-}
-
-impl Axis {
-    /// Both axes, in index order.
-    pub const BOTH: [Axis; 2] = [Axis::Insertion, Axis::Rotation];
-}
-
-/// What a configuration value is wrong about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ConfigField {
-    /// The timer's tick rate.
-    TickRate,
-    /// An axis' steps per unit.
-    StepsPerUnit(Axis),
-    /// An axis' maximum speed.
-    MaxSpeed(Axis),
-    /// An axis' maximum acceleration.
-    MaxAccel(Axis),
-    /// An axis' soft limits (min must lie below max, both finite, within the step counter).
-    SoftLimits(Axis),
-    /// A rate of the driver (insert speed, rotate speed or spin rate).
-    Rate,
-    /// The homing speed or travel.
-    Homing,
-}
 
 /// One axis: how units become steps and what it may do.
 #[derive(Clone, Copy, Debug, PartialEq)]

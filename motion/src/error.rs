@@ -1,6 +1,6 @@
 //! Every way a request of the motion core can fail.
 
-use crate::config::{Axis, ConfigField};
+use crate::fields::{Axis, ConfigField};
 use crate::safety::{FaultCause, State};
 
 /// Why a request was refused.

@@ -1,6 +1,6 @@
 //! How the core's states, causes and fields read in messages.
 
-use crate::config::{Axis, ConfigField};
+use crate::fields::{Axis, ConfigField};
 use crate::safety::{FaultCause, State};
 use core::fmt::{Display, Formatter, Result};
 

@@ -8,6 +8,10 @@
 //! asks more speed or acceleration than the stage can follow. The insertion stage closes its home switch at the retracted end (0) and
 //! a limit switch at the far end; an optional encoder reads each stage to its resolution.
 
+// The stage's physics, not the planner's: it runs on the host and in QEMU, never on a board that
+// drives motors, so libm's f64 sine is fine here and fmath (planner-core) is not a dependency.
+#![allow(clippy::disallowed_methods)]
+
 use crate::config::Axis;
 use crate::runner::StepEvent;
 use crate::safety::Inputs;

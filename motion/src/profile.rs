@@ -10,6 +10,10 @@
 //! correctly rounded operations (add, divide, square root) are used: the same bits on any IEEE
 //! machine, the host and the Cortex-M4F alike.
 
+// The square roots of the step timing are correctly rounded, so the same bits everywhere; they
+// are software on the M4F, which is why they are to leave the step path.
+#![allow(clippy::disallowed_methods)]
+
 /// One axis' steps in one segment.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisRun {

@@ -16,7 +16,7 @@
 //!          └─────────┘     from any state; both axes stop at once; reset keeps it
 //! ```
 
-use crate::config::Axis;
+use crate::fields::Axis;
 
 /// Where the controller is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,9 +3,9 @@
 
 use crate::convert::python_value;
 use crate::errors::{guarded, scenario_error, ScenarioError};
-use needle_cli::anatomy::command::{cover_json, CoverArgs};
-use needle_cli::anatomy::cover::DEFAULT_TIGHTNESS;
-use needle_cli::anatomy::mesh::DEFAULT_VOXEL_MM;
+use needle_anatomy::command::{cover_json, CoverArgs};
+use needle_anatomy::cover::DEFAULT_TIGHTNESS;
+use needle_anatomy::mesh::DEFAULT_VOXEL_MM;
 use planner_core::MAX_OBSTACLES;
 use pyo3::prelude::*;
 use std::path::PathBuf;

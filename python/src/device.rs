@@ -6,9 +6,9 @@ use crate::convert::python_value;
 use crate::errors::{guarded, message, Failed, PlanError};
 use crate::plan::{degree, form_words, planned, Planned};
 use crate::scenario::Scenario;
-use needle_cli::device::checked::{plan_checked, Sent};
-use needle_cli::device::commands::{info_json, LinkArgs};
-use needle_cli::scenario::restrict;
+use needle_device::checked::{plan_checked, Sent};
+use needle_device::commands::{info_json, LinkArgs};
+use needle_scenario::restrict;
 use pyo3::prelude::*;
 
 /// How `Device.plan` went wrong: the device (link, answer) or the planning it reported.

@@ -1,6 +1,6 @@
 //! The native half of the Python package `needle_planner`: scenarios, plans and simulations
-//! through the `needle` command's own library (`needle_cli`), so Python gets the command's
-//! numbers and messages. The Python half (`needle_planner/__init__.py`) wraps what this module
+//! through the library crates the `needle` command calls (`needle-scenario`, `needle-report`,
+//! `needle-simulate`, ...), so Python gets the command's numbers and messages. The Python half (`needle_planner/__init__.py`) wraps what this module
 //! returns in typed objects.
 //!
 //! Nothing panics across the boundary: the planner and the simulator run inside

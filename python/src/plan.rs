@@ -4,9 +4,9 @@
 use crate::convert::{points_array, python_value};
 use crate::errors::{guarded, plan_error, scenario_error, ScenarioError};
 use crate::scenario::Scenario;
-use needle_cli::report::local::plan_locally;
-use needle_cli::report::PlanJson;
-use needle_cli::scenario::restrict;
+use needle_report::local::plan_locally;
+use needle_report::PlanJson;
+use needle_scenario::restrict;
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyString;

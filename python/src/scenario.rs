@@ -3,8 +3,8 @@
 //! messages, so a bad scenario fails where it is written.
 
 use crate::errors::{scenario_error, ScenarioError};
-use needle_cli::scenario::execution::execution_of;
-use needle_cli::scenario::{Execution, ScenarioFile};
+use needle_scenario::execution::execution_of;
+use needle_scenario::{Execution, ScenarioFile};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::{Path, PathBuf};

@@ -4,9 +4,9 @@
 use crate::convert::points_array;
 use crate::errors::{guarded, plan_error, scenario_error, ScenarioError};
 use crate::scenario::Scenario;
-use needle_cli::analysis::parallel::default_threads;
-use needle_cli::simulate::request::{asked, results_json, Request, Results};
-use needle_cli::simulate::setup::Keep;
+use needle_analysis::parallel::default_threads;
+use needle_simulate::request::{asked, results_json, Request, Results};
+use needle_simulate::setup::Keep;
 use needle_sim::Run;
 use numpy::PyArray1;
 use pyo3::prelude::*;

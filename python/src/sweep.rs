@@ -4,8 +4,8 @@
 use crate::convert::python_value;
 use crate::errors::{guarded, plan_error, ScenarioError};
 use crate::scenario::Scenario;
-use needle_cli::analysis::parallel;
-use needle_cli::analysis::sweep::{run, to_json, Range, Weight};
+use needle_analysis::parallel;
+use needle_analysis::sweep::{run, to_json, Range, Weight};
 use pyo3::prelude::*;
 
 /// Re-plans `scenario` for each value of one weight, as `needle sweep --json` does.

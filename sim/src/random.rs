@@ -1,6 +1,6 @@
 //! The one seeded generator of the insertion simulator (tissue and tracker), of the analysis (the
 //! RRT) and of the tests (the reference planner's random scenarios and searches): SplitMix64 from
-//! `rand_xoshiro`, with the few draws they use (`needle_cli::random` re-exports this module).
+//! `rand_xoshiro`, with the few draws they use.
 //! A fixed algorithm rather than a crate's default generator, so a seed gives the same numbers
 //! on every machine and with every version of `rand`.
 

@@ -79,36 +79,46 @@ pub fn example(name: &str) -> PathBuf {
 /// Path of the `needle` binary built with the profile running these tests; built on first use.
 pub fn needle_bin() -> &'static Path {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        // Test executables live in target/<profile-dir>/deps/.
-        let exe = std::env::current_exe().expect("test executable path");
-        let profile_dir = exe
-            .parent()
-            .and_then(Path::parent)
-            .expect("target/<profile>/deps layout")
-            .to_path_buf();
-        let profile = match profile_dir.file_name().and_then(|n| n.to_str()) {
-            Some("debug") => "dev".to_string(),
-            Some(other) => other.to_string(),
-            None => "dev".to_string(),
-        };
-        let status = Command::new(env!("CARGO"))
-            .args([
-                "build",
-                "--quiet",
-                "-p",
-                "needle-cli",
-                "--bin",
-                "needle",
-                "--profile",
-            ])
-            .arg(&profile)
-            .current_dir(workspace())
-            .status()
-            .expect("run cargo build");
-        assert!(status.success(), "building needle failed");
-        profile_dir.join(format!("needle{}", std::env::consts::EXE_SUFFIX))
-    })
+    BIN.get_or_init(|| built("needle-cli", "needle"))
+}
+
+/// Path of the `xtask` binary (`cargo xtask`'s tasks) built with the profile running these
+/// tests; built on first use.
+pub fn xtask_bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| built("xtask", "xtask"))
+}
+
+/// Builds `bin` of the workspace's `package` with the profile running these tests (no package
+/// of the workspace depends on a binary's package, so it is built here) and returns its path.
+fn built(package: &str, bin: &str) -> PathBuf {
+    // Test executables live in target/<profile-dir>/deps/.
+    let exe = std::env::current_exe().expect("test executable path");
+    let profile_dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps layout")
+        .to_path_buf();
+    let profile = match profile_dir.file_name().and_then(|n| n.to_str()) {
+        Some("debug") => "dev".to_string(),
+        Some(other) => other.to_string(),
+        None => "dev".to_string(),
+    };
+    let status = Command::new(env!("CARGO"))
+        .args(["build", "--quiet", "-p", package, "--bin", bin, "--profile"])
+        .arg(&profile)
+        .current_dir(workspace())
+        .status()
+        .expect("run cargo build");
+    assert!(status.success(), "building {bin} failed");
+    profile_dir.join(format!("{bin}{}", std::env::consts::EXE_SUFFIX))
+}
+
+/// A `cargo xtask` task ready for arguments (`xtask_bin`), run from the workspace root.
+pub fn xtask() -> Command {
+    let mut c = Command::new(xtask_bin());
+    c.current_dir(workspace());
+    c
 }
 
 /// A `needle` command ready for arguments, run from the workspace root.

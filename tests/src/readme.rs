@@ -47,6 +47,22 @@ pub fn table_examples(text: &str) -> Vec<(String, String)> {
         .collect()
 }
 
+/// The arguments (after `cargo xtask`) of the README's example of the developer task `task`:
+/// the first `` `cargo xtask TASK ...` `` it shows.
+pub fn xtask_example_args(task: &str) -> Vec<String> {
+    let text = text();
+    let start = format!("`cargo xtask {task}");
+    let at = text
+        .find(&start)
+        .unwrap_or_else(|| panic!("README: no example of `cargo xtask {task}`"));
+    let example = text[at + 1..].split('`').next().unwrap_or_default();
+    example
+        .split_whitespace()
+        .skip(2)
+        .map(str::to_string)
+        .collect()
+}
+
 /// The arguments (after `needle`) of the command table's example of `command`.
 pub fn example_args(command: &str) -> Vec<String> {
     let (_, line) = table_examples(&text())

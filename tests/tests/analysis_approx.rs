@@ -1,11 +1,11 @@
 //! Polygon obstacles become circles that cover them entirely, for every method, on convex and
 //! concave outlines; scenario files carry polygons inline or in a file.
 
-use needle_cli::scenario::approx::{approximate, Method};
-use needle_cli::scenario::geometry::bounding_box;
-use needle_cli::scenario::polygon::Polygon;
-use needle_cli::scenario::{load_scenario_shapes, ScenarioFile};
 use needle_e2e::{needle, needle_json, workspace};
+use needle_scenario::approx::{approximate, Method};
+use needle_scenario::geometry::bounding_box;
+use needle_scenario::polygon::Polygon;
+use needle_scenario::{load_scenario_shapes, ScenarioFile};
 
 fn shapes() -> Vec<(&'static str, Vec<[f64; 2]>)> {
     let star: Vec<[f64; 2]> = (0..10)

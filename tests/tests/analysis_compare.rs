@@ -1,7 +1,7 @@
 //! The RRT baseline and the comparison with the optimiser (the paper's Table 4).
 
-use needle_cli::analysis::pieces::{merge, score, Piece};
-use needle_cli::analysis::rrt;
+use needle_analysis::pieces::{merge, score, Piece};
+use needle_analysis::rrt;
 use needle_e2e::{needle, needle_json};
 use planner_core::model::kinematics::{entry_basis, insertion_frame, V3};
 use planner_core::Scenario;

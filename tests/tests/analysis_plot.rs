@@ -1,7 +1,7 @@
 //! SVG structure of the plots: one circle per obstacle, one path per feasible form, the best one
 //! marked, a legend; two projections in 3-D; polygons drawn with their circles.
 
-use needle_cli::analysis::plot::{scene_svg, PlotPath, Scene};
+use needle_analysis::plot::{scene_svg, PlotPath, Scene};
 use needle_e2e::{example, needle};
 use planner_core::Scenario;
 

@@ -1,7 +1,7 @@
 //! Weight robustness on the paper's scenario (its Figures 6-8 and Table 2), through
 //! `needle sweep --json`, and the parallel sweep giving the same points as a serial one.
 
-use needle_cli::analysis::sweep::{self, Range, Weight};
+use needle_analysis::sweep::{self, Range, Weight};
 use needle_e2e::{needle, needle_json};
 use planner_core::Scenario;
 use serde_json::Value;

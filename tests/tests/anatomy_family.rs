@@ -198,7 +198,7 @@ fn family_scenario(
 /// at the voxel centres) are printed.
 #[test]
 fn the_family_fits_the_devices_sphere_budget() {
-    use needle_cli::scenario::file::ScenarioFile;
+    use needle_scenario::file::ScenarioFile;
     let dir = std::env::temp_dir().join(format!("needle-anat-budget-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (mut counts, mut ratios) = (Vec::new(), Vec::new());

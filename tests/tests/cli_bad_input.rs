@@ -118,3 +118,29 @@ fn counts_of_work_have_an_upper_bound_named_in_the_error() {
         "it must be 1 to 10000",
     );
 }
+
+/// The firmware's measurement is a checkout's developer task now: `needle device-bench` says
+/// where it went, with the arguments given, and exits 1 (help included).
+#[test]
+fn device_bench_points_at_the_xtask() {
+    for args in [
+        &["device-bench", "--check", "--json"][..],
+        &["device-bench", "--help"][..],
+        &["device-bench"][..],
+    ] {
+        let out = needle_e2e::needle()
+            .args(args)
+            .output()
+            .expect("run needle");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "needle {args:?}: {err}");
+        let expected = format!("run `cargo xtask {}`", args.join(" "));
+        assert!(err.contains(&expected), "needle {args:?}: {err}");
+        assert!(out.stdout.is_empty(), "needle {args:?} printed to stdout");
+    }
+    let help = needle_e2e::needle()
+        .arg("--help")
+        .output()
+        .expect("run needle");
+    assert!(!String::from_utf8_lossy(&help.stdout).contains("device-bench"));
+}

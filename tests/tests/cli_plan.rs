@@ -390,11 +390,11 @@ fn a_plan_with_no_feasible_form_prints_every_form_and_no_best_and_exits_1() {
     assert!(err.contains("the target is unreachable"), "{err}");
 }
 
-/// `needle device-bench`'s "space" workload is the 3-D example's scene, planned unbounded at the
+/// `cargo xtask device-bench`'s "space" workload is the 3-D example's scene, planned unbounded at the
 /// full curvature: only those two keys differ from examples/space.toml.
 #[test]
 fn the_device_bench_space_workload_is_the_example_unbounded() {
-    let load = |p: &std::path::Path| needle_cli::scenario::load_scenario(p).unwrap();
+    let load = |p: &std::path::Path| needle_scenario::load_scenario(p).unwrap();
     let example = load(&needle_e2e::example("space"));
     let workload = load(&needle_e2e::workspace().join("devtools/workloads/space.toml"));
     assert_eq!(example.options.curvature_reserve, 0.2);
@@ -402,7 +402,7 @@ fn the_device_bench_space_workload_is_the_example_unbounded() {
     let mut same = example.clone();
     same.options.curvature_reserve = 0.0;
     assert_eq!(same, workload);
-    let e = needle_cli::scenario::execution::load_execution(
+    let e = needle_scenario::execution::load_execution(
         &needle_e2e::workspace().join("devtools/workloads/space.toml"),
     )
     .unwrap();

@@ -388,7 +388,7 @@ fn fixed_heading_examples() -> Vec<(String, Scenario)> {
     let mut list: Vec<(String, Scenario)> = ["paper", "space", "spheres32"]
         .into_iter()
         .map(|name| {
-            let s = needle_cli::scenario::load_scenario(&needle_e2e::example(name))
+            let s = needle_scenario::load_scenario(&needle_e2e::example(name))
                 .expect("example scenario");
             (format!("{name}.toml"), fixed(s))
         })

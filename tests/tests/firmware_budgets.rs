@@ -1,4 +1,4 @@
-//! The firmware's cost, measured by `needle device-bench` in QEMU on both boards, within every
+//! The firmware's cost, measured by `cargo xtask device-bench` in QEMU on both boards, within every
 //! device budget of `needle_devtools::budgets::BUDGETS` (flash, RAM, the paper and space plans'
 //! instructions, a steering reading's), and every device plan equal to the host's.
 
@@ -7,7 +7,7 @@ mod firmware_support;
 use firmware_support::emulator_ready;
 use needle_devtools::budgets::BUDGETS;
 use needle_devtools::device_bench::BoardFigures;
-use needle_e2e::needle;
+use needle_e2e::xtask;
 use serde_json::Value;
 
 #[test]
@@ -16,14 +16,18 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
         return;
     }
     // The README's example, as written: it must check the budgets and print the figures.
-    let args = needle_e2e::readme::example_args("device-bench");
+    let args = needle_e2e::readme::xtask_example_args("device-bench");
+    assert_eq!(args.first().map(String::as_str), Some("device-bench"));
     assert!(args.iter().any(|a| a == "--check") && args.iter().any(|a| a == "--json"));
-    let out = needle()
+    let out = xtask()
         .args(&args)
         .output()
-        .expect("run needle device-bench");
+        .expect("run cargo xtask device-bench");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "needle device-bench failed: {stderr}");
+    assert!(
+        out.status.success(),
+        "cargo xtask device-bench failed: {stderr}"
+    );
     let boards: Value = serde_json::from_slice(&out.stdout).expect("device-bench prints JSON");
     let boards: Vec<BoardFigures> = boards
         .as_array()
@@ -80,9 +84,9 @@ fn firmware_stays_within_its_budgets_on_both_boards() {
 /// curvature reserve, what they tell their steering), so the budget holds for what a lab runs.
 #[test]
 fn the_lab_row_steers_as_the_clinical_examples_say() {
-    use needle_cli::scenario::build::load_scenario;
-    use needle_cli::scenario::execution::load_execution;
     use needle_devtools::replan_bench::{LAB_RESERVE, LAB_STEERING};
+    use needle_scenario::build::load_scenario;
+    use needle_scenario::execution::load_execution;
     for name in ["paper-clinical", "space-clinical"] {
         let file = needle_e2e::example(name);
         let told = load_execution(&file).unwrap().steering;

@@ -121,7 +121,7 @@ fn firmware_in_qemu_plans_like_the_host_and_answers_bad_input() {
         })
     );
     // The same link still plans, and the plan is the host's, bit for bit.
-    let paper = needle_cli::scenario::load_scenario(&example("paper")).unwrap();
+    let paper = needle_scenario::load_scenario(&example("paper")).unwrap();
     let on_device = client
         .plan(&paper, &mut |_| {})
         .expect("plan after bad input");

@@ -11,7 +11,7 @@ use planner_core::{plan, Scenario};
 
 fn fixed(name: &str) -> Scenario {
     let path = workspace().join(format!("tests/data/fixed_heading/{name}.toml"));
-    let mut s = needle_cli::scenario::load_scenario(&path).expect("scenario");
+    let mut s = needle_scenario::load_scenario(&path).expect("scenario");
     // The optimiser at the needle's full curvature, as the f64 reference and the published
     // planners bend it (a file silent on it keeps a steering reserve).
     s.options.curvature_reserve = 0.0;

@@ -9,12 +9,12 @@
 //! cargo test -p needle-e2e --profile ci --test motion_schedules -- --nocapture
 //! ```
 
-use needle_cli::random::{seeded, Draw};
 use needle_e2e::reference::random::random_scenario;
 use needle_motion::check::TrainCheck;
 use needle_motion::moves::Planned;
 use needle_motion::runner::SegmentRun;
 use needle_motion::{Axis, Controller, Inputs, MotionConfig, Move, Rates, SafetyConfig, State};
+use needle_sim::random::{seeded, Draw};
 use planner_core::execute::schedule::{continuation_steps, schedule, Op, Step};
 use planner_core::model::scenario::Driver;
 use planner_core::{plan, Scenario, SegmentKind, SegmentPlan};

@@ -4,9 +4,9 @@
 //! planted scenarios nobody tuned on (seeds 8001..8008; the campaign of docs/execution.md, "Safe
 //! by default", runs 500 such files).
 
-use needle_cli::scenario::planted::planted_scenario;
-use needle_cli::scenario::write::scenario_toml;
 use needle_e2e::{needle, needle_json, TempScenario};
+use needle_scenario::planted::planted_scenario;
+use needle_scenario::write::scenario_toml;
 
 /// The generated scenario as a plain file: the writer's explicit opt-outs and reserve removed.
 fn plain(seed: u64) -> TempScenario {

@@ -1,9 +1,9 @@
 //! Hundreds of spheres: the host holds 512 and plans them, refuses 513 with the planner's typed
 //! error, and `planner.risk_within_mm` is checked like the other planner keys.
 
-use needle_cli::scale::near_and_far;
-use needle_cli::scenario::write::scenario_toml;
+use needle_analysis::scale::near_and_far;
 use needle_e2e::{example, needle_fails_with, needle_json, TempScenario};
+use needle_scenario::write::scenario_toml;
 
 fn with_512() -> String {
     let s = near_and_far(5, planner_core::HOST_MAX_OBSTACLES, 32).all;

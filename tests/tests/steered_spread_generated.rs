@@ -1,14 +1,14 @@
 //! The closed loop's spread predicted before the insertion (`planner_core::steer::apriori`)
 //! against the steered simulation on generated scenarios nobody tuned on
-//! (`needle_cli::scenario::unseen`, seeds 101–110, the plans `needle benchmark` steers: a
+//! (`needle_scenario::unseen`, seeds 101–110, the plans `needle benchmark` steers: a
 //! curvature reserve of 0.2): the RMS distance of the steered path from the plan, predicted and
 //! simulated, per scenario and over them. A first-order spread describes the runs that keep the
 //! planned way around the obstacles; a run the controller takes round another way (a replan may
 //! change the form) is counted apart, and must stay rare.
 
-use needle_cli::scenario::unseen::unseen_scenario;
-use needle_cli::simulate::prepare_keeping_reserve;
+use needle_scenario::unseen::unseen_scenario;
 use needle_sim::{closed_loop, in_process, Perturbation, Planned, TrackerFaults};
+use needle_simulate::prepare_keeping_reserve;
 use planner_core::model::kinematics::V3;
 use planner_core::steer::apriori::propagate_steered;
 use planner_core::steer::SteerConfig;

@@ -5,10 +5,10 @@
 
 mod wire_support;
 
-use needle_cli::device::verify::verified_chance;
-use needle_cli::scenario::{load_scenario, Execution, ExecutionMode};
+use needle_device::verify::verified_chance;
 use needle_e2e::{example, needle_stdout};
 use needle_link::{Client, ClientConfig};
+use needle_scenario::{load_scenario, Execution, ExecutionMode};
 use planner_core::chance::plan_within_risk_as;
 use planner_core::device::plan_as_device;
 use planner_core::execute::perturbation::Perturbation;

@@ -145,7 +145,7 @@ fn wire_bytes_for_the_paper_scenario() {
     // 32 KiB at the device's capacity of 256 spheres (30.1 KiB on the board, leaving its stack
     // room within the 60 KiB RAM budget); the host's layout holds every scenario at the host's
     // (each obstacle of it under 90 bytes: planner-core's device::tests), and the board's own
-    // RAM is measured by `needle device-bench`.
+    // RAM is measured by `cargo xtask device-bench`.
     let extra = 90 * (planner_core::MAX_OBSTACLES - planner_core::DEVICE_MAX_OBSTACLES);
     assert!(
         ram < 32 * 1024 + extra,

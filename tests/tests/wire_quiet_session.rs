@@ -1,4 +1,4 @@
-//! The client as `needle device-bench` drives it: ids from 1, a hello repeated until the device
+//! The client as `cargo xtask device-bench` drives it: ids from 1, a hello repeated until the device
 //! listens, and nothing sent while the device plans (a status query would be counted in the
 //! firmware's instructions per plan).
 
@@ -58,7 +58,7 @@ fn a_quiet_session_asks_nothing_while_planning_and_numbers_from_one() {
     client
         .hello_within(Duration::from_secs(1), Duration::from_millis(100))
         .expect("hello");
-    let paper = needle_cli::scenario::load_scenario(&example("paper")).expect("paper.toml");
+    let paper = needle_scenario::load_scenario(&example("paper")).expect("paper.toml");
     let on_device = client.plan(&paper, &mut |_| {}).expect("plan");
     assert_eq!(
         postcard::to_stdvec(&on_device).unwrap(),
@@ -188,7 +188,7 @@ impl Transport for Mute {
 
 #[test]
 fn a_quiet_session_gives_up_on_a_silent_plan_without_asking_for_its_status() {
-    let paper = needle_cli::scenario::load_scenario(&example("paper")).expect("paper.toml");
+    let paper = needle_scenario::load_scenario(&example("paper")).expect("paper.toml");
     let limit = Duration::from_secs(600);
     let mut quiet = Client::new(Mute::new(), LINK).with_quiet_planning(limit);
     match quiet.plan(&paper, &mut |_| {}) {

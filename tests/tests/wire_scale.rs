@@ -6,11 +6,11 @@
 
 mod wire_support;
 
-use needle_cli::scale::near_and_far;
-use needle_cli::scenario::load_scenario;
-use needle_cli::scenario::write::scenario_toml;
+use needle_analysis::scale::near_and_far;
 use needle_e2e::{example, TempScenario};
 use needle_link::{Client, ClientConfig};
+use needle_scenario::load_scenario;
+use needle_scenario::write::scenario_toml;
 use planner_core::device::plan_as_device;
 use planner_core::{PlanError, DEVICE_MAX_OBSTACLES, HOST_MAX_OBSTACLES};
 use wire_support::{run_needle, Sim, SimProcess};

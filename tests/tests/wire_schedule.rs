@@ -6,7 +6,7 @@
 mod wire_support;
 
 use hil_sim::InProcess;
-use needle_cli::device::verify::verified_schedule;
+use needle_device::verify::verified_schedule;
 use needle_e2e::example;
 use needle_link::{Client, ClientConfig};
 use planner_core::execute::nominal::check;
@@ -15,7 +15,7 @@ use planner_core::{plan_scheduled, Form, FormSet, Scenario};
 use wire_support::Sim;
 
 fn load(name: &str) -> Scenario {
-    needle_cli::scenario::load_scenario(&example(name)).expect("example scenario")
+    needle_scenario::load_scenario(&example(name)).expect("example scenario")
 }
 
 /// Plans on the device and checks its schedule against the host's, bit for bit.

@@ -6,7 +6,7 @@
 use crate::link::Link;
 use core::ptr::{read_volatile, write_volatile};
 
-/// Board name, as `needle device-bench` reports it.
+/// Board name, as `cargo xtask device-bench` reports it.
 pub const NAME: &str = "mps2-an386";
 
 const UART0: usize = 0x4000_4000;

@@ -6,7 +6,7 @@
 //!   then one named `NeedleTipToReference` (the tip frame: e2 the bevel, e3 the heading); with a
 //!   stream rate it also repeats the newest pose at that rate.
 //! - The robot is an OpenIGTLink server speaking the robot mapping of
-//!   [`needle_cli::lab::robot`]: it takes a step list, executes it piece by piece exactly as
+//!   [`needle_lab::robot`]: it takes a step list, executes it piece by piece exactly as
 //!   [`World::execute`] does, reports each piece's progress and waits for the host's word (go
 //!   on, a new step list replacing the rest from that piece, hold, or stop). One robot connection
 //!   is one insertion; the k-th (from 0) runs in the world of seed `seed + k`.
@@ -26,10 +26,10 @@ mod robot;
 pub mod tracker;
 
 use anyhow::{anyhow, bail, Context, Result};
-use needle_cli::lab::robot::{RobotCommand, RobotReport};
-use needle_cli::lab::wire::now;
-use needle_cli::simulate::setup::Setup;
+use needle_lab::robot::{RobotCommand, RobotReport};
+use needle_lab::wire::now;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
+use needle_simulate::setup::Setup;
 use planner_core::execute::schedule::{Op, Posture, Step};
 use robot::{Robot, Word};
 use serde::Serialize;

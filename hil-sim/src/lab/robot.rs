@@ -2,9 +2,9 @@
 //! own thread), and its reports, each stamped.
 
 use anyhow::Result;
-use needle_cli::lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
-use needle_cli::lab::wire::{now, read_frames, send_with};
 use needle_igtl::{FrameInfo, Message, StringMessage, Timestamp};
+use needle_lab::robot::{RobotCommand, RobotReport, COMMAND_DEVICE, REPORT_DEVICE};
+use needle_lab::wire::{now, read_frames, send_with};
 use planner_core::execute::schedule::Step;
 use std::net::TcpStream;
 use std::sync::mpsc::{channel, Receiver};

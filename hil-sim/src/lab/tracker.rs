@@ -17,11 +17,11 @@
 
 use super::Flag;
 use anyhow::{anyhow, bail, Result};
-use needle_cli::lab::wire::{inverse, now, registered_point, registered_pose, tip_transform};
-use needle_cli::lab::wire::{TARGET_DEVICE, TIP_DEVICE};
 use needle_igtl::crc::crc64;
 use needle_igtl::{encode_frame, Extended, FrameInfo, Message, Status, StatusCode};
 use needle_igtl::{TextEncoding, Timestamp, Transform, HEADER_SIZE};
+use needle_lab::wire::{inverse, now, registered_point, registered_pose, tip_transform};
+use needle_lab::wire::{TARGET_DEVICE, TIP_DEVICE};
 use needle_sim::Measurement;
 use planner_core::steer::Pose;
 use std::collections::VecDeque;

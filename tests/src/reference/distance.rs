@@ -39,7 +39,7 @@ pub fn to_arc(f: &Frame, len: f64, rho: f64, c: V3) -> f64 {
 mod tests {
     use super::*;
     use crate::reference::frame::{entry_basis, insertion};
-    use needle_cli::random::{seeded, Draw};
+    use needle_sim::random::{seeded, Draw};
 
     #[test]
     fn exact_distances_match_dense_sampling() {

@@ -1,7 +1,7 @@
 //! Seeded random scenarios for the optimality comparison: 3 to 8 obstacles between the entry and
 //! the target, none containing either (with a margin), in the y-z plane or in space.
 
-use needle_cli::random::{seeded, Draw};
+use needle_sim::random::{seeded, Draw};
 use planner_core::model::scenario::{Obstacle, Workspace};
 use planner_core::Scenario;
 

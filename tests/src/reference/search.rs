@@ -5,7 +5,7 @@
 use super::problem::{score, Cand, Problem, INFEASIBLE};
 use super::variant::{Var, Variant};
 use core::f64::consts::PI;
-use needle_cli::random::{seeded, Draw};
+use needle_sim::random::{seeded, Draw};
 
 /// How hard to search; 1.0 is the default suite's effort.
 #[derive(Clone, Copy, Debug)]

@@ -5,7 +5,7 @@ use super::frame::V3;
 use super::problem::{Cand, Problem};
 use super::random::random_scenario;
 use super::*;
-use needle_cli::random::{seeded, Draw};
+use needle_sim::random::{seeded, Draw};
 use planner_core::check::check;
 use planner_core::model::form::catalogue;
 use planner_core::model::scenario::Workspace;

@@ -106,7 +106,7 @@ fn last_arc(l: &Limits, h: &Frame) -> Option<SampledSegment> {
 mod tests {
     use super::*;
     use crate::reference::frame::V3;
-    use needle_cli::random::{seeded, Draw};
+    use needle_sim::random::{seeded, Draw};
 
     #[test]
     fn two_arcs_end_on_the_target() {

@@ -139,7 +139,7 @@ fn arc_then_line(l: &Limits, g: &Frame) -> Option<(f64, f64)> {
 mod tests {
     use super::*;
     use crate::reference::frame::V3;
-    use needle_cli::random::{seeded, Draw};
+    use needle_sim::random::{seeded, Draw};
     use planner_core::Scenario;
 
     fn open_limits(plane: bool) -> Limits {

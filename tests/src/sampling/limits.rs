@@ -3,7 +3,7 @@
 
 use crate::reference::distance::{to_arc, to_line};
 use crate::reference::frame::{entry_basis, heading_angles, insertion, Frame, V3};
-use needle_cli::random::Draw;
+use needle_sim::random::Draw;
 use planner_core::model::scenario::Workspace;
 use planner_core::{Scenario, SegmentKind};
 

@@ -11,7 +11,7 @@ use super::connect::connect;
 use super::limits::Limits;
 use super::route::{measure, normalize, tail_of};
 use super::SampledSegment;
-use needle_cli::random::{seeded, Draw};
+use needle_sim::random::{seeded, Draw};
 use planner_core::SegmentKind;
 
 /// First step of an angle (radians) and of a length (mm).

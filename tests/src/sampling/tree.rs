@@ -8,7 +8,7 @@ use super::route::Tail;
 use super::SampledSegment;
 use crate::reference::frame::{Frame, V3};
 use core::f64::consts::PI;
-use needle_cli::random::{seeded, Draw};
+use needle_sim::random::{seeded, Draw};
 use planner_core::SegmentKind;
 
 /// Shortest and longest edge (mm), drawn log-uniformly: short edges thread between spheres a

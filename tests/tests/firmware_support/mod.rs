@@ -38,7 +38,7 @@ pub fn emulator_ready(test: &str) -> bool {
     false
 }
 
-/// Builds the release firmware for `board` (its own target dir, as `needle device-bench` does)
+/// Builds the release firmware for `board` (its own target dir, as `cargo xtask device-bench` does)
 /// and returns the image.
 pub fn build_firmware(board: &str, features: &str) -> PathBuf {
     match artifacts::build_firmware(&workspace(), board, features) {

@@ -13,7 +13,7 @@ mod watchdog;
 
 use stm32f4::stm32f405 as pac;
 
-/// Board name, as `needle device-bench` reports it.
+/// Board name, as `cargo xtask device-bench` reports it.
 pub const NAME: &str = "stm32f4";
 
 /// The board's link: USART1, or the USB port with the `usb` feature.

@@ -1,0 +1,335 @@
+//! `needle steer`: plan a scenario as `needle simulate --closed-loop` does, then steer the
+//! insertion in a lab: tracker poses over OpenIGTLink in, robot commands out, the in-process
+//! controller in between, the interlocks of [`super::session`], an insertion log.
+
+use super::log::InsertionLog;
+use super::report::{self, Unreachable};
+use super::robot::step_list;
+use super::session::INTERRUPTED;
+use super::session::{Event, Inputs, LabController, Session, SessionConfig, SessionOutcome};
+use super::slicer::Slicer;
+use super::tracker::{TrackerNames, TrackerState};
+use super::wire::{load_registration, read_frames_counting, Arrival, TARGET_DEVICE, TIP_DEVICE};
+use anyhow::{anyhow, Result};
+use needle_device::commands::LinkArgs;
+use needle_sim::in_process;
+use needle_simulate::closed_loop_setup;
+use needle_simulate::device::{device_planning, start_steering, LinkController};
+use serde_json::json;
+use std::net::{IpAddr, Ipv4Addr, TcpStream, ToSocketAddrs};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// `needle steer`
+#[derive(clap::Args, Clone, Debug)]
+pub struct SteerArgs {
+    /// Scenario file (TOML): planned as `needle simulate --closed-loop` plans it.
+    pub file: PathBuf,
+    /// The tracker's OpenIGTLink server (PLUS, or `hil-sim --lab`), HOST:PORT.
+    #[arg(long)]
+    pub tracker: String,
+    /// Device name of the tip's TRANSFORM.
+    #[arg(long, default_value = TIP_DEVICE)]
+    pub tip_name: String,
+    /// Device name of the target's TRANSFORM.
+    #[arg(long, default_value = TARGET_DEVICE)]
+    pub target_name: String,
+    /// The registration: a JSON file with `rotation` (row-major) and `translation_mm`, taking a
+    /// point of the tracker's reference frame to the scenario's (default: the same frame).
+    #[arg(long, conflicts_with = "registration_name")]
+    pub registration: Option<PathBuf>,
+    /// The registration from the tracker stream: the device name of a TRANSFORM taking a point
+    /// of the tracker's reference frame to the scenario's (as the file's), e.g.
+    /// ReferenceToScenario. Steering waits for the first one; a later different one is refused.
+    #[arg(long, value_name = "NAME")]
+    pub registration_name: Option<String>,
+    /// With --registration-name: how long to wait for it before giving up ("no_registration").
+    #[arg(long, requires = "registration_name", default_value_t = 5000)]
+    pub registration_timeout_ms: u64,
+    /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
+    #[arg(long)]
+    pub robot: String,
+    /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
+    #[arg(long, conflicts_with = "serve_slicer")]
+    pub slicer: Option<String>,
+    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of 127.0.0.1 (or of
+    /// --serve-slicer-bind): Slicer's OpenIGTLinkIF connector of type Client connects to it, as
+    /// to PLUS; 0 picks a free port, printed on stderr. Viewers may join and leave during the
+    /// insertion. Anyone who can connect sees the plan and the insertion (no authentication).
+    #[arg(long, value_name = "PORT")]
+    pub serve_slicer: Option<u16>,
+    /// With --serve-slicer: the address to serve on (default 127.0.0.1, this machine only;
+    /// 0.0.0.0 every interface, so any host that reaches this one can watch).
+    #[arg(long, value_name = "ADDR", requires = "serve_slicer",
+          default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
+    pub serve_slicer_bind: IpAddr,
+    /// With --serve-slicer: wait up to this many seconds for the first viewer before steering.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        requires = "serve_slicer",
+        default_value_t = 0.0
+    )]
+    pub wait_for_slicer: f64,
+    /// Write the insertion log here (JSON lines: the plan, each reading, each command, the stop).
+    #[arg(long)]
+    pub log: Option<PathBuf>,
+    /// Seed of the insertion's world, for the record (the world is the lab's, not this
+    /// program's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Degrees of freedom of the tip sensor: 6 (the tip TRANSFORM's roll is the bevel's) or 5
+    /// (a 5-DOF coil, as the ones that fit a needle: the TRANSFORM's roll means nothing and is
+    /// left out; the controller infers the roll from how the path bends).
+    #[arg(long, value_name = "N", default_value_t = 6,
+          value_parser = clap::value_parser!(u8).range(5..=6))]
+    pub tracker_dof: u8,
+    /// Tell the controller one thing, KEY=VALUE (as `needle simulate --steer`).
+    #[arg(long = "steer", value_name = "KEY=VALUE")]
+    pub steer: Vec<String>,
+    /// No tip pose for this long: the robot is told hold, then stop ("tracking_lost").
+    #[arg(long, default_value_t = 500)]
+    pub tracking_timeout_ms: u64,
+    /// No robot report this long after a command: the robot is told stop
+    /// ("robot_not_answering").
+    #[arg(long, default_value_t = 2000)]
+    pub robot_timeout_ms: u64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Steer on the device at this TCP address (hil-sim --tcp, QEMU) instead of in-process.
+    #[arg(long, conflicts_with = "port")]
+    pub tcp: Option<String>,
+    /// Steer on the device at this serial port instead of in-process.
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Baud rate of --port.
+    #[arg(long, default_value_t = 115_200)]
+    pub baud: u32,
+    /// Seconds of silence allowed per exchange with the device.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
+}
+
+impl SteerArgs {
+    /// The device to steer on (`--tcp` or `--port`), if any.
+    pub fn link(&self) -> Option<LinkArgs> {
+        LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)
+    }
+}
+
+/// Connects to the tracker or the robot; failing, the link is broken before anything moved.
+fn connect(what: &'static str, address: &str) -> Result<TcpStream> {
+    let unreachable = |message: String| Unreachable {
+        reason: if what == "tracker" {
+            "tracker_unreachable"
+        } else {
+            "robot_unreachable"
+        },
+        message,
+    };
+    let addr = address
+        .to_socket_addrs()
+        .map_err(|e| unreachable(format!("{what} address {address}: {e}")))?
+        .next()
+        .ok_or_else(|| unreachable(format!("{what} address {address} resolves to nothing")))?;
+    let s = TcpStream::connect_timeout(&addr, Duration::from_secs(5))
+        .map_err(|e| unreachable(format!("cannot reach the {what} at {address}: {e}")))?;
+    s.set_nodelay(true)?;
+    Ok(s)
+}
+
+/// Events waiting for the session at most: the robot's reader waits when they are this many
+/// (the robot is lock-step: a few frames a piece), the tracker's sends at most one notice.
+const EVENTS_WAITING: usize = 64;
+
+/// Reads the robot's frames into `tx`.
+fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<Arc<AtomicU64>> {
+    let (frames, ended) = (tx.clone(), tx.clone());
+    let bytes = Arc::new(AtomicU64::new(0));
+    read_frames_counting(
+        stream.try_clone()?,
+        bytes.clone(),
+        move |a| frames.send(Event::Robot(Box::new(a))).is_ok(),
+        move || {
+            let _ = ended.send(Event::RobotClosed);
+        },
+    );
+    Ok(bytes)
+}
+
+/// Reads the tracker's frames into a shared [`TrackerState`] (bounded whatever the rate), and
+/// tells the session with a notice when none is waiting already.
+fn forward_tracker(
+    stream: &TcpStream,
+    tx: &SyncSender<Event>,
+    names: TrackerNames,
+) -> Result<(Arc<Mutex<TrackerState>>, Arc<AtomicU64>)> {
+    let state = Arc::new(Mutex::new(TrackerState::default()));
+    let (shared, notices, ended) = (state.clone(), tx.clone(), tx.clone());
+    let bytes = Arc::new(AtomicU64::new(0));
+    read_frames_counting(
+        stream.try_clone()?,
+        bytes.clone(),
+        move |a: Arrival| {
+            let notify = {
+                let mut s = shared.lock().unwrap_or_else(|p| p.into_inner());
+                s.on_frame(&names, a);
+                !std::mem::replace(&mut s.notice_pending, true)
+            };
+            // Full: the session has news waiting anyway; it reads the state, not the notice.
+            !notify
+                || !matches!(
+                    notices.try_send(Event::Tracker),
+                    Err(TrySendError::Disconnected(_))
+                )
+        },
+        move || {
+            let _ = ended.send(Event::TrackerClosed);
+        },
+    );
+    Ok((state, bytes))
+}
+
+/// A device name must fit the header's 20 bytes, or no frame can ever carry it.
+fn check_name(flag: &str, name: &str) -> Result<()> {
+    anyhow::ensure!(
+        !name.is_empty() && name.len() <= needle_igtl::header::DEVICE_NAME_SIZE,
+        "{flag} `{name}`: an OpenIGTLink device name has 1 to 20 bytes, this one {}",
+        name.len()
+    );
+    Ok(())
+}
+
+/// The insertion without a usable pose after which a lab insertion stops (mm), unless the
+/// scenario's `[steering]` or `--steer` says otherwise: a robot pushing a needle blind is the
+/// lab's interlock, tighter than the simulator's controller default (which bridges tracker
+/// dropouts of up to 10 mm).
+pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
+
+/// The flags of `needle simulate --closed-loop` that plan and set up the insertion as
+/// `needle steer` is told: the `--steer` keys (the lab's tracking interlock unless the scenario
+/// or a key sets it), and the device, for the same refusal (a plan bound the device cannot
+/// plan).
+fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
+    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+    let key = "tracking_lost_after_mm";
+    let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
+    let told_in_file = needle_scenario::ScenarioFile::load(&a.file)?
+        .steering
+        .is_some_and(|t| t.contains_key(key));
+    if !told_here && !told_in_file {
+        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
+    }
+    if let Some(t) = &a.tcp {
+        flags.push(format!("--tcp={t}"));
+    }
+    if let Some(p) = &a.port {
+        flags.push(format!("--port={p}"));
+    }
+    Ok(flags)
+}
+
+/// Runs `needle steer`: an insertion that does not reach the target is an error carrying its
+/// exit status ([`super::outcome::exit_code`]); with `--json` every ending prints one object.
+pub fn run_steer(a: &SteerArgs) -> Result<()> {
+    let mut form = None;
+    match steer(a, &mut form) {
+        Ok(outcome) => report::print(a, form.unwrap_or_default(), outcome),
+        Err(e) => report::failed(a, form, e),
+    }
+}
+
+/// Plans, connects and steers; `form` is the form steered once it is known.
+fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutcome> {
+    check_name("--tip-name", &a.tip_name)?;
+    check_name("--target-name", &a.target_name)?;
+    if let Some(name) = &a.registration_name {
+        check_name("--registration-name", name)?;
+    }
+    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_flags(a)?)?;
+    let registration = a
+        .registration
+        .as_deref()
+        .map(load_registration)
+        .transpose()?;
+    let schedule = &setup.prepared.schedule;
+    let mut in_process_controller;
+    let mut device;
+    let mut on_device;
+    let controller: &mut dyn LabController = match a.link() {
+        None => {
+            in_process_controller = in_process(&setup.scenario, schedule, &setup.config)
+                .map_err(|e| anyhow!("steering cannot start: {e}"))?;
+            &mut in_process_controller
+        }
+        Some(link) => {
+            device = device_planning(&setup, &link)?;
+            start_steering(&mut device, &setup)?;
+            on_device = LinkController(&mut device);
+            &mut on_device
+        }
+    };
+    let mut log = InsertionLog::create(a.log.as_deref())?;
+    let form = setup.prepared.outcome.form.to_string();
+    *form_steered = Some(form.clone());
+    let steps: Vec<String> = step_list(&schedule.steps)
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    log.write(
+        "plan",
+        json!({ "file": a.file, "form": form, "posture": schedule.posture, "steps": steps }),
+    );
+    let mut slicer = match a.serve_slicer {
+        Some(port) => {
+            let wait = Duration::try_from_secs_f64(a.wait_for_slicer)
+                .map_err(|_| anyhow::anyhow!("--wait-for-slicer must be 0 or more seconds"))?;
+            Slicer::serve((a.serve_slicer_bind, port), wait)?
+        }
+        None => Slicer::connect(a.slicer.as_deref())?,
+    };
+    slicer.plan(&setup.scenario, schedule);
+    let tracker = connect("tracker", &a.tracker)?;
+    let robot = connect("robot", &a.robot)?;
+    let (tx, rx) = sync_channel(EVENTS_WAITING);
+    let names = TrackerNames {
+        tip: a.tip_name.clone(),
+        target: a.target_name.clone(),
+        registration: a.registration_name.clone(),
+    };
+    let (tracker_state, tracker_bytes) = forward_tracker(&tracker, &tx, names)?;
+    let robot_bytes = forward_robot(&robot, &tx)?;
+    drop(tx);
+    // A second handler cannot be set (a test calling twice): the first one still flags.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    let config = SessionConfig {
+        tracking_timeout: Duration::from_millis(a.tracking_timeout_ms),
+        robot_timeout: Duration::from_millis(a.robot_timeout_ms),
+        arc_radius_mm: setup.scenario.needle.curvature_radius,
+        registration,
+        registration_name: a.registration_name.clone(),
+        registration_timeout: Duration::from_millis(a.registration_timeout_ms),
+        roll_measured: a.tracker_dof == 6,
+        posture: schedule.posture,
+    };
+    let inputs = Inputs {
+        events: rx,
+        tracker: tracker_state,
+        tracker_bytes,
+        robot_bytes,
+    };
+    let outcome =
+        Session::new(config, controller, robot, &mut log, &mut slicer, inputs).run(&schedule.steps);
+    let _ = tracker.shutdown(std::net::Shutdown::Both);
+    if let Some(e) = &slicer.failure {
+        eprintln!("needle steer: Slicer was not shown everything: {e}");
+    }
+    if let Some(e) = &log.failure {
+        eprintln!("needle steer: the insertion log is incomplete: {e}");
+    }
+    Ok(outcome)
+}
