@@ -17,6 +17,7 @@ compile_error!(
     "choose a board feature: `--features mps2-an386`, `--features stm32f4` or `--features usb`"
 );
 
+mod axes;
 mod board;
 mod link;
 mod marker;
@@ -59,5 +60,6 @@ fn main() -> ! {
     );
     let mut board = board::init();
     SERVICE.set_identity(IDENTITY);
-    pump::run(&mut board, SERVICE, INBOX, OUTBOX)
+    let mut axes = board::axes(SERVICE);
+    pump::run(&mut board, &mut axes, SERVICE, INBOX, OUTBOX)
 }

@@ -10,6 +10,7 @@
 //! steering reading is a region reported on its own: the instructions of one reading. Reply bytes are staged in
 //! [`Outbox`] and sent to the link outside the regions.
 
+use crate::axes::Axes;
 use crate::link::Link;
 use crate::marker;
 use heapless::Vec;
@@ -75,9 +76,10 @@ impl Outbox {
     }
 }
 
-/// Serves requests forever.
+/// Serves requests forever; the axes run between polls, outside the measured regions.
 pub fn run(
     link: &mut impl Link,
+    axes: &mut impl Axes,
     service: &mut DeviceService,
     inbox: &mut Inbox,
     outbox: &mut Outbox,
@@ -101,5 +103,6 @@ pub fn run(
             marker::report();
         }
         outbox.flush(link);
+        axes.advance(service);
     }
 }

@@ -9,7 +9,7 @@
 //! The modules, by concern: [`transport`] moves bytes with timeouts; `client` holds the session
 //! state and turns bytes into frames; `exchange` sends one request until it is answered (the
 //! retry policy); `hello` (greeting, ping, cancel), `upload`, `plan` (waiting while the device
-//! plans) and `fetch` are the requests built on it. [`LinkError`] says why a session failed.
+//! plans), `fetch` and `motion` (the board's axes) are the requests built on it. [`LinkError`] says why a session failed.
 
 #![deny(missing_docs)]
 
@@ -18,6 +18,7 @@ mod error;
 mod exchange;
 mod fetch;
 mod hello;
+mod motion;
 mod plan;
 mod steer;
 pub mod transport;

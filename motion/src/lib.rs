@@ -10,7 +10,8 @@
 //!   both axes on the same profile shape; constant work per step, for the timer interrupt.
 //! - [`safety`] and [`Controller`]: disarmed at power-up, homing against a switch, e-stop,
 //!   limit switches, following error and the host link's watchdog; faults latch.
-//! - [`plant`]: simulated axes (inertia, missed steps, end switches, encoders).
+//! - [`plant`]: simulated axes (inertia, missed steps, end switches, encoders); [`bench`]: the
+//!   bench driver with them, as hil-sim and the QEMU board run it.
 //!
 //! The same moves give the same step train, bit for bit: the profile uses only correctly
 //! rounded `f32` operations and integer ticks.
@@ -54,6 +55,7 @@
 // Two axes indexed alike in several arrays read best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bench;
 pub mod check;
 pub mod config;
 mod controller;

@@ -176,6 +176,43 @@ fn an_estop_mid_insertion_is_reported_with_both_positions_and_survives_a_reset()
 }
 
 #[test]
+fn an_estop_over_the_link_stops_both_axes_at_once_and_latches_until_cleared() {
+    let mut b = Board::new();
+    ask(&mut b.dev, 1, MotionRequest::Arm);
+    ask(&mut b.dev, 2, MotionRequest::Home);
+    b.run(usize::MAX);
+    let steps = [planner_core::execute::schedule::Step {
+        op: planner_core::execute::schedule::Op::InsertSpin {
+            length_mm: 20.0,
+            turns: 16,
+        },
+        duration_s: 8.0,
+    }];
+    let job = MotionRequest::Move {
+        driver: Scenario::paper().driver,
+        needle_mm: 150.0,
+        steps: steps.iter().copied().collect(),
+    };
+    status(ask(&mut b.dev, 3, job));
+    b.run(5000);
+    let s = status(ask(&mut b.dev, 4, MotionRequest::EStop));
+    let f = s.last_fault.unwrap();
+    assert_eq!((s.state, f.cause), (State::Faulted, FaultCause::EStop));
+    assert!(f.position[0] > 0.0 && f.position[1] != 0.0, "{f:?}");
+    // Not one more step on either axis.
+    assert!(b.dev.motion().unwrap().next_step().is_none());
+    // A second e-stop changes nothing; a reset or an arm does not end it.
+    let again = status(ask(&mut b.dev, 5, MotionRequest::EStop));
+    assert_eq!(again.last_fault, Some(f));
+    let latched = ReplyBody::Fault(Fault::Motion(MotionError::Faulted(FaultCause::EStop)));
+    assert_eq!(ask(&mut b.dev, 6, MotionRequest::Reset), latched);
+    assert_eq!(ask(&mut b.dev, 7, MotionRequest::Arm), latched);
+    // Nothing holds the e-stop input: clearing ends it, disarmed and unhomed.
+    let s = status(ask(&mut b.dev, 8, MotionRequest::ClearFault));
+    assert_eq!((s.state, s.homed), (State::Disarmed, false));
+}
+
+#[test]
 fn hold_resume_stop_and_a_soft_limit_over_the_link() {
     let mut b = Board::new();
     ask(&mut b.dev, 1, MotionRequest::Arm);

@@ -1,11 +1,19 @@
-//! Boards: each brings up its clocks and link and says how to stop after a fault.
+//! Boards: each brings up its clocks, its link and its axes, and says how to stop after a fault.
 
 #[cfg(feature = "mps2-an386")]
 mod mps2_an386;
 #[cfg(feature = "mps2-an386")]
-pub use mps2_an386::{fatal_stop, init, panic_link, NAME};
+mod mps2_an386_axes;
+#[cfg(feature = "mps2-an386")]
+pub use mps2_an386::{axes, fatal_stop, init, panic_link, NAME};
 
 #[cfg(feature = "stm32f4")]
 mod stm32f4;
 #[cfg(feature = "stm32f4")]
 pub use stm32f4::{fatal_stop, init, panic_link, NAME};
+
+/// The STM32F4 board drives no axes yet: its step timers and switch inputs are still to come.
+#[cfg(feature = "stm32f4")]
+pub fn axes(_service: &mut planner_core::device::DeviceService) -> crate::axes::NoAxes {
+    crate::axes::NoAxes
+}

@@ -1,8 +1,10 @@
 //! QEMU's MPS2 AN386: a Cortex-M4 with FPU, the link on CMSDK APB UART0 (QEMU's serial0).
 //!
 //! The UART is polled: QEMU holds incoming bytes until the guest has read the previous one, so
-//! nothing is lost while a form is being planned. Logs go out through semihosting (defmt).
+//! nothing is lost while a form is being planned. Logs go out through semihosting (defmt). The
+//! board drives simulated axes (`mps2_an386_axes`).
 
+use super::mps2_an386_axes::SimulatedAxes;
 use crate::link::Link;
 use core::ptr::{read_volatile, write_volatile};
 
@@ -42,6 +44,13 @@ pub fn init() -> Uart0 {
     reg_write(BAUDDIV, BAUD_DIVISOR);
     reg_write(CTRL, CTRL_TX_RX_ENABLE);
     Uart0 { _private: () }
+}
+
+/// The simulated axes, on SysTick's clock (`None` if the core peripherals were already taken
+/// or the motion set-up was refused: motion requests are then answered `NoMotion`).
+pub fn axes(service: &mut planner_core::device::DeviceService) -> Option<SimulatedAxes> {
+    let core = cortex_m::Peripherals::take()?;
+    SimulatedAxes::attach(service, core.SYST)
 }
 
 /// The UART for the panic handler's last words (the main loop is gone by then).

@@ -96,5 +96,9 @@ fn apply(c: &mut Controller, req: &MotionRequest) -> Result<(), MotionError> {
             c.clear_fault(&inputs)
         }
         MotionRequest::Reset => c.reset(),
+        MotionRequest::EStop => {
+            c.estop();
+            Ok(())
+        }
     }
 }

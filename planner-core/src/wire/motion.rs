@@ -38,6 +38,9 @@ pub enum MotionRequest {
     ClearFault,
     /// Back to the power-up state (a latched fault stays).
     Reset,
+    /// The e-stop, sent over the link: both axes stop at once, in any state, and the fault
+    /// latches (cause `EStop`) until cleared, as the board's e-stop input does.
+    EStop,
 }
 
 /// A fault as reported: its cause and where both axes were.

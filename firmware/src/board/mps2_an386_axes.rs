@@ -1,0 +1,70 @@
+//! The QEMU board's axes: the bench driver's motion core (`needle_motion::bench`) stepping
+//! simulated stages, with simulated time taken from SysTick, which QEMU runs on the host's
+//! clock (at most `MAX_TURN_MS` a loop turn). The stages run in the main loop between polls, so they stand still while the service
+//! plans or steers (a real board steps them from a timer interrupt); the step train does not
+//! depend on when they run, only how far the clock has gone, so the axes end where the host's
+//! simulation of the same moves (`hil-sim --axes`) ends.
+
+use crate::axes::Axes;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use needle_motion::bench::{bench_config, bench_plant, run_for};
+use needle_motion::plant::Plant;
+use needle_motion::SafetyConfig;
+use planner_core::device::DeviceService;
+
+/// The processor clock of QEMU's MPS2 boards, which SysTick counts.
+const SYSCLK_HZ: u32 = 25_000_000;
+/// SysTick's full 24-bit range: a loop turn up to 0.67 s long is still timed right.
+const RELOAD: u32 = 0x00FF_FFFF;
+/// The most simulated time one loop turn runs: an emulator the host left waiting (a loaded
+/// machine) slows the simulated world down rather than making it jump, which the link
+/// watchdog would take for a silent host.
+const MAX_TURN_MS: u32 = 50;
+
+/// Simulated stages and the clock that runs them.
+pub struct SimulatedAxes {
+    plant: Plant,
+    syst: SYST,
+    last: u32,
+    /// SysTick ticks not yet turned into whole milliseconds.
+    ticks: u32,
+}
+
+impl SimulatedAxes {
+    /// Gives `service` the bench axes and starts the clock; `None` if the set-up is refused
+    /// (then the service answers motion requests with `NoMotion`).
+    pub fn attach(service: &mut DeviceService, mut syst: SYST) -> Option<SimulatedAxes> {
+        let cfg = bench_config();
+        service.set_motion(cfg, SafetyConfig::BENCH).ok()?;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(RELOAD);
+        syst.clear_current();
+        syst.enable_counter();
+        Some(SimulatedAxes {
+            plant: bench_plant(&cfg),
+            last: SYST::get_current(),
+            syst,
+            ticks: 0,
+        })
+    }
+}
+
+impl Axes for SimulatedAxes {
+    fn advance(&mut self, service: &mut DeviceService) {
+        // SysTick counts down and wraps at RELOAD.
+        let now = SYST::get_current();
+        self.ticks += self.last.wrapping_sub(now) & RELOAD;
+        self.last = now;
+        // Clears the wrap flag, which nothing else reads.
+        let _ = self.syst.has_wrapped();
+        let ms = self.ticks / (SYSCLK_HZ / 1000);
+        if ms == 0 {
+            return;
+        }
+        self.ticks -= ms * (SYSCLK_HZ / 1000);
+        if let Some(core) = service.motion() {
+            run_for(core, &mut self.plant, ms.min(MAX_TURN_MS));
+        }
+    }
+}
