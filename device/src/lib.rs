@@ -4,7 +4,8 @@
 //! `cargo xtask device-bench`); [`commands`] reaches the device and backs `needle ping`, `info` and
 //! `ports`, [`send`] runs a whole plan within `--deadline` (starting over when the device
 //! restarts), [`verify`] re-checks the motor schedule a device sends with its plan and its
-//! figures under a collision bound, and [`checked`] puts the two together.
+//! figures under a collision bound, and [`checked`] puts the two together. [`motion`] moves the
+//! board's axes (`needle motion`).
 //!
 //! Planning a scenario on a device, checked, as `needle send` does (here `hil-sim --tcp
 //! 127.0.0.1:7878`, started first):
@@ -32,5 +33,6 @@
 
 pub mod checked;
 pub mod commands;
+pub mod motion;
 pub mod send;
 pub mod verify;

@@ -50,6 +50,9 @@ enum Command {
     Benchmark(needle_simulate::benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(plan::SendArgs),
+    /// Drive a board's two axes: arm, home, move a scenario's plan, hold, stop, e-stop
+    /// (docs/motion.md; `hil-sim --axes` and the QEMU firmware drive simulated ones).
+    Motion(needle_device::motion::MotionArgs),
     /// Check that a device answers, and how fast.
     Ping {
         #[command(flatten)]
@@ -111,6 +114,7 @@ fn main() -> ExitCode {
         Command::Steer(a) => needle_lab::run_steer(a),
         Command::Benchmark(a) => needle_simulate::benchmark::run_benchmark(a),
         Command::Send(a) => plan::send(a),
+        Command::Motion(a) => needle_device::motion::motion(a),
         Command::Ping { link, count } => device::ping(link, *count),
         Command::Info { link, json } => device::info(link, *json),
         Command::Ports => device::ports(),

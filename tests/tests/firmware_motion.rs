@@ -22,8 +22,7 @@ type Link = Client<Box<dyn Transport>>;
 fn connect(addr: &str) -> Link {
     let config = ClientConfig {
         timeout: Duration::from_secs(10),
-        // A repeated move would be refused by a core already moving: no resends.
-        retries: 0,
+        retries: 2,
         deadline: None,
     };
     Client::new(

@@ -1,7 +1,7 @@
 //! The README's promises, kept: every `needle` subcommand has an example in its command table,
 //! every example there and in the first session runs as written (from a working directory that
 //! sees the repository's `examples/` and `tests/`, the device commands against
-//! `hil-sim --tcp 127.0.0.1:7878` as the README starts it; `cargo xtask device-bench`'s, which
+//! `hil-sim --axes --tcp 127.0.0.1:7878` as the README starts it; `cargo xtask device-bench`'s, which
 //! runs both boards in QEMU, is run by the firmware budgets test; `needle steer` against the
 //! simulated lab the README starts), the plan tables it prints (the safe default's, then the paper's) are what `needle
 //! plan` prints, and the scenario it shows plans.
@@ -112,12 +112,12 @@ fn every_subcommand_has_an_example_in_the_command_table() {
 #[test]
 fn every_example_in_the_readme_runs_as_written() {
     let text = readme();
-    let start = format!("hil-sim --tcp {README_DEVICE} &");
+    let start = format!("hil-sim --axes --tcp {README_DEVICE} &");
     assert!(
         text.contains(&start),
         "the README starts hil-sim as {start}"
     );
-    let _device = SimProcess::start(&["--tcp", README_DEVICE]);
+    let _device = SimProcess::start(&["--axes", "--tcp", README_DEVICE]);
     let paper = workspace().join("examples/paper.toml");
     let _lab = text.contains(README_LAB).then(|| {
         let mut args: Vec<&str> = README_LAB.split_whitespace().skip(1).collect();
