@@ -30,6 +30,9 @@ pub enum Quantity {
     /// Most instructions of one steering reading, over every steered scenario
     /// (`replan_instructions.*.max`).
     SteeringReading,
+    /// Most instructions of one step of the motion core (`step_instructions.max`), on a board
+    /// that drives axes.
+    StepInterrupt,
 }
 
 /// How a budget's figure is counted.
@@ -117,6 +120,14 @@ pub const BUDGETS: &[Budget] = &[
             "each tracker reading answered (estimate, and a replan when needed) in about 6 ms \
                    at 168 MHz: a quarter of the 25 ms between a 40 Hz tracker's readings",
     },
+    Budget {
+        name: "step interrupt",
+        quantity: Quantity::StepInterrupt,
+        unit: Unit::Instructions,
+        limit: 2_000,
+        protects: "each step of either axis computed in about 12 µs at 168 MHz, which leaves \
+                   room for 30 kHz step rates on a board that drives axes",
+    },
 ];
 
 impl Unit {
@@ -130,6 +141,7 @@ impl Unit {
                 _ => format!("{n} B ({:.1} KiB)", n as f64 / 1024.0),
             },
             Unit::Instructions => match (n / 1_000_000, n % 1_000_000) {
+                (0, _) => format!("{n} instructions"),
                 (millions, 0) => format!("{millions} M instructions"),
                 _ => format!("{n} instructions ({:.2} M)", n as f64 / 1e6),
             },
@@ -156,7 +168,13 @@ impl Budget {
             Quantity::BoundedPaperPlan => plan("paper-bounded"),
             Quantity::SpheresPlan => plan("spheres256"),
             Quantity::SteeringReading => board.replan_instructions.iter().map(|(_, r)| r.max).max(),
+            Quantity::StepInterrupt => board.steps.map(|s| s.max),
         }
+    }
+
+    /// Whether the budget holds for the board: the step interrupt's only where it drives axes.
+    pub fn applies(&self, board: &BoardFigures) -> bool {
+        self.quantity != Quantity::StepInterrupt || board.steps.is_some()
     }
 }
 
@@ -201,6 +219,7 @@ impl fmt::Display for Breach {
 pub fn breaches(board: &BoardFigures) -> Vec<Breach> {
     BUDGETS
         .iter()
+        .filter(|budget| budget.applies(board))
         .filter_map(|budget| {
             let figure = budget.figure(board);
             figure.is_none_or(|n| n > budget.limit).then(|| Breach {
@@ -265,6 +284,7 @@ pub fn verdict(figures: &[BoardFigures], check: bool) -> Result<Vec<String>> {
 pub(crate) mod tests {
     use super::*;
     use crate::replan_bench::ReplanFigures;
+    use crate::step_bench::StepFigures;
 
     #[test]
     fn check_refuses_a_300_kib_image_and_without_it_warns() {
@@ -323,6 +343,11 @@ pub(crate) mod tests {
                     (name.to_string(), r)
                 })
                 .collect(),
+            steps: Some(StepFigures {
+                steps: 163_000,
+                max: 900,
+                sum: 97_800_000,
+            }),
         }
     }
 
@@ -339,6 +364,7 @@ pub(crate) mod tests {
             Quantity::SpacePlan => f.instructions[2].1 = above,
             Quantity::SpheresPlan => f.instructions[3].1 = above,
             Quantity::SteeringReading => f.replan_instructions[1].1.max = above,
+            Quantity::StepInterrupt => f.steps.as_mut().unwrap().max = above,
         }
         f
     }
@@ -362,6 +388,7 @@ pub(crate) mod tests {
             Quantity::BoundedPaperPlan,
             Quantity::SpheresPlan,
             Quantity::SteeringReading,
+            Quantity::StepInterrupt,
         ];
         assert_eq!(quantities.len(), BUDGETS.len(), "a budget left untested");
         for quantity in quantities {
@@ -379,6 +406,13 @@ pub(crate) mod tests {
                 "{message}"
             );
         }
+    }
+
+    #[test]
+    fn a_board_without_axes_has_no_step_budget_to_keep() {
+        let mut f = within();
+        f.steps = None;
+        assert_eq!(breaches(&f), []);
     }
 
     #[test]
@@ -413,6 +447,7 @@ pub(crate) mod tests {
         assert_eq!(Unit::Bytes.show(131_072), "131072 B (128 KiB)");
         assert_eq!(Unit::Bytes.show(127_496), "127496 B (124.5 KiB)");
         assert_eq!(Unit::Instructions.show(15_000_000), "15 M instructions");
+        assert_eq!(Unit::Instructions.show(2_000), "2000 instructions");
         assert_eq!(
             Unit::Instructions.show(13_704_929),
             "13704929 instructions (13.70 M)"

@@ -3,8 +3,9 @@
 //! For each board it builds the release firmware, reads flash and static RAM from the image,
 //! boots it in QEMU (mps2-an386 for the `mps2-an386` build, netduinoplus2 for the `stm32f4`
 //! build) with the instruction-count plugin (`tools/insn-count`), plans each scenario over the
-//! emulated UART, and reads the stack's high-water mark from the painted stack at the end. Each
-//! device plan is also checked against the host's plan, bit for bit.
+//! emulated UART, steers, moves the axes of a board that drives them (the step interrupt), and
+//! reads the stack's high-water mark from the painted stack at the end. Each device plan is also
+//! checked against the host's plan, bit for bit.
 
 use crate::firmware_artifacts::{self as artifacts, ensure_qemu, ensure_target};
 use crate::replan_bench::Steered;
@@ -188,6 +189,9 @@ pub fn measure(
             steer(format!("{}-lab", s.name), &lab, &Steered::LAB)?;
         }
     }
+    // Last: the stage's steps, each counted alone, after every plan and reading.
+    let steps = crate::step_bench::measure(&mut device, &qemu)
+        .with_context(|| format!("the step interrupt on {}", board.name))?;
     drop(device);
     let len = footprint
         .stack_top
@@ -206,6 +210,7 @@ pub fn measure(
         instructions,
         matches_host,
         replan_instructions,
+        steps,
     })
 }
 
@@ -232,8 +237,8 @@ pub struct Args {
     /// file's collision bound is planned under on the device too.
     files: Vec<PathBuf>,
     /// Print one JSON object per board (keys `board`, `flash_bytes`, `static_ram_bytes`,
-    /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`), as a JSON
-    /// array.
+    /// `peak_stack_bytes`, `instructions`, `matches_host`, `replan_instructions`,
+    /// `step_instructions`: `null` on a board without axes), as a JSON array.
     #[arg(long)]
     json: bool,
     /// Fail when a board leaves any device budget (`--budgets` lists them), or a device plan

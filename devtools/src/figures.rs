@@ -2,6 +2,7 @@
 //! budgets (`--check`), and their JSON and text forms. Plain data: nothing here runs QEMU.
 
 use crate::replan_bench::ReplanFigures;
+use crate::step_bench::StepFigures;
 use anyhow::{Context, Result};
 use serde_json::{json, Map, Value};
 
@@ -22,6 +23,9 @@ pub struct BoardFigures {
     pub matches_host: Vec<(String, bool)>,
     /// Scenario name and the instructions per steering reading of one closed-loop insertion.
     pub replan_instructions: Vec<(String, ReplanFigures)>,
+    /// The step interrupt's instructions (homing and the paper's schedule), or `None` on a board
+    /// that drives no axes.
+    pub steps: Option<StepFigures>,
 }
 
 impl BoardFigures {
@@ -57,6 +61,12 @@ impl BoardFigures {
                     (k.clone(), v)
                 })
                 .collect::<Map<_, _>>(),
+            "step_instructions": self.steps.map(|s| json!({
+                "steps": s.steps,
+                "max": s.max,
+                "sum": s.sum,
+                "mean": s.mean(),
+            })),
         })
     }
 
@@ -100,6 +110,15 @@ impl BoardFigures {
                 Ok((k.clone(), figures))
             })
             .collect::<Result<_>>()?;
+        // Absent from the JSON of a firmware without axes (and of older runs).
+        let steps = match &v["step_instructions"] {
+            Value::Null => None,
+            s => Some(StepFigures {
+                steps: number(s, "steps")?,
+                max: number(s, "max")?,
+                sum: number(s, "sum")?,
+            }),
+        };
         Ok(BoardFigures {
             board: v["board"]
                 .as_str()
@@ -111,6 +130,7 @@ impl BoardFigures {
             instructions: counts,
             matches_host,
             replan_instructions,
+            steps,
         })
     }
 }
@@ -137,6 +157,17 @@ pub fn table(figures: &[BoardFigures]) -> String {
         }
         if f.replan_instructions.is_empty() {
             s.push_str("  steering not measured (--plan-only)\n");
+        }
+        match f.steps {
+            None => s.push_str("  drives no axes: no step interrupt to measure\n"),
+            Some(st) => s.push_str(&format!(
+                "  step interrupt: {} steps (homing, the paper's schedule), max {} instructions \
+                 (≈ {:.1} µs at 168 MHz), mean {:.0}\n",
+                st.steps,
+                st.max,
+                st.max as f64 / 168.0,
+                st.mean()
+            )),
         }
         for (name, r) in &f.replan_instructions {
             s.push_str(&format!(
@@ -182,6 +213,7 @@ mod tests {
             instructions: vec![("paper".into(), 14_000_000)],
             matches_host: vec![("paper".into(), true)],
             replan_instructions: Vec::new(),
+            steps: None,
         };
         let text = table(&[figures]);
         assert!(
@@ -189,5 +221,6 @@ mod tests {
             "{text}"
         );
         assert!(text.contains("steering not measured"), "{text}");
+        assert!(text.contains("drives no axes"), "{text}");
     }
 }

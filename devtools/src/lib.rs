@@ -1,7 +1,8 @@
 //! Developer tooling of needle-planner, kept out of the `needle` binary: what the firmware costs
 //! on the microcontroller ([`device_bench`], run as `cargo xtask device-bench`; the [`figures`]
 //! it measures) and what it may cost ([`budgets`]), the QEMU run it drives ([`qemu`]), reading
-//! the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), where the counted
+//! the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), the steering
+//! readings' and the step interrupt's counts ([`replan_bench`], [`step_bench`]), where the counted
 //! instructions go ([`profile`]), and the firmware and plugin builds that device-bench and the
 //! `firmware_*` tests share ([`firmware_artifacts`]).
 //!
@@ -27,3 +28,4 @@ pub mod firmware_artifacts;
 pub mod profile;
 pub mod qemu;
 pub mod replan_bench;
+pub mod step_bench;

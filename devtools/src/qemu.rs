@@ -9,6 +9,31 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+/// One report of the plugin: `<sum> instructions in <regions> regions, largest <max>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Report {
+    /// Instructions in all the regions since the last report.
+    pub sum: u64,
+    /// Regions since the last report.
+    pub regions: u64,
+    /// The largest single region.
+    pub largest: u64,
+}
+
+impl Report {
+    fn parse(line: &str) -> Option<Report> {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            [sum, "instructions", "in", regions, "regions,", "largest", largest] => Some(Report {
+                sum: sum.parse().ok()?,
+                regions: regions.parse().ok()?,
+                largest: largest.parse().ok()?,
+            }),
+            _ => None,
+        }
+    }
+}
+
 /// A running emulator.
 pub struct Qemu {
     child: Child,
@@ -96,15 +121,16 @@ impl Qemu {
 
     /// The plugin's reports so far: instructions per plan, in order.
     pub fn counts(&self) -> Result<Vec<u64>> {
+        Ok(self.reports()?.iter().map(|r| r.sum).collect())
+    }
+
+    /// The plugin's reports so far, whole, in order.
+    pub fn reports(&self) -> Result<Vec<Report>> {
         let text = std::fs::read_to_string(&self.counts).unwrap_or_default();
         text.lines()
             .filter_map(|l| l.strip_prefix("insn-count: "))
             .filter(|l| l.contains(" in "))
-            .map(|l| {
-                let n = l.split_whitespace().next().unwrap_or("");
-                n.parse::<u64>()
-                    .with_context(|| format!("bad plugin line {l:?}"))
-            })
+            .map(|l| Report::parse(l).with_context(|| format!("bad plugin line {l:?}")))
             .collect()
     }
 

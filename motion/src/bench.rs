@@ -3,7 +3,7 @@
 //! schedule and the emulated board's end on the same step.
 
 use crate::plant::{Plant, PlantAxis, PlantConfig};
-use crate::{Controller, MotionConfig, Rates};
+use crate::{Controller, MotionConfig, Rates, StepEvent};
 
 /// The bench driver's axes (`MotionConfig::bench` for a 200 mm stage and ±360° of twist); each
 /// move request replaces the rates and soft limits with its plan's.
@@ -37,10 +37,21 @@ pub fn bench_plant(cfg: &MotionConfig) -> Plant {
 /// `ms` of simulated time: the core steps the stages as its timer would (the inputs read after
 /// each step), then the clock runs on to the end of the time at rest.
 pub fn run_for(core: &mut Controller, plant: &mut Plant, ms: u32) {
+    run_for_with(core, plant, ms, Controller::next_step);
+}
+
+/// `run_for`, each step taken by `next_step` (the timer interrupt's work: a board measures it
+/// there).
+pub fn run_for_with(
+    core: &mut Controller,
+    plant: &mut Plant,
+    ms: u32,
+    mut next_step: impl FnMut(&mut Controller) -> Option<StepEvent>,
+) {
     let tick_hz = u64::from(core.config().tick_hz);
     let end = plant.ticks() + u64::from(ms) * tick_hz / 1000;
     while plant.ticks() < end {
-        let Some(e) = core.next_step() else { break };
+        let Some(e) = next_step(core) else { break };
         plant.apply(&e);
         core.update(plant.now_ms(), &plant.inputs());
     }

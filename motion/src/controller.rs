@@ -23,6 +23,18 @@ struct Current {
     seg: SegmentTarget,
 }
 
+/// The segment after the current one, set up ahead of time outside the step interrupt
+/// ([`Controller::update`]), with what it was set up for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Prepared {
+    mv: Resolved,
+    part: u32,
+    /// Where the current segment ends: the new one's start.
+    from: [i32; 2],
+    seg: SegmentTarget,
+    run: SegmentRun,
+}
+
 /// What the controller reports.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Status {
@@ -55,6 +67,8 @@ pub struct Controller {
     queue: heapless::Deque<Resolved, QUEUE>,
     current: Option<Current>,
     run: SegmentRun,
+    /// The next segment, set up ahead (dropped whenever the plan or the settings change).
+    prepared: Option<Prepared>,
     /// Ticks since each axis' last step, and the speed it gave (steps/s, signed).
     since: [u32; 2],
     speed: [f32; 2],
@@ -88,6 +102,7 @@ impl Controller {
             queue: heapless::Deque::new(),
             current: None,
             run: SegmentRun::IDLE,
+            prepared: None,
             since: [0; 2],
             speed: [0.0; 2],
             now_ms: 0,
@@ -127,6 +142,7 @@ impl Controller {
         (cfg.axes[1].min, cfg.axes[1].max) = (-max_twist_deg, max_twist_deg);
         cfg.validate()?;
         self.cfg = cfg;
+        self.prepared = None;
         Ok(())
     }
 
@@ -239,8 +255,11 @@ impl Controller {
         }
         self.planned = planned;
         self.queue = queue;
+        self.prepared = None;
         self.state = State::Moving;
         self.heard_ms = self.now_ms;
+        // The first segment now, not in the step interrupt.
+        self.prepare();
         Ok(())
     }
 

@@ -1,6 +1,6 @@
 //! The controller's clock, inputs and step generation.
 
-use super::{Controller, Current};
+use super::{Controller, Current, Prepared};
 use crate::config::Axis;
 use crate::moves::SegmentTarget;
 use crate::runner::{SegmentRun, StepEvent};
@@ -13,7 +13,8 @@ const MAX_SETUPS: usize = 2 * super::QUEUE + 2;
 
 impl Controller {
     /// The clock (ms, wrapping) and the inputs: e-stop, switches and encoders are checked, the
-    /// watchdog runs, homing ends at its switch. Returns the fault this call latched, if any.
+    /// watchdog runs, homing ends at its switch, and the segment after the current one is set
+    /// up ahead of the step interrupt. Returns the fault this call latched, if any.
     pub fn update(&mut self, now_ms: u32, inputs: &Inputs) -> Option<FaultRecord> {
         self.now_ms = now_ms;
         self.encoder = inputs.encoder;
@@ -46,7 +47,9 @@ impl Controller {
                 return Some(self.fault(FaultCause::FollowingError(axis)));
             }
         }
-        self.watchdog()
+        let fault = self.watchdog();
+        self.prepare();
+        fault
     }
 
     /// The e-stop's interrupt: both axes stop at once.
@@ -162,6 +165,32 @@ impl Controller {
         }
     }
 
+    /// Sets up the segment after the current one while the axes move, so that the step
+    /// interrupt only swaps it in: the set-up (the schedule's arithmetic, in `f64`) is the
+    /// costliest step otherwise. The same set-up as [`Self::next_step`] would make, used only
+    /// when the move, part and start it was made for are the ones met.
+    pub(super) fn prepare(&mut self) {
+        if self.state != State::Moving || self.prepared.is_some() {
+            return;
+        }
+        // After the current segment, or the first of the queue before any.
+        let (mv, part, from) = match (self.current, self.queue.front()) {
+            (Some(c), _) if c.part + 1 < c.mv.parts() => (c.mv, c.part + 1, c.seg.target),
+            (Some(c), Some(&mv)) => (mv, 0, c.seg.target),
+            (None, Some(&mv)) if self.run.is_done() => (mv, 0, self.pos),
+            _ => return,
+        };
+        let seg = mv.segment(&self.cfg, part);
+        let run = SegmentRun::new(&self.cfg, from, &seg);
+        self.prepared = Some(Prepared {
+            mv,
+            part,
+            from,
+            seg,
+            run,
+        });
+    }
+
     /// Set up the next segment; `false` when there is none (then the state settles).
     fn next_segment(&mut self) -> bool {
         match self.state {
@@ -179,9 +208,15 @@ impl Controller {
             self.since = [0; 2];
             return false;
         };
-        let seg = mv.segment(&self.cfg, part);
+        let (seg, run) = match self.prepared.take() {
+            Some(p) if (p.mv, p.part, p.from) == (mv, part, self.pos) => (p.seg, p.run),
+            _ => {
+                let seg = mv.segment(&self.cfg, part);
+                (seg, SegmentRun::new(&self.cfg, self.pos, &seg))
+            }
+        };
         self.current = Some(Current { mv, part, seg });
-        self.run = SegmentRun::new(&self.cfg, self.pos, &seg);
+        self.run = run;
         true
     }
 }

@@ -31,6 +31,12 @@ pub struct AxisRun {
     last: f32,
     /// Direction: +1 or −1.
     dir: i8,
+    /// `√done`, the acceleration curve's root the next interval shares with this one; `None`
+    /// once the curve is below cruise for good (it only falls).
+    root_done: Option<f32>,
+    /// `(r, √r)` for the steps left after the next one: the deceleration curve's root the next
+    /// interval shares with this one (a stop changes the steps left, and misses it).
+    root_left: Option<(u32, f32)>,
 }
 
 impl AxisRun {
@@ -43,6 +49,8 @@ impl AxisRun {
         carry: 0.0,
         last: 0.0,
         dir: 1,
+        root_done: Some(0.0),
+        root_left: None,
     };
 
     /// `steps` (signed) at cruise speed `speed` and acceleration `accel` (steps/s, steps/s²,
@@ -59,6 +67,8 @@ impl AxisRun {
             carry: 0.0,
             last: 0.0,
             dir: if steps > 0 { 1 } else { -1 },
+            root_done: Some(0.0),
+            root_left: None,
         }
     }
 
@@ -77,10 +87,27 @@ impl AxisRun {
         if self.done >= self.total {
             return None;
         }
-        let j = (self.done + 1) as f32;
-        let up = self.k / (libm::sqrtf(j) + libm::sqrtf(j - 1.0));
-        let r = (self.total - self.done) as f32;
-        let down = self.k / (libm::sqrtf(r) + libm::sqrtf(r - 1.0));
+        // The same roots as `k / (√j + √(j−1))` and `k / (√r + √(r−1))` each time, each taken
+        // once: the interrupt's work is two square roots a step at most, one at cruise.
+        let up = match self.root_done {
+            Some(below) => {
+                let root = libm::sqrtf((self.done + 1) as f32);
+                let up = self.k / (root + below);
+                // Non-increasing in the step (correctly rounded roots, sum and quotient are
+                // monotonic): once at or below cruise, never again above it.
+                self.root_done = (up > self.cruise).then_some(root);
+                up
+            }
+            None => 0.0,
+        };
+        let r = self.total - self.done;
+        let root_r = match self.root_left {
+            Some((left, root)) if left == r => root,
+            _ => libm::sqrtf(r as f32),
+        };
+        let root_below = libm::sqrtf((r - 1) as f32);
+        self.root_left = Some((r - 1, root_below));
+        let down = self.k / (root_r + root_below);
         let x = up.max(down).max(self.cruise);
         self.last = x;
         let with_carry = x + self.carry;
@@ -135,6 +162,63 @@ mod tests {
         assert_eq!(v[0], 14_142);
         let (a, b) = (v[..50].iter().sum::<u32>(), v[1950..].iter().sum::<u32>());
         assert!(a.abs_diff(b) <= 1, "{a} {b}");
+    }
+
+    /// Each interval straight from the formula, every root taken anew.
+    fn direct(
+        total: u32,
+        k: f32,
+        cruise: f32,
+        stop_after: Option<u32>,
+    ) -> heapless::Vec<u32, 4096> {
+        let (mut v, mut carry, mut total) = (heapless::Vec::new(), 0.0f32, total);
+        let mut done = 0;
+        while done < total {
+            let j = (done + 1) as f32;
+            let up = k / (libm::sqrtf(j) + libm::sqrtf(j - 1.0));
+            let r = (total - done) as f32;
+            let down = k / (libm::sqrtf(r) + libm::sqrtf(r - 1.0));
+            let x = up.max(down).max(cruise);
+            let ticks = libm::floorf(x + carry);
+            carry = x + carry - ticks;
+            done += 1;
+            v.push(ticks as u32).unwrap();
+            if Some(done) == stop_after {
+                let q = k / (2.0 * x);
+                let r = libm::ceilf(q * q) + 1.0;
+                total = done
+                    + if r < (total - done) as f32 {
+                        r as u32
+                    } else {
+                        total - done
+                    };
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn the_shared_roots_give_the_formulas_intervals_bit_for_bit() {
+        for (steps, speed, accel) in [
+            (2000, 1000.0, 10_000.0),
+            (-20, 1000.0, 10_000.0),
+            (3999, 16_000.0, 80_000.0),
+            (777, 1234.5, 987.0),
+            (1, 50.0, 1.0),
+        ] {
+            for stop_after in [None, Some(1), Some(37), Some(500)] {
+                let mut run = AxisRun::new(steps, speed, accel, 1e6);
+                let mut got = heapless::Vec::<u32, 4096>::new();
+                while let Some(t) = run.next_interval() {
+                    got.push(t).unwrap();
+                    if Some(got.len() as u32) == stop_after {
+                        run.stop();
+                    }
+                }
+                let want = direct(steps.unsigned_abs(), run.k, run.cruise, stop_after);
+                assert_eq!(got, want, "{steps} steps, stop after {stop_after:?}");
+            }
+        }
     }
 
     #[test]

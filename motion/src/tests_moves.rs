@@ -150,3 +150,49 @@ fn unusable_settings_are_named() {
     let text = MotionError::Config(crate::ConfigField::MaxSpeed(Axis::Insertion)).to_string();
     assert_eq!(text, "unusable motion setting: insertion maximum speed");
 }
+
+/// The segments set up ahead by `update` (outside the step interrupt) give the train the
+/// interrupt gives when it sets each one up itself, event for event, through a hold and resume.
+#[test]
+fn segments_set_up_ahead_give_the_same_train_as_set_up_in_the_interrupt() {
+    let moves = [
+        Move::Rotate { angle_deg: 90.0 },
+        Move::InsertSpin {
+            length_mm: 3.0,
+            turns: 4,
+        },
+        Move::InsertDuty {
+            length_mm: 2.0,
+            duty: 0.4,
+        },
+        Move::Insert { length_mm: 1.5 },
+    ];
+    let train = |ahead: bool| {
+        let mut b = crate::testbench::Bench::homed();
+        b.c.execute(&moves).unwrap();
+        // The clock stands still: the watchdog never sees a silence.
+        let now = b.p.now_ms();
+        let mut events = Vec::new();
+        loop {
+            match b.c.next_step() {
+                Some(e) => events.push(e),
+                // At rest after the hold: go on.
+                None if b.c.state() == crate::State::Holding => b.c.resume().unwrap(),
+                None => break,
+            }
+            if events.len() == 3000 {
+                b.c.hold().unwrap();
+            }
+            b.c.heartbeat();
+            if ahead {
+                b.c.update(now, &crate::Inputs::default());
+            }
+        }
+        (events, b.c.steps())
+    };
+    let (ahead, at) = train(true);
+    let (inline, at_inline) = train(false);
+    assert!(ahead.len() > 10_000, "{}", ahead.len());
+    assert_eq!(at, at_inline);
+    assert!(ahead == inline, "the trains differ");
+}

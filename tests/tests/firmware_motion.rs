@@ -136,8 +136,16 @@ fn the_qemu_board_moves_the_papers_schedule_like_the_host_and_obeys_an_estop() {
         refused(link.motion(job.clone())),
         Fault::Motion(MotionError::NotHomed)
     );
-    assert_eq!(ask(&mut link, MotionRequest::Home).state, State::Homing);
-    let homed = wait_at_rest(&mut link, Duration::from_secs(60));
+    // A loaded machine may keep this test from the board long enough for the link watchdog to
+    // hold, which ends a homing unhomed: then it homes again.
+    let mut homed = ask(&mut link, MotionRequest::Status);
+    for _ in 0..3 {
+        assert_eq!(ask(&mut link, MotionRequest::Home).state, State::Homing);
+        homed = wait_at_rest(&mut link, Duration::from_secs(60));
+        if homed.homed {
+            break;
+        }
+    }
     assert_eq!(
         (homed.state, homed.homed, homed.position),
         (State::Armed, true, [0.0, 0.0])

@@ -3,14 +3,17 @@
 //! clock (at most `MAX_TURN_MS` a loop turn). The stages run in the main loop between polls, so they stand still while the service
 //! plans or steers (a real board steps them from a timer interrupt); the step train does not
 //! depend on when they run, only how far the clock has gone, so the axes end where the host's
-//! simulation of the same moves (`hil-sim --axes`) ends.
+//! simulation of the same moves (`hil-sim --axes`) ends. Each step is a measured region for the
+//! instruction-count plugin, and each homing or move one report: the step interrupt's figures
+//! in `cargo xtask device-bench`.
 
 use crate::axes::Axes;
+use crate::marker;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
-use needle_motion::bench::{bench_config, bench_plant, run_for};
+use needle_motion::bench::{bench_config, bench_plant, run_for_with};
 use needle_motion::plant::Plant;
-use needle_motion::SafetyConfig;
+use needle_motion::{Controller, SafetyConfig, State};
 use planner_core::device::DeviceService;
 
 /// The processor clock of QEMU's MPS2 boards, which SysTick counts.
@@ -29,6 +32,8 @@ pub struct SimulatedAxes {
     last: u32,
     /// SysTick ticks not yet turned into whole milliseconds.
     ticks: u32,
+    /// Steps measured since the axes last came to rest.
+    measured: bool,
 }
 
 impl SimulatedAxes {
@@ -46,6 +51,7 @@ impl SimulatedAxes {
             last: SYST::get_current(),
             syst,
             ticks: 0,
+            measured: false,
         })
     }
 }
@@ -63,8 +69,28 @@ impl Axes for SimulatedAxes {
             return;
         }
         self.ticks -= ms * (SYSCLK_HZ / 1000);
-        if let Some(core) = service.motion() {
-            run_for(core, &mut self.plant, ms.min(MAX_TURN_MS));
+        let Some(core) = service.motion() else { return };
+        run_for_with(core, &mut self.plant, ms.min(MAX_TURN_MS), |c| {
+            measured_step(c, &mut self.measured)
+        });
+        // A homing or a move is over: its steps are one report (the device bench's step figures),
+        // sent before any plan can start a region of its own.
+        if self.measured && !matches!(core.state(), State::Moving | State::Homing) {
+            marker::report();
+            self.measured = false;
         }
     }
+}
+
+/// One step, as the timer interrupt would take it, a measured region while the axes move; a
+/// call that finds them at rest is not measured (it would add to the next plan's count).
+fn measured_step(core: &mut Controller, measured: &mut bool) -> Option<needle_motion::StepEvent> {
+    if !matches!(core.state(), State::Moving | State::Homing) {
+        return core.next_step();
+    }
+    *measured = true;
+    marker::begin();
+    let step = core.next_step();
+    marker::end();
+    step
 }

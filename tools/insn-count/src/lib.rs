@@ -5,14 +5,16 @@
 //! otherwise (see `firmware/src/marker.rs`):
 //! - `mov r10, r10` (0x46D2) begins a region,
 //! - `mov r11, r11` (0x46DB) ends it and adds its count to the running sum,
-//! - `mov r12, r12` (0x46E4) reports the sum (one line) and resets it.
+//! - `mov r12, r12` (0x46E4) reports the sum, the number of regions and the largest region (one
+//!   line) and resets them.
 //!
 //! Every instruction except the markers gets an inline 64-bit add, so a sum counts exactly the
 //! instructions executed between markers, whatever the translation-block boundaries, interrupts or
 //! `-icount` setting.
 //!
 //! Usage: `qemu-system-arm ... -plugin libinsn_count.so[,out=FILE][,profile=FILE] -d plugin [-D LOG]`.
-//! Each report is a line `insn-count: <sum> instructions in <regions> regions`, appended to the
+//! Each report is a line `insn-count: <sum> instructions in <regions> regions, largest <max>`
+//! (the largest single region: a step interrupt's worst case), appended to the
 //! `out` FILE when given (and flushed at once, so a reader sees it while QEMU runs), else written
 //! to QEMU's plugin log. With `profile=FILE`, the instructions inside regions are also attributed
 //! to the translation block that executed them, and written at exit as `<hex address> <count>`
@@ -59,6 +61,7 @@ struct Regions {
     open_at: Option<u64>,
     sum: u64,
     regions: u64,
+    largest: u64,
     reports: u64,
     out: Option<File>,
     /// Profile file, the histogram of counted regions, and that of the region now open (merged
@@ -70,6 +73,7 @@ static STATE: Mutex<Regions> = Mutex::new(Regions {
     open_at: None,
     sum: 0,
     regions: 0,
+    largest: 0,
     reports: 0,
     out: None,
     profile: None,
@@ -105,6 +109,7 @@ unsafe extern "C" fn on_marker(_vcpu: c_uint, userdata: *mut c_void) {
             if let Some(start) = state.open_at.take() {
                 state.sum += now - start;
                 state.regions += 1;
+                state.largest = state.largest.max(now - start);
                 if let Some((_, counted, open)) = state.profile.as_mut() {
                     for (addr, n) in open.drain() {
                         *counted.entry(addr).or_insert(0) += n;
@@ -114,12 +119,13 @@ unsafe extern "C" fn on_marker(_vcpu: c_uint, userdata: *mut c_void) {
         }
         m if m == Marker::Report as usize => {
             let line = format!(
-                "insn-count: {} instructions in {} regions\n",
-                state.sum, state.regions
+                "insn-count: {} instructions in {} regions, largest {}\n",
+                state.sum, state.regions, state.largest
             );
             emit(&mut state, &line);
             state.sum = 0;
             state.regions = 0;
+            state.largest = 0;
             state.reports += 1;
         }
         _ => {}
