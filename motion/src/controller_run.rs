@@ -169,6 +169,8 @@ impl Controller {
     /// interrupt only swaps it in: the set-up (the schedule's arithmetic, in `f64`) is the
     /// costliest step otherwise. The same set-up as [`Self::next_step`] would make, used only
     /// when the move, part and start it was made for are the ones met.
+    // One copy for its two callers (`update`, `execute`).
+    #[inline(never)]
     pub(super) fn prepare(&mut self) {
         if self.state != State::Moving || self.prepared.is_some() {
             return;
