@@ -3,7 +3,9 @@
 
 use crate::line::{FaultyLine, LineConfig, LineStats};
 use planner_core::device::{DeviceService, DeviceStats};
-use planner_core::wire::{FrameDecoder, MAX_FRAME};
+use planner_core::wire::{
+    encode_frame, FrameDecoder, Header, Reply, Request, RequestBody, ENCODE_SCRATCH, MAX_FRAME,
+};
 use std::collections::HashSet;
 
 /// Checks that no frame damaged on the line is ever accepted: every payload a receiver's decoder
@@ -179,4 +181,30 @@ impl Default for InProcess {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// One request (id `id`) straight into `device`, no line and no clock; the replies it gives
+/// until it has nothing more to do. For tests that drive a device's state by hand.
+pub fn answer(device: &mut DeviceService, id: u16, body: RequestBody) -> Vec<Reply> {
+    let mut scratch = [0u8; ENCODE_SCRATCH];
+    let mut bytes = Vec::new();
+    let request = Request {
+        header: Header::new(id),
+        body,
+    };
+    // A request that does not encode (over the frame's size) reaches the device as nothing.
+    let _ = encode_frame(&request, &mut scratch, &mut |b: &[u8]| {
+        bytes.extend_from_slice(b)
+    });
+    device.receive(&bytes);
+    let mut out = Vec::new();
+    while device.poll(&mut |b: &[u8]| out.extend_from_slice(b)) {}
+    let mut decoder = FrameDecoder::<MAX_FRAME>::for_replies();
+    let mut replies = Vec::new();
+    for &b in &out {
+        if let Some(Ok(payload)) = decoder.push(b) {
+            replies.extend(postcard::from_bytes::<Reply>(payload).ok());
+        }
+    }
+    replies
 }

@@ -19,7 +19,7 @@ pub mod line;
 pub mod serve;
 
 pub use axes::SimulatedAxes;
-pub use in_process::{AuditReport, InProcess};
+pub use in_process::{answer, AuditReport, InProcess};
 pub use line::{FaultyLine, LineConfig, LineStats, Pacer};
 pub use planner_core::device::{DeviceIdentity, DeviceService};
 pub use serve::serve;

@@ -1,36 +1,14 @@
 //! The simulated device drives simulated motors: motion requests on the link move the
 //! simulated stages behind its motion core as simulated time passes.
 
-use hil_sim::{DeviceService, SimulatedAxes, IDENTITY};
+use hil_sim::{answer, DeviceService, SimulatedAxes, IDENTITY};
 use needle_motion::{FaultCause, MotionError, State};
 use planner_core::execute::schedule::schedule;
-use planner_core::wire::{
-    encode_frame, Fault, FrameDecoder, Header, MotionRequest, MotionStatus, Reply, ReplyBody,
-    Request, RequestBody, ENCODE_SCRATCH, MAX_FRAME,
-};
+use planner_core::wire::{Fault, MotionRequest, MotionStatus, ReplyBody, RequestBody};
 use planner_core::{plan, Scenario};
 
 fn ask(dev: &mut DeviceService, req: MotionRequest) -> ReplyBody {
-    let mut scratch = [0u8; ENCODE_SCRATCH];
-    let mut bytes = Vec::new();
-    let request = Request {
-        header: Header::new(1),
-        body: RequestBody::Motion(req),
-    };
-    encode_frame(&request, &mut scratch, &mut |b: &[u8]| {
-        bytes.extend_from_slice(b)
-    })
-    .unwrap();
-    dev.receive(&bytes);
-    let mut out = Vec::new();
-    while dev.poll(&mut |b: &[u8]| out.extend_from_slice(b)) {}
-    let mut d = FrameDecoder::<MAX_FRAME>::for_replies();
-    let mut replies: Vec<Reply> = Vec::new();
-    for &b in &out {
-        if let Some(p) = d.push(b) {
-            replies.push(postcard::from_bytes(p.unwrap()).unwrap());
-        }
-    }
+    let mut replies = answer(dev, 1, RequestBody::Motion(req));
     assert_eq!(replies.len(), 1);
     replies.remove(0).body
 }

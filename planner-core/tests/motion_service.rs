@@ -75,6 +75,29 @@ impl Board {
         Board { dev, plant }
     }
 
+    /// Armed, homed, and 5000 steps into a spun insertion of 20 mm.
+    fn spinning() -> Board {
+        let mut b = Board::new();
+        ask(&mut b.dev, 1, MotionRequest::Arm);
+        ask(&mut b.dev, 2, MotionRequest::Home);
+        b.run(usize::MAX);
+        let steps = [planner_core::execute::schedule::Step {
+            op: planner_core::execute::schedule::Op::InsertSpin {
+                length_mm: 20.0,
+                turns: 16,
+            },
+            duration_s: 8.0,
+        }];
+        let job = MotionRequest::Move {
+            driver: Scenario::paper().driver,
+            needle_mm: 150.0,
+            steps: steps.iter().copied().collect(),
+        };
+        status(ask(&mut b.dev, 3, job));
+        b.run(5000);
+        b
+    }
+
     /// The timer and the main loop: up to `n` steps, the inputs read after each.
     fn run(&mut self, n: usize) {
         let c = self.dev.motion().unwrap();
@@ -135,24 +158,7 @@ fn the_host_arms_homes_and_moves_the_papers_schedule() {
 
 #[test]
 fn an_estop_mid_insertion_is_reported_with_both_positions_and_survives_a_reset() {
-    let mut b = Board::new();
-    ask(&mut b.dev, 1, MotionRequest::Arm);
-    ask(&mut b.dev, 2, MotionRequest::Home);
-    b.run(usize::MAX);
-    let steps = [planner_core::execute::schedule::Step {
-        op: planner_core::execute::schedule::Op::InsertSpin {
-            length_mm: 20.0,
-            turns: 16,
-        },
-        duration_s: 8.0,
-    }];
-    let job = MotionRequest::Move {
-        driver: Scenario::paper().driver,
-        needle_mm: 150.0,
-        steps: steps.iter().copied().collect(),
-    };
-    status(ask(&mut b.dev, 3, job));
-    b.run(5000);
+    let mut b = Board::spinning();
     let moving = status(ask(&mut b.dev, 4, MotionRequest::Status));
     assert_eq!(moving.state, State::Moving);
     b.plant.estop = true;
@@ -177,24 +183,7 @@ fn an_estop_mid_insertion_is_reported_with_both_positions_and_survives_a_reset()
 
 #[test]
 fn an_estop_over_the_link_stops_both_axes_at_once_and_latches_until_cleared() {
-    let mut b = Board::new();
-    ask(&mut b.dev, 1, MotionRequest::Arm);
-    ask(&mut b.dev, 2, MotionRequest::Home);
-    b.run(usize::MAX);
-    let steps = [planner_core::execute::schedule::Step {
-        op: planner_core::execute::schedule::Op::InsertSpin {
-            length_mm: 20.0,
-            turns: 16,
-        },
-        duration_s: 8.0,
-    }];
-    let job = MotionRequest::Move {
-        driver: Scenario::paper().driver,
-        needle_mm: 150.0,
-        steps: steps.iter().copied().collect(),
-    };
-    status(ask(&mut b.dev, 3, job));
-    b.run(5000);
+    let mut b = Board::spinning();
     let s = status(ask(&mut b.dev, 4, MotionRequest::EStop));
     let f = s.last_fault.unwrap();
     assert_eq!((s.state, f.cause), (State::Faulted, FaultCause::EStop));

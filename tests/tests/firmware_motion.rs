@@ -6,14 +6,11 @@
 mod firmware_support;
 
 use firmware_support::{build_firmware, emulator_ready, Qemu};
-use hil_sim::{DeviceService, SimulatedAxes, IDENTITY};
+use hil_sim::{answer, DeviceService, SimulatedAxes, IDENTITY};
 use needle_link::{open, Client, ClientConfig, LinkError, LinkTarget, Transport};
 use needle_motion::{FaultCause, MotionError, State};
 use planner_core::execute::schedule::{schedule, Op, Step};
-use planner_core::wire::{
-    encode_frame, Fault, FrameDecoder, Header, MotionRequest, MotionStatus, Reply, ReplyBody,
-    Request, RequestBody, ENCODE_SCRATCH, MAX_FRAME,
-};
+use planner_core::wire::{Fault, MotionRequest, MotionStatus, ReplyBody, RequestBody};
 use planner_core::{plan, Scenario};
 use std::time::{Duration, Instant};
 
@@ -77,26 +74,9 @@ fn host_simulation(job: &MotionRequest) -> MotionStatus {
 }
 
 fn local_ask(dev: &mut DeviceService, req: MotionRequest) -> ReplyBody {
-    let mut scratch = [0u8; ENCODE_SCRATCH];
-    let mut bytes = Vec::new();
-    let request = Request {
-        header: Header::new(1),
-        body: RequestBody::Motion(req),
-    };
-    encode_frame(&request, &mut scratch, &mut |b: &[u8]| {
-        bytes.extend_from_slice(b)
-    })
-    .unwrap();
-    dev.receive(&bytes);
-    let mut out = Vec::new();
-    while dev.poll(&mut |b: &[u8]| out.extend_from_slice(b)) {}
-    let mut d = FrameDecoder::<MAX_FRAME>::for_replies();
-    for &b in &out {
-        if let Some(frame) = d.push(b) {
-            return postcard::from_bytes::<Reply>(frame.unwrap()).unwrap().body;
-        }
-    }
-    panic!("no reply")
+    let mut replies = answer(dev, 1, RequestBody::Motion(req));
+    assert_eq!(replies.len(), 1, "one reply");
+    replies.remove(0).body
 }
 
 fn refused(result: Result<MotionStatus, LinkError>) -> Fault {
