@@ -16,22 +16,28 @@ pub fn bench_config() -> MotionConfig {
     MotionConfig::bench(200.0, 360.0, rates)
 }
 
-/// Simulated stages for `cfg`: motors that follow 20 % past the axes' limits, the insertion
-/// stage 5 mm from its home switch, the far end switch 1 mm past the stage's 200 mm, encoders
-/// of 4 steps a count.
+/// Simulated stages for `cfg`: the insertion stage 5 mm from its home switch, the far end switch
+/// 401 mm out (past any move the soft limits allow).
 pub fn bench_plant(cfg: &MotionConfig) -> Plant {
+    Plant::new(bench_stages(cfg, 401 * 1600))
+}
+
+/// The bench's stages for `cfg` with the far end switch at `end` steps: motors that follow 20 %
+/// past the axes' limits, the insertion stage 5 mm (8000 steps) from its home switch, encoders
+/// of 4 steps a count.
+pub fn bench_stages(cfg: &MotionConfig, end: i32) -> PlantConfig {
     let axis = |i: usize| PlantAxis {
         pull_out: 1.2 * cfg.axes[i].max_speed * cfg.axes[i].steps_per_unit,
         torque_accel: 1.2 * cfg.axes[i].max_accel * cfg.axes[i].steps_per_unit,
         full_step: 16.0,
         encoder_steps: Some(4),
     };
-    Plant::new(PlantConfig {
+    PlantConfig {
         axes: [axis(0), axis(1)],
         tick_hz: cfg.tick_hz,
         start: [8000, 0],
-        end: 401 * 1600,
-    })
+        end,
+    }
 }
 
 /// `ms` of simulated time: the core steps the stages as its timer would (the inputs read after

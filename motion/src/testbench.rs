@@ -1,6 +1,6 @@
 //! A controller wired to a simulated plant, for the tests.
 
-use crate::plant::{Plant, PlantAxis, PlantConfig};
+use crate::plant::{Plant, PlantConfig};
 use crate::{Controller, MotionConfig, Rates, SafetyConfig, State};
 
 pub const RATES: Rates = Rates {
@@ -13,21 +13,9 @@ pub fn config() -> MotionConfig {
     MotionConfig::bench(150.0, 360.0, RATES)
 }
 
-/// The bench's plant: the motors follow 20 % past the limits; the stage 5 mm from its home
-/// switch, the far switch 1 mm past the needle's length; encoders of 4 steps a count.
+/// The bench's plant (`bench::bench_stages`), the far switch 1 mm past the needle's length.
 pub fn plant_config(cfg: &MotionConfig) -> PlantConfig {
-    let axis = |i: usize| PlantAxis {
-        pull_out: 1.2 * cfg.axes[i].max_speed * cfg.axes[i].steps_per_unit,
-        torque_accel: 1.2 * cfg.axes[i].max_accel * cfg.axes[i].steps_per_unit,
-        full_step: 16.0,
-        encoder_steps: Some(4),
-    };
-    PlantConfig {
-        axes: [axis(0), axis(1)],
-        tick_hz: cfg.tick_hz,
-        start: [8000, 0],
-        end: 151 * 1600,
-    }
+    crate::bench::bench_stages(cfg, 151 * 1600)
 }
 
 pub struct Bench {
