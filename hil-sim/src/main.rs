@@ -140,9 +140,9 @@ struct LabArgs {
     /// With --stream-rate: every 50 periods this many poses go out back to back in one write.
     #[arg(long, requires = "stream_rate", default_value_t = 1)]
     stream_burst: u32,
-    /// With --lab, a fault for tests: before every this many pieces' pose one bad frame (in
-    /// turn: a bad CRC, a wrong body size, a 20-byte name not UTF-8, a non-rigid matrix, a
-    /// 20-byte name one letter off the tip's).
+    /// With --lab, a fault for tests: before every this many pieces' pose (with --real-time,
+    /// every this many samples) one bad frame (in turn: a bad CRC, a wrong body size, a 20-byte
+    /// name not UTF-8, a non-rigid matrix, a 20-byte name one letter off the tip's).
     #[arg(long, requires = "lab")]
     bad_frames_every: Option<u32>,
     /// With --lab: the world the insertions are made in, as `needle simulate --world` names it

@@ -3,7 +3,8 @@
 //! pieces take their share of the plan's durations (sped up). A reading uses a pose sampled
 //! after its piece ended, so an insertion still ends as `needle simulate --closed-loop` ends the
 //! run of its seed, bit for bit, also with a tracker whose poses lag the robot by 100 ms; and
-//! the program's reaction (pose received to command sent) over 1000 readings.
+//! the program's reaction (pose received to command sent) over 1000 readings; bad frames in the
+//! free-running stream are read past.
 //!
 //! The tests take turns: they time the program, and two labs and two steering programs at once
 //! on two cores would time the machine instead.
@@ -66,6 +67,28 @@ fn real_time_insertions_steer_as_simulated() {
     for (v, _) in &runs {
         assert_eq!(v["clock_offset_applied"], false, "one clock: {v}");
     }
+}
+
+/// A free-running tracker that sends a bad frame before every fifth sample: each is rejected and
+/// counted, none costs a reading, and the insertion ends as simulated.
+#[test]
+fn bad_frames_in_a_free_running_stream_are_read_past() {
+    let _turn = TURN.lock().unwrap_or_else(|p| p.into_inner());
+    let extra = [
+        "--tracker-rate",
+        "40",
+        "--time-scale",
+        "0.05",
+        "--bad-frames-every",
+        "5",
+    ];
+    let runs = steers_as_simulated(1, &extra);
+    let (v, _) = &runs[0];
+    let rejected = v["rejected_frames"].as_u64().unwrap();
+    let ignored = v["ignored_frames"].as_u64().unwrap();
+    // Four of the five kinds are rejected, the fifth (a name one letter off) ignored.
+    assert!(rejected >= 4 && ignored >= 1, "{v}");
+    assert!(rejected <= 4 * ignored + 4, "the kinds in turn: {v}");
 }
 
 /// The tracker's poses lag the robot by 100 ms: poses sampled before the piece ended keep

@@ -47,9 +47,9 @@ pub struct TrackerConfig {
     /// Test fault: after this many pieces the registration sent is moved 5 mm along x (the
     /// poses stay in the first one's frame).
     pub registration_change_after: Option<u32>,
-    /// Test fault: before every this many pieces' pose, one bad frame (cycling through a bad
-    /// CRC, a wrong body size, a 20-byte name that is not UTF-8, a non-rigid matrix, and a
-    /// 20-byte name one letter off the tip's).
+    /// Test fault: before every this many pieces' pose (sampling free-running: every this many
+    /// samples), one bad frame (cycling through a bad CRC, a wrong body size, a 20-byte name
+    /// that is not UTF-8, a non-rigid matrix, and a 20-byte name one letter off the tip's).
     pub bad_frames_every: Option<u32>,
     /// Poses go out only as the free-running sampler takes them ([`TrackerClients::sample`]),
     /// not when a piece ends.
@@ -121,7 +121,7 @@ impl TrackerClients {
                     continue;
                 };
                 let copies = if tick % BURST_EVERY == 0 { burst } else { 1 };
-                let _ = tracker.send(&sample, copies.max(1), false);
+                let _ = tracker.send(&sample, copies.max(1), None);
             }
         });
     }
@@ -184,7 +184,8 @@ impl TrackerClients {
             sample
         };
         if !self.config.sampling {
-            self.send(&sample, 1, true)?;
+            let fault = self.fault_before(piece);
+            self.send(&sample, 1, fault)?;
         }
         Ok(sample.stamp)
     }
@@ -199,6 +200,7 @@ impl TrackerClients {
         std::thread::spawn(move || {
             let mut waiting: VecDeque<(Instant, Sample)> = VecDeque::new();
             let mut next = Instant::now();
+            let mut sent = 0u32;
             loop {
                 next += period;
                 match next.checked_duration_since(Instant::now()) {
@@ -217,18 +219,26 @@ impl TrackerClients {
                         break;
                     }
                     waiting.pop_front();
-                    let _ = tracker.send(&s, 1, false);
+                    sent = sent.wrapping_add(1);
+                    let _ = tracker.send(&s, 1, tracker.fault_before(sent));
                 }
             }
         });
     }
 
-    /// Writes `copies` groups of `sample`'s frames to every client, in one write each.
-    fn send(&self, sample: &Sample, copies: u32, with_fault: bool) -> Result<()> {
+    /// Which bad frame, if any, goes before the `count`th pose (pieces lock-step, samples
+    /// free-running): one every `bad_frames_every`, the kinds in turn.
+    fn fault_before(&self, count: u32) -> Option<u32> {
+        let n = self.config.bad_frames_every.filter(|&n| n > 0)?;
+        count.is_multiple_of(n).then_some(count / n)
+    }
+
+    /// Writes `copies` groups of `sample`'s frames to every client, in one write each, after
+    /// the bad frame `fault` if one is due.
+    fn send(&self, sample: &Sample, copies: u32, fault: Option<u32>) -> Result<()> {
         let mut bytes = Vec::new();
-        let every = self.config.bad_frames_every.filter(|&n| n > 0);
-        if let Some(n) = every.filter(|n| with_fault && sample.piece.is_multiple_of(*n)) {
-            bytes.extend(bad_frame(sample.piece / n)?);
+        if let Some(k) = fault {
+            bytes.extend(bad_frame(k)?);
         }
         let group = self.group(sample)?;
         for _ in 0..copies {
