@@ -4,6 +4,7 @@
 
 use crate::request::change_world;
 use anyhow::{anyhow, Context, Result};
+use needle_scenario::steering::ASSUMED_STEERING;
 use needle_sim::{Perturbation, TrackerFaults, WorldEffects};
 use planner_core::steer::SteerConfig;
 
@@ -22,7 +23,9 @@ pub struct BenchWorld {
 
 impl BenchWorld {
     /// The named world (`default` when none), changed by `perturb` (`KEY=VALUE`, a perturbation
-    /// or a world key) and `faults`; the controller told the defaults changed by `steer`.
+    /// or a world key) and `faults`; the controller told what it is told steering a scenario
+    /// file silent on `[steering]` ([`ASSUMED_STEERING`]: a real tracker and real tissue),
+    /// changed by `steer`. The closed-loop plans keep curvature in hand as such a file's do.
     pub fn of(
         world: Option<&str>,
         perturb: &[String],
@@ -39,7 +42,7 @@ impl BenchWorld {
         for kv in faults {
             tracker.apply(kv).map_err(|e| anyhow!("--fault: {e}"))?;
         }
-        let mut config = SteerConfig::DEFAULT;
+        let mut config = ASSUMED_STEERING;
         for kv in steer {
             needle_scenario::steering::apply(&mut config, kv).context("--steer")?;
         }
@@ -84,7 +87,7 @@ mod tests {
         assert_eq!(w.config.noise.registration_mm, 0.42);
         let default = BenchWorld::of(None, &[], &[], &[]).unwrap();
         assert!(default.effects.is_off());
-        assert_eq!(default.config, SteerConfig::DEFAULT);
+        assert_eq!(default.config, ASSUMED_STEERING, "as a plain scenario file");
         let err = |r: Result<BenchWorld>| format!("{:#}", r.unwrap_err());
         assert!(err(BenchWorld::of(Some("mars"), &[], &[], &[])).starts_with("--world"));
         let bad = kv(&["nonsense=1"]);
