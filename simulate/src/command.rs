@@ -18,6 +18,10 @@ use std::io::Write;
 
 /// Runs `needle simulate`.
 pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
+    if !a.json {
+        // Covering a scenario's anatomy can take seconds before the runs' bar starts.
+        needle_anatomy::progress::enable();
+    }
     let (setup, shapes) = set_up(a)?;
     let plot = a.plot.as_deref().map(OutputFile::open).transpose()?;
     // The export keeps every path; the plot the first few.

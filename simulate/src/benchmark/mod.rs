@@ -20,6 +20,7 @@ use crate::setup::{Keep, Setup};
 use crate::PlanBound;
 use crate::{at_least_one, run_count, scenario_count};
 use anyhow::{Context, Result};
+use needle_analysis::cli::output::progress;
 use needle_analysis::parallel;
 use needle_scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use needle_scenario::planted::planted_scenario;
@@ -156,6 +157,11 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let threads = a.threads.unwrap_or_else(parallel::default_threads);
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        progress(a.scenarios, "benchmark")
+    };
     let mut rows = Vec::new();
     let mut unplanned = Vec::new();
     for i in 0..a.scenarios {
@@ -170,12 +176,12 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
         match measure(scenario, &world, a, seed, threads) {
             Ok(row) => {
                 let secs = started.elapsed().as_secs_f64();
-                eprintln!("{head}: {}, {secs:.1} s", row.progress());
+                bar.println(format!("{head}: {}, {secs:.1} s", row.progress()));
                 rows.push(row);
             }
             Err(e) => {
                 let reason = format!("{e:#}");
-                eprintln!("{head}: not benchmarked: {reason}");
+                bar.println(format!("{head}: not benchmarked: {reason}"));
                 unplanned.push(Unplanned {
                     seed,
                     spheres,
@@ -183,7 +189,9 @@ pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
                 });
             }
         }
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     let report = BenchmarkReport::new(a.scenarios, a.generator, &world, rows, unplanned);
     let text = if a.json {
         serde_json::to_string(&report)? + "\n"
@@ -199,8 +207,8 @@ fn write_scenario(dir: &Path, generator: Generator, seed: u64, scenario: &Scenar
     let name = format!("{}-{seed}", generator.name());
     let path = dir.join(format!("{name}.toml"));
     let header = format!(
-        "A generated 3-D scenario: needle_cli::scenario::{0}::{0}_scenario({seed}),\n\
-         written by `needle benchmark` (see docs/execution.md, \"Unseen scenarios\").",
+        "A generated 3-D scenario: needle_scenario::{0}::{0}_scenario({seed}),\n\
+         written by `needle benchmark` (see docs/simulation.md, \"Unseen scenarios\").",
         generator.name()
     );
     std::fs::write(&path, scenario_toml(scenario, &name, &header))
