@@ -23,10 +23,28 @@ struct Covered {
 }
 
 impl ScenarioFile {
+    /// How many spheres the anatomy may take beside `used` obstacle spheres:
+    /// `planner.max_anatomy_spheres`, up to what the host holds, else what keeps the scenario
+    /// within the device's capacity ([`DEVICE_MAX_OBSTACLES`]; the host's when the obstacles
+    /// alone fill it).
+    fn anatomy_budget(&self, used: usize) -> Result<usize> {
+        let host = HOST_MAX_OBSTACLES.saturating_sub(used);
+        match self.planner.as_ref().and_then(|p| p.max_anatomy_spheres) {
+            Some(0) => bail!("planner.max_anatomy_spheres is 0: the anatomy needs at least 1"),
+            Some(n) if n > host => bail!(
+                "planner.max_anatomy_spheres is {n}: at most {host} (the host's \
+                 {HOST_MAX_OBSTACLES} obstacles less the {used} of [[obstacles]])"
+            ),
+            Some(n) => Ok(n),
+            None if used < DEVICE_MAX_OBSTACLES => Ok(DEVICE_MAX_OBSTACLES - used),
+            None => Ok(host),
+        }
+    }
+
     /// The spheres of every `[[anatomy]]` entry, one shape per entry; their indices follow the
-    /// `[[obstacles]]`' ones. `used` spheres are the obstacles': with them, the scenario holds
-    /// at most the device's capacity ([`DEVICE_MAX_OBSTACLES`]; the host's when the obstacles
-    /// alone fill it), and a cover loosened to fit says so on stderr.
+    /// `[[obstacles]]`' ones. `used` spheres are the obstacles': the anatomy takes at most its
+    /// budget beside them ([`ScenarioFile::anatomy_budget`]), and a cover loosened to fit says
+    /// so on stderr.
     pub fn anatomy_shapes(&self, plane: bool, used: usize) -> Result<Vec<ObstacleShape>> {
         if self.anatomy.is_empty() {
             return Ok(Vec::new());
@@ -34,6 +52,7 @@ impl ScenarioFile {
         if plane {
             bail!("anatomy is 3-D: leave planner.plane out");
         }
+        let budget = self.anatomy_budget(used)?;
         // Once for every entry: a target given as a label reads its label map.
         let ends = [self.entry_position()?, self.target_position()?];
         let reach = Reach {
@@ -46,11 +65,6 @@ impl ScenarioFile {
             self.anatomy_ladders(n, a, &reach, &mut covered)
                 .map_err(|e| anyhow!("in anatomy[{n}]: {e:#}"))?;
         }
-        let budget = if used < DEVICE_MAX_OBSTACLES {
-            DEVICE_MAX_OBSTACLES - used
-        } else {
-            HOST_MAX_OBSTACLES.saturating_sub(used)
-        };
         let ladders: Vec<&[_]> = covered.iter().map(|c| &c.ladder.candidates[..]).collect();
         let chosen = allocate(&ladders, budget).map_err(|e| anyhow!("in anatomy: {e:#}"))?;
         let mut shapes: Vec<ObstacleShape> = (0..self.anatomy.len())
@@ -69,7 +83,8 @@ impl ScenarioFile {
                 eprintln!(
                     "note: anatomy[{}]: segment {:?} is covered by {} spheres, looser than \
                      tightness {} asks ({asked} spheres; {:.0} % outside the dilated segment), \
-                     so that the scenario holds at most {budget} anatomy spheres",
+                     so that the scenario holds at most {budget} anatomy spheres \
+                     (planner.max_anatomy_spheres)",
                     c.entry,
                     c.segment.name,
                     cover.spheres.len(),

@@ -186,6 +186,9 @@ pub struct PlannerFile {
     /// or `"off"` (unbounded); 0.01 where the file is silent (read by
     /// `execution::execution_of`).
     pub max_collision_probability: Option<toml::Value>,
+    /// Spheres the `[[anatomy]]` covers may take together, at most the host's obstacles less
+    /// the `[[obstacles]]`; where silent, what keeps the scenario within the device's capacity.
+    pub max_anatomy_spheres: Option<usize>,
 }
 
 impl ScenarioFile {

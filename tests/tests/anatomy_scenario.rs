@@ -134,6 +134,36 @@ fn a_scenario_over_the_devices_spheres_is_loosened_and_the_device_plans_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `planner.max_anatomy_spheres` sets the budget: raised to the host's 512, map 3 is covered by
+/// more than the device's 256 spheres and plans on the host, and a device refuses it with the
+/// reason; 0 and more than the host holds are refused naming the key.
+#[test]
+fn the_sphere_budget_is_a_scenario_key() {
+    let dir = temp_dir("budget-key");
+    let path = map_three(&dir);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = |n: &str| {
+        let p = dir.join(format!("budget-{n}.toml"));
+        std::fs::write(&p, format!("{text}max_anatomy_spheres = {n}\n")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let raised = with("512");
+    let (ok, _, err) = run_needle(&["plan", &raised, "--json"]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("at most 256 anatomy spheres"), "{err}");
+    let sim = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
+    let (ok_r, _, err_r) = run_needle(&["send", &raised, "--tcp", sim.address.as_str()]);
+    assert!(!ok_r && err_r.contains("256"), "{err_r}");
+    for (n, says) in [("0", "at least 1"), ("513", "at most 512")] {
+        let (ok, _, err) = run_needle(&["plan", &with(n), "--json"]);
+        assert!(
+            !ok && err.contains("planner.max_anatomy_spheres") && err.contains(says),
+            "{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The best path's clearance `needle plan` reports against the label map, beside the least
 /// distance from the path (its printed points, joined by lines 0.05 mm apart) to the centres
 /// of the labelled voxels, found one by one in f64 here: within half a voxel's diagonal, and
