@@ -85,6 +85,11 @@ struct LabArgs {
     /// than it did.
     #[arg(long, requires = "lab")]
     robot_misreport_after: Option<u32>,
+    /// With --lab, a fault for tests: after this many pieces the robot's contact sensor fires
+    /// (it reports `collided` and stops), wherever the tip is. Without it the sensor fires when
+    /// the true tip ends a piece inside an obstacle.
+    #[arg(long, requires = "lab")]
+    robot_collides_after: Option<u32>,
     /// With --lab: run in real time, as a lab does: a free-running tracker sampling the tip at
     /// --tracker-rate (each sample stamped when taken, a piece's pose seen once it ended) and a
     /// robot whose pieces take their share of their step's duration times --time-scale.
@@ -221,6 +226,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             robot_silent_after: l.robot_silent_after,
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
+            robot_collides_after: l.robot_collides_after,
             robot_start_roll_deg: l.robot_start_roll,
             robot_fixed_guide: l.robot_fixed_guide,
             time_scale: l.real_time.then_some(l.time_scale),

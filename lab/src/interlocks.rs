@@ -42,7 +42,8 @@ impl Session<'_> {
 
     /// Tells the robot to stop (holding first when tracking was lost) and waits for its word.
     pub(super) fn stop_robot(&mut self, ending: Ending) {
-        if ending == Ending::RobotStopped {
+        // A robot that sensed a collision has stopped of itself and takes no more words.
+        if matches!(ending, Ending::RobotStopped | Ending::RobotCollided) {
             self.outcome.robot_stopped = true;
             return;
         }

@@ -39,6 +39,8 @@ pub enum Ending {
     RobotNotOpenIgtlink,
     /// The robot cannot take the plan's posture (a fixed guide asked to tilt).
     PostureRefused,
+    /// The robot sensed the needle in an obstacle and stopped.
+    RobotCollided,
 }
 
 /// How an insertion ended, in the four ways a run ends plus the link breaking; each has its own
@@ -50,8 +52,8 @@ pub enum Class {
     Reached,
     /// The steps ran out, or the controller judged the target missed (3).
     Missed,
-    /// The needle entered an obstacle (4): only a lab that sees the true path can say so; the
-    /// robot mapping carries no such report, so `needle steer` never ends so today.
+    /// The needle entered an obstacle (4), as the robot's contact or force sensor said
+    /// (`collided`): only the lab sees the true path.
     Collided,
     /// Stopped by an interlock, a refusal or the operator (5).
     Stopped,
@@ -126,6 +128,7 @@ impl Ending {
             Ending::TrackerNotOpenIgtlink => Some("tracker_not_openigtlink"),
             Ending::RobotNotOpenIgtlink => Some("robot_not_openigtlink"),
             Ending::PostureRefused => Some("posture_refused"),
+            Ending::RobotCollided => Some("robot_sensed_collision"),
         }
     }
 
@@ -134,6 +137,7 @@ impl Ending {
         match self {
             Ending::Controller(StopReason::TargetReached) => Class::Reached,
             Ending::Controller(StopReason::Missed) | Ending::StepsRanOut => Class::Missed,
+            Ending::RobotCollided => Class::Collided,
             Ending::Controller(_)
             | Ending::TrackingLost
             | Ending::Interrupted

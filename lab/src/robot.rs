@@ -101,6 +101,12 @@ pub enum RobotReport {
     Holding,
     /// Stopped after `stop`.
     Stopped,
+    /// The robot sensed the needle in an obstacle (a contact or force sensor) and stopped; the
+    /// insertion is over.
+    Collided {
+        /// Commanded insertion when it was sensed (mm).
+        depth_mm: f32,
+    },
 }
 
 /// Why a text is not a robot message.
@@ -215,6 +221,7 @@ impl fmt::Display for RobotReport {
             RobotReport::Done => write!(f, "done"),
             RobotReport::Holding => write!(f, "holding"),
             RobotReport::Stopped => write!(f, "stopped"),
+            RobotReport::Collided { depth_mm } => write!(f, "collided depth_mm={depth_mm}"),
         }
     }
 }
@@ -388,6 +395,12 @@ impl std::str::FromStr for RobotReport {
                 Ok(RobotReport::PostureRefused {
                     max_tilt_deg: p
                         .required("max_tilt_deg", |t: &f32| t.is_finite() && *t >= 0.0)?,
+                })
+            }
+            "collided" => {
+                let p = Pairs::of(rest, &["depth_mm"])?;
+                Ok(RobotReport::Collided {
+                    depth_mm: p.required("depth_mm", finite)?,
                 })
             }
             "done" | "holding" | "stopped" => {

@@ -77,6 +77,7 @@ fn each_step_kind_and_word_round_trips() {
         RobotReport::Done,
         RobotReport::Holding,
         RobotReport::Stopped,
+        RobotReport::Collided { depth_mm: 41.25 },
     ] {
         assert_eq!(r.to_string().parse::<RobotReport>(), Ok(r));
     }
@@ -159,6 +160,10 @@ fn bad_strings_are_typed_errors() {
         .parse::<RobotReport>()
         .is_err());
     assert!("stopped now=1".parse::<RobotReport>().is_err());
+    assert!(
+        "collided".parse::<RobotReport>().is_err(),
+        "the depth is required"
+    );
 }
 
 /// The absolute roll is read as an `f64`: a rotation's `f32` bits survive a large roll added to

@@ -345,6 +345,11 @@ impl<'a> Session<'a> {
             RobotReport::Done => Some(Ending::StepsRanOut),
             RobotReport::Holding => None,
             RobotReport::Stopped => Some(Ending::RobotStopped),
+            RobotReport::Collided { depth_mm } => {
+                self.log
+                    .write("robot_sensed_collision", json!({ "depth_mm": depth_mm }));
+                Some(Ending::RobotCollided)
+            }
             RobotReport::PostureSet { .. } | RobotReport::PostureRefused { .. } => {
                 let why = format!("`{report}` after the posture was taken");
                 self.log.write("robot_disagrees", json!({ "why": why }));

@@ -1,10 +1,11 @@
 //! How `needle steer` ends, each way on the simulated lab (`hil-sim --lab`), and what it says:
-//! the exit status (0 reached, 3 missed, 5 stopped by an interlock or a refusal, 6 the link
-//! broken) and, with `--json`, exactly one JSON object naming the ending, whatever it is.
+//! the exit status (0 reached, 3 missed, 4 collided as the robot sensed it, 5 stopped by an
+//! interlock or a refusal, 6 the link broken) and, with `--json`, exactly one JSON object naming
+//! the ending, whatever it is.
 
 mod lab_support;
 
-use lab_support::{ending, Lab};
+use lab_support::{ending, log_lines, temp_path, Lab};
 use needle_e2e::{example, needle};
 use serde_json::Value;
 use std::io::{Read, Write};
@@ -49,6 +50,61 @@ fn an_interlock_exits_5() {
         (5, ("stopped", "robot_disagrees")),
         "{v}"
     );
+}
+
+/// The robot's contact sensor fires: the insertion ends `collided`, exit status 4, the robot
+/// already stopped and nothing more commanded; the log says so.
+#[test]
+fn a_collision_the_robot_senses_exits_4() {
+    let file = paper();
+    let mut lab = Lab::start(&file, 2, &["--robot-collides-after", "12"]);
+    let log = temp_path("collided.jsonl");
+    let (code, v) = lab.steer_ending(&file, &["--log", log.to_str().unwrap()]);
+    assert_eq!(
+        (code, reason(&v)),
+        (4, ("collided", "robot_sensed_collision")),
+        "{v}"
+    );
+    assert_eq!(v["robot_stopped"], true, "{v}");
+    let truth = lab.next_run();
+    assert_eq!(
+        (truth["end"].as_str(), truth["pieces"].as_u64()),
+        (Some("collided"), Some(13))
+    );
+    let lines = log_lines(&log);
+    let sensed: Vec<_> = lines
+        .iter()
+        .filter(|l| l["event"] == "robot_sensed_collision")
+        .collect();
+    assert_eq!(sensed.len(), 1, "{lines:?}");
+    assert!(sensed[0]["depth_mm"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_file(log);
+}
+
+/// The lab's world holds an obstacle the plan does not know of (a circle of 2 mm on the
+/// paper's planned path, halfway): the true tip enters it, the robot senses it, and `needle
+/// steer` ends `collided` with exit status 4, as the lab's truth says.
+#[test]
+fn an_obstacle_the_plan_did_not_know_ends_collided() {
+    let paper_text = std::fs::read_to_string(paper()).unwrap();
+    let lab_file = temp_path("unknown-obstacle.toml");
+    let extra = "\n[[obstacles]]\ncenter = [0.0, 6.47, 44.48]\nradius = 2.0\n";
+    let at = paper_text
+        .find("[weights]")
+        .expect("paper.toml has [weights]");
+    let text = format!("{}{extra}\n{}", &paper_text[..at], &paper_text[at..]);
+    std::fs::write(&lab_file, text).unwrap();
+    let mut lab = Lab::start(lab_file.to_str().unwrap(), 1, &[]);
+    let (code, v) = lab.steer_ending(&paper(), &[]);
+    let truth = lab.next_run();
+    assert_eq!(truth["collided"], true, "{truth}");
+    assert_eq!(truth["end"], "collided", "{truth}");
+    assert_eq!(
+        (code, reason(&v)),
+        (4, ("collided", "robot_sensed_collision")),
+        "{v}"
+    );
+    let _ = std::fs::remove_file(lab_file);
 }
 
 /// The lab dies mid-insertion: the link is broken.

@@ -31,6 +31,8 @@ use needle_lab::wire::now;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
 use needle_simulate::setup::Setup;
 use planner_core::execute::schedule::{Op, Posture, Step};
+use planner_core::model::kinematics::V3;
+use planner_core::model::scenario::Workspace;
 use robot::{Robot, Word};
 use serde::Serialize;
 use std::net::{TcpListener, TcpStream};
@@ -61,6 +63,9 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
+    /// Test fault: after this many pieces the robot's contact sensor fires wherever the tip is
+    /// (it reports `collided` and stops).
+    pub robot_collides_after: Option<u32>,
     /// The robot's absolute base roll when an insertion begins (degrees): it turns from there
     /// to the posture's roll by the shorter way, and reports absolute rolls.
     pub robot_start_roll_deg: f64,
@@ -89,6 +94,8 @@ pub enum End {
     Done,
     /// The host left mid-insertion.
     ConnectionLost,
+    /// The robot sensed the tip in an obstacle, reported `collided` and stopped.
+    Collided,
 }
 
 /// One insertion's true figures, printed as a JSON line: the world's truth, which the host
@@ -221,7 +228,7 @@ impl Lab {
             let mut next = None;
             for step in &steps {
                 let mut failure = None;
-                world.execute(step, |m| {
+                world.execute_seen(step, |m, tip, _| {
                     self.pace(&mut last_piece);
                     self.take_time(step, m, &mut was);
                     robot.pieces += 1;
@@ -248,6 +255,16 @@ impl Lab {
                         self.tracker.silence();
                     }
                     std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
+                    if self.senses_collision(robot.pieces, tip.p) {
+                        robot.report_at(
+                            RobotReport::Collided {
+                                depth_mm: m.depth_mm,
+                            },
+                            ended,
+                        );
+                        end = Some(End::Collided);
+                        return ControlFlow::Break(());
+                    }
                     // Stamped when the piece ended, as its pose was sampled.
                     robot.report_at(
                         RobotReport::Progress {
@@ -362,6 +379,26 @@ impl Lab {
             Some(n) if k > n => 5.0,
             _ => 0.0,
         }
+    }
+
+    /// Whether the robot's contact sensor fires after piece `k` with the true tip at `tip`: the
+    /// tip inside an obstacle (a circle of a plane scenario is a cylinder across it), or the
+    /// test fault's piece reached. A path that grazes an obstacle between two piece ends (at
+    /// most 1 mm apart) goes unsensed, as a sensor's threshold lets a graze pass.
+    fn senses_collision(&self, k: u32, tip: V3) -> bool {
+        if self.config.robot_collides_after.is_some_and(|n| k > n) {
+            return true;
+        }
+        let plane = self.setup.scenario.options.workspace == Workspace::PlaneYz;
+        self.setup.scenario.obstacles.iter().any(|o| {
+            let d = [
+                tip.x - o.center[0],
+                tip.y - o.center[1],
+                tip.z - o.center[2],
+            ];
+            let across = if plane { 0.0 } else { d[0] * d[0] };
+            across + d[1] * d[1] + d[2] * d[2] < o.radius * o.radius
+        })
     }
 
     /// How the pose of piece `k` is flagged invalid, if it is.
