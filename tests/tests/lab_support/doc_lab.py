@@ -5,7 +5,8 @@ pyigtl's message classes and kinematics of their own.
         [--tracker-hz 40] [--time-scale 0.02] [--seed S] [--noise-mm 0.05]
 
 Prints `tracker ADDRESS robot ADDRESS`, then for each insertion (one robot connection each)
-one JSON line: the true tip's distance to the target, the pieces, how it ended.
+one JSON line: the true tip's distance to the target, the true path's least clearance to the
+scenario's spheres (null without any), the pieces, how it ended.
 
 pyigtl's server keeps one received message per device name, and a step list is several in a
 row: the robot reads its socket itself and uses pyigtl to pack and unpack the frames.
@@ -42,6 +43,9 @@ class Needle:
         E2 = np.cross(E3, E1)
         self.E = np.column_stack([E1, E2, E3])
         self.radius = radius
+        self.obstacles = [(np.asarray(o["center"], dtype=float), float(o["radius"]))
+                          for o in scenario.get("obstacles", [])]
+        self.min_clearance = math.inf
         self.set_posture(0.0, 0.0, 0.0)
 
     def set_posture(self, a_deg, b_deg, roll_deg):
@@ -58,9 +62,24 @@ class Needle:
         e2 = self.e2 * math.cos(r) - self.e1 * math.sin(r)
         self.e1, self.e2 = e1, e2
 
+    def along(self, s, k):
+        """The point s mm along the arc of curvature k from the tip (0: a line)."""
+        if k == 0.0:
+            return self.p + self.e3 * s
+        return self.p + self.e2 * ((1 - math.cos(s * k)) / k) + self.e3 * (math.sin(s * k) / k)
+
+    def clearance_along(self, length, k):
+        """The true path's least distance to an obstacle's surface, every 0.1 mm."""
+        n = max(1, math.ceil(length / 0.1))
+        for i in range(1, n + 1):
+            q = self.along(length * i / n, k)
+            for c, r in self.obstacles:
+                self.min_clearance = min(self.min_clearance, float(np.linalg.norm(q - c)) - r)
+
     def push(self, length, curvature_share):
         """An arc curving towards the bevel (a share of the full curvature; 0: a line)."""
         k = curvature_share / self.radius
+        self.clearance_along(length, k)
         if k == 0.0:
             self.p = self.p + self.e3 * length
             return
@@ -264,7 +283,10 @@ def main():
         miss = float(np.linalg.norm(robot.needle.p - target))
         tracker.show(None)
         conn.close()
-        print(json.dumps({"end": end, "pieces": robot.pieces, "target_error": miss}), flush=True)
+        clearance = robot.needle.min_clearance
+        print(json.dumps({"end": end, "pieces": robot.pieces, "target_error": miss,
+                          "min_clearance": clearance if math.isfinite(clearance) else None}),
+              flush=True)
 
 
 if __name__ == "__main__":
