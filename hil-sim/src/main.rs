@@ -90,6 +90,16 @@ struct LabArgs {
     /// the true tip ends a piece inside an obstacle.
     #[arg(long, requires = "lab")]
     robot_collides_after: Option<u32>,
+    /// With --lab: the robot's clock runs this far ahead of the machine's (ms; negative:
+    /// behind), and its reports are stamped by it.
+    #[arg(
+        long,
+        requires = "lab",
+        value_name = "MS",
+        default_value_t = 0,
+        allow_negative_numbers = true
+    )]
+    robot_clock_offset_ms: i64,
     /// With --lab: run in real time, as a lab does: a free-running tracker sampling the tip at
     /// --tracker-rate (each sample stamped when taken, a piece's pose seen once it ended) and a
     /// robot whose pieces take their share of their step's duration times --time-scale.
@@ -227,6 +237,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             invalid_every: l.invalid_every,
             robot_misreport_after: l.robot_misreport_after,
             robot_collides_after: l.robot_collides_after,
+            robot_clock_offset_ms: l.robot_clock_offset_ms,
             robot_start_roll_deg: l.robot_start_roll,
             robot_fixed_guide: l.robot_fixed_guide,
             time_scale: l.real_time.then_some(l.time_scale),

@@ -2,16 +2,23 @@
 //! end is the robot's `progress` header timestamp (its clock), the pose's sample time the tip
 //! `TRANSFORM`'s header timestamp (the tracker's clock).
 //!
-//! The clocks are compared as one (the same machine, or synchronised by NTP or PTP) unless a
-//! frame proves otherwise. Each peer's clock is set against this program's by the smallest
-//! `arrival - stamp` seen over its frames: the peer's smallest delay minus how far its clock is
-//! ahead. Below zero, the peer's clock is ahead by at least that much, and its stamps are moved
-//! back by it (late by at most the smallest delay, which is the bound). Above zero it cannot
-//! tell a clock behind from a delay (a tracker lagging 100 ms looks like one 100 ms behind), so
-//! nothing is moved: the pose's age then counts the lag, and a pose sampled before the piece
-//! ended is never taken for a fresh one; a tracker clock behind the robot's by more than the
-//! tracking timeout would stop the insertion (`tracking_lost`). A report or pose without a
-//! timestamp (0) is not judged: the newest pose since the previous reading is used.
+//! Each peer's clock is set against this program's by bounds on its offset (this program's
+//! time less the peer's at one instant). Every stamped frame bounds it from above: `arrival -
+//! stamp` is the offset plus the frame's delay. A reply bounds it from below: the robot stamps
+//! its `holding` when it answers a `hold`, after the `hold` was sent, so `sent - stamp` is at
+//! most the offset (the exchange at the start of an insertion, [`Offset::observe_sent`]).
+//!
+//! The clocks are taken as one (the same machine, or synchronised by NTP or PTP) unless the
+//! bounds prove otherwise. Proven apart (the upper bound below zero: the peer's clock ahead;
+//! the lower bound above zero: behind), the peer's stamps are moved by the upper bound: a
+//! robot's piece end is then taken as late as it can have been, never earlier, so a pose
+//! sampled before it is never taken for a fresh one (a reading may wait up to the exchange's
+//! reply delay longer than it must). A tracker only streams: no reply bounds its clock from
+//! below, so one behind the robot's cannot be told from a tracker that lags; nothing is moved
+//! for it, and its poses then look older than they are: the reading waits (and a tracker behind
+//! by more than the tracking timeout stops the insertion, `tracking_lost`, saying why). A report
+//! or pose without a timestamp (0) is not judged: the newest pose since the previous reading is
+//! used.
 
 use needle_igtl::Timestamp;
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
@@ -52,30 +59,49 @@ impl HostClock {
     }
 }
 
-/// A peer clock's offset from this program's (s): the smallest `arrival - stamp` seen.
+/// Bounds on a peer clock's offset from this program's (s): the smallest `arrival - stamp` seen
+/// (above), and the largest `sent - stamp` of a reply (below).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Offset(Option<f64>);
+pub struct Offset {
+    upper: Option<f64>,
+    lower: Option<f64>,
+}
 
 impl Offset {
     /// Takes in one stamped frame's arrival (this program's clock) and stamp (the peer's).
     pub fn observe(&mut self, arrival_s: f64, stamp_s: f64) {
         let d = arrival_s - stamp_s;
         if d.is_finite() {
-            self.0 = Some(self.0.map_or(d, |m| m.min(d)));
+            self.upper = Some(self.upper.map_or(d, |m| m.min(d)));
         }
     }
 
-    /// The estimate, once a stamped frame came.
-    pub fn get(self) -> Option<f64> {
-        self.0
+    /// Takes in a reply's stamp (the peer's clock) and when its request was sent (this
+    /// program's): the peer stamped it after that.
+    pub fn observe_sent(&mut self, sent_s: f64, stamp_s: f64) {
+        let d = sent_s - stamp_s;
+        if d.is_finite() {
+            self.lower = Some(self.lower.map_or(d, |m| m.max(d)));
+        }
     }
-}
 
-impl Offset {
-    /// What the peer's stamps are moved by into this program's clock: back by how far the
-    /// peer's clock is proven ahead, else nothing.
+    /// The upper bound, once a stamped frame came.
+    pub fn get(self) -> Option<f64> {
+        self.upper
+    }
+
+    /// The lower bound, once a reply came.
+    pub fn lower(self) -> Option<f64> {
+        self.lower
+    }
+
+    /// What the peer's stamps are moved by into this program's clock: the upper bound where the
+    /// bounds prove the clocks apart, else nothing.
     pub fn correction(self) -> f64 {
-        self.0.map_or(0.0, |d| d.min(0.0))
+        match self.upper {
+            Some(hi) if hi < 0.0 || self.lower.is_some_and(|lo| lo > 0.0 && lo <= hi) => hi,
+            _ => 0.0,
+        }
     }
 }
 
@@ -94,7 +120,8 @@ mod tests {
     use super::*;
 
     /// A pose sampled before the piece ended is not fresh, at or after it is; a lag is not
-    /// taken for a clock behind, a clock proven ahead is moved back.
+    /// taken for a clock behind, a clock proven ahead is moved back, one proven behind (by a
+    /// reply) forward.
     #[test]
     fn freshness_against_the_pieces_end() {
         let none = Offset::default();
@@ -115,6 +142,20 @@ mod tests {
         assert!((ahead.correction() + 0.999).abs() < 1e-9);
         assert!(fresh(Some(11.0), Some(10.0), ahead, none));
         assert!(!fresh(Some(10.9), Some(10.0), ahead, none));
+        // A robot clock 300 ms behind: its `holding` stamped 9.702 for a `hold` sent at 10.0 and
+        // answered at 10.003 (this program's clock). Its stamps move forward by at least the
+        // offset: a pose sampled 1 ms before the piece truly ended is stale.
+        let mut behind = Offset::default();
+        behind.observe_sent(10.0, 9.702);
+        behind.observe(10.003, 9.702);
+        assert!((behind.correction() - 0.301).abs() < 1e-9);
+        assert!(!fresh(Some(20.299), Some(20.0), none, behind));
+        assert!(fresh(Some(20.302), Some(20.0), none, behind));
+        // Within the exchange's bounds the clocks are one.
+        let mut one = Offset::default();
+        one.observe_sent(10.0, 10.001);
+        one.observe(10.002, 10.001);
+        assert_eq!(one.correction(), 0.0);
         let stamp = Timestamp::from_secs_nanos(7, 500_000_000);
         assert_eq!(seconds(stamp), Some(7.5));
         assert_eq!(seconds(Timestamp::default()), None);

@@ -261,6 +261,9 @@ impl<'a> Session<'a> {
         if let Some(ending) = self.set_posture() {
             return ending;
         }
+        if let Some(ending) = self.exchange_clocks() {
+            return ending;
+        }
         self.commanded.list_sent(steps);
         for c in step_list(steps) {
             if self.command(c).is_err() {

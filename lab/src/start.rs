@@ -3,10 +3,12 @@
 //! tilted and rolled as planned, before any insertion. The robot answers with its absolute base
 //! roll, which must be the posture's up to whole turns and is the zero of the rolls the
 //! controller is given; a robot that cannot tilt that far (a fixed guide) refuses, and steering
-//! stops naming the posture.
+//! stops naming the posture. Then a few `hold`/`holding` exchanges bound the robot's clock.
 
 use super::{Ending, Event, Session, INTERRUPTED, POLL};
-use crate::robot::{posture_command, tilt_deg, RobotReport};
+use crate::fresh::seconds;
+use crate::robot::{posture_command, tilt_deg, RobotCommand, RobotReport};
+use needle_igtl::Timestamp;
 use serde_json::json;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::RecvTimeoutError;
@@ -15,6 +17,10 @@ use std::time::Instant;
 /// How far the depth of the posture taken may be from the entry (mm), and its roll from the
 /// posture's up to whole turns (degrees): the rounding of a printed number.
 const POSTURE_ROUNDING: f64 = 1e-2;
+
+/// `hold`/`holding` exchanges that bound the robot's clock: the tightest bounds of a few, so
+/// that one reply delayed by the machine does not loosen them.
+const CLOCK_EXCHANGES: usize = 3;
 
 impl Session<'_> {
     /// With `--registration-name`: waits for the stream's first registration (nothing is sent to
@@ -61,23 +67,71 @@ impl Session<'_> {
         if self.command(posture_command(&self.config.posture)).is_err() {
             return Some(Ending::RobotDisconnected);
         }
+        match self.next_report() {
+            Ok((report, _, _)) => self.posture_answer(report),
+            Err(ending) => Some(ending),
+        }
+    }
+
+    /// Bounds the robot's clock from both sides before the first piece: `hold` answered by
+    /// `holding`, [`CLOCK_EXCHANGES`] times; each `holding` is stamped after its `hold` was sent
+    /// and before it arrived (docs/lab.md, "Fresh poses"). `None` when done (a reply stamped 0
+    /// bounds nothing), else the ending.
+    pub(super) fn exchange_clocks(&mut self) -> Option<Ending> {
+        for _ in 0..CLOCK_EXCHANGES {
+            let sent = self.clock.unix(Instant::now());
+            if self.command(RobotCommand::Hold).is_err() {
+                return Some(Ending::RobotDisconnected);
+            }
+            match self.next_report() {
+                Ok((RobotReport::Holding, stamp, at)) => {
+                    if let Some(h) = seconds(stamp) {
+                        self.robot_offset.observe_sent(sent, h);
+                        self.robot_offset.observe(self.clock.unix(at), h);
+                    }
+                }
+                Ok((other, _, _)) => {
+                    let why = format!("`{other}` in answer to `hold` before the first piece");
+                    self.log.write("robot_disagrees", json!({ "why": why }));
+                    self.outcome.why = Some(why);
+                    return Some(Ending::RobotDisagrees);
+                }
+                Err(ending) => return Some(ending),
+            }
+        }
+        let ms = |b: Option<f64>| b.map(|s| s * 1e3);
+        self.log.write(
+            "robot_clock",
+            json!({
+                "offset_ms_at_least": ms(self.robot_offset.lower()),
+                "offset_ms_at_most": ms(self.robot_offset.get()),
+                "correction_ms": self.robot_offset.correction() * 1e3,
+            }),
+        );
+        None
+    }
+
+    /// The robot's next report within the robot timeout, its stamp and arrival; else the
+    /// ending (Ctrl-C, a connection lost, a robot silent).
+    fn next_report(&mut self) -> Result<(RobotReport, Timestamp, Instant), Ending> {
         let deadline = Instant::now() + self.config.robot_timeout;
         loop {
             if INTERRUPTED.load(Ordering::SeqCst) {
-                return Some(Ending::Interrupted);
+                return Err(Ending::Interrupted);
             }
             let Some(left) = deadline.checked_duration_since(Instant::now()) else {
-                return Some(self.robot_silence());
+                return Err(self.robot_silence());
             };
             match self.events.recv_timeout(left.min(POLL)) {
                 Ok(Event::Robot(arrival)) => {
-                    if let Some((report, _)) = self.report_of(arrival.0) {
-                        return self.posture_answer(report);
+                    let (frame, at) = *arrival;
+                    if let Some((report, stamp)) = self.report_of(frame) {
+                        return Ok((report, stamp, at));
                     }
                 }
-                Ok(Event::TrackerClosed) => return Some(Ending::TrackerDisconnected),
+                Ok(Event::TrackerClosed) => return Err(Ending::TrackerDisconnected),
                 Ok(Event::RobotClosed) | Err(RecvTimeoutError::Disconnected) => {
-                    return Some(Ending::RobotDisconnected)
+                    return Err(Ending::RobotDisconnected)
                 }
                 Ok(Event::Tracker) | Err(RecvTimeoutError::Timeout) => {}
             }

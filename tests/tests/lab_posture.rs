@@ -22,7 +22,7 @@ fn commands(lines: &[serde_json::Value]) -> Vec<String> {
 }
 
 /// The posture goes out first, with the plan's angles as the log's plan line has them, and the
-/// robot's answer is logged before the step list.
+/// robot's answer is logged before the three clock exchanges (`hold`) and the step list.
 #[test]
 fn the_posture_is_the_first_command() {
     let file = path("paper");
@@ -45,7 +45,9 @@ fn the_posture_is_the_first_command() {
         posture["roll_deg"], 180.0,
         "paper starts rolled half a turn"
     );
-    assert!(sent[1].starts_with("steps count="), "{sent:?}");
+    // Then the clock exchanges, then the step list.
+    assert_eq!(sent[1..4], ["hold", "hold", "hold"], "{sent:?}");
+    assert!(sent[4].starts_with("steps count="), "{sent:?}");
     let events: Vec<&str> = lines.iter().map(|l| l["event"].as_str().unwrap()).collect();
     let set = events.iter().position(|e| *e == "posture_set").unwrap();
     let steps = lines

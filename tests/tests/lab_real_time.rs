@@ -91,6 +91,55 @@ fn bad_frames_in_a_free_running_stream_are_read_past() {
     assert!(rejected <= 4 * ignored + 4, "the kinds in turn: {v}");
 }
 
+/// A robot whose clock runs 300 ms behind the tracker's (and this machine's): its piece ends
+/// are stamped early, so poses sampled before a piece truly ended (a 200 Hz tracker samples a
+/// few during each piece) look fresh by the stamps. The
+/// `hold`/`holding` exchanges at the start prove it behind and move its stamps forward: every
+/// reading still uses a pose sampled after its piece ended, and the insertion ends as simulated.
+/// (Judged here by the simulation's end alone: the log's stamps are the robot's own.)
+#[test]
+fn a_robot_clock_behind_is_found_and_corrected() {
+    let _turn = TURN.lock().unwrap_or_else(|p| p.into_inner());
+    let file = paper();
+    let expected = simulated(&file, 1, 2);
+    let extra = [
+        "--real-time",
+        "--tracker-rate",
+        "200",
+        "--time-scale",
+        "0.05",
+        "--robot-clock-offset-ms",
+        "-300",
+    ];
+    let mut lab = Lab::start(&file, 1, &extra);
+    for (i, sim) in expected.iter().enumerate() {
+        let log = temp_path(&format!("robot-behind-{i}.jsonl"));
+        let v = lab.steer(&file, &["--log", log.to_str().unwrap()]);
+        let truth = lab.next_run();
+        assert_eq!(
+            truth["target_error"],
+            sim["target_error"],
+            "seed {}: {v}",
+            i + 1
+        );
+        assert_eq!(v["steering"], sim["steering"], "seed {}", i + 1);
+        assert_eq!(v["clock_offset_applied"], true, "{v}");
+        let clock = log_lines(&log)
+            .into_iter()
+            .find(|l| l["event"] == "robot_clock")
+            .expect("a robot_clock line");
+        let (lo, hi) = (
+            clock["offset_ms_at_least"].as_f64().unwrap(),
+            clock["offset_ms_at_most"].as_f64().unwrap(),
+        );
+        assert!(
+            lo > 250.0 && lo <= 300.0 && (300.0..350.0).contains(&hi),
+            "{clock}"
+        );
+        let _ = std::fs::remove_file(log);
+    }
+}
+
 /// The tracker's poses lag the robot by 100 ms: poses sampled before the piece ended keep
 /// arriving after the report and are not used (counted stale); the reading waits for one
 /// sampled after, at least 100 ms old when used, and the insertion ends as simulated.

@@ -26,6 +26,7 @@ mod robot;
 pub mod tracker;
 
 use anyhow::{anyhow, bail, Context, Result};
+use needle_igtl::Timestamp;
 use needle_lab::robot::{RobotCommand, RobotReport};
 use needle_lab::wire::now;
 use needle_sim::{finish, Measurement, Tracker, TrackerFaults, World};
@@ -63,6 +64,9 @@ pub struct LabConfig {
     pub invalid_every: Option<u32>,
     /// Test fault: after this many pieces the robot reports 5 mm more depth than it did.
     pub robot_misreport_after: Option<u32>,
+    /// How far the robot's clock runs ahead of the machine's (ms; negative: behind): its
+    /// reports' stamps are moved so.
+    pub robot_clock_offset_ms: i64,
     /// Test fault: after this many pieces the robot's contact sensor fires wherever the tip is
     /// (it reports `collided` and stops).
     pub robot_collides_after: Option<u32>,
@@ -208,7 +212,11 @@ impl Lab {
         let s = &self.setup;
         let schedule = &s.prepared.schedule;
         let (p, effects) = (&s.perturbation, &s.effects);
-        let mut robot = Robot::new(conn, self.config.robot_silent_after)?;
+        let mut robot = Robot::new(
+            conn,
+            self.config.robot_silent_after,
+            self.config.robot_clock_offset_ms,
+        )?;
         let (posture, base0_deg, steps) = self.start(&mut robot)?;
         // The needle starts where the robot set it: the plan's posture if it was commanded.
         let mut at = schedule.clone();
@@ -232,28 +240,13 @@ impl Lab {
                     self.pace(&mut last_piece);
                     self.take_time(step, m, &mut was);
                     robot.pieces += 1;
-                    let mut ended = now();
-                    if self
-                        .config
-                        .tracker_silent_after
-                        .is_none_or(|n| robot.pieces <= n)
-                    {
-                        let (m, dropped) = tracked(&mut faults, m);
-                        let flag = if dropped {
-                            Some(Flag::Metadata)
-                        } else {
-                            self.flag(robot.pieces)
-                        };
-                        match self.tracker.publish(&m, flag, robot.pieces) {
-                            Ok(stamp) => ended = stamp,
-                            Err(e) => {
-                                failure = Some(e);
-                                return ControlFlow::Break(());
-                            }
+                    let ended = match self.show(&mut faults, m, robot.pieces) {
+                        Ok(ended) => ended,
+                        Err(e) => {
+                            failure = Some(e);
+                            return ControlFlow::Break(());
                         }
-                    } else {
-                        self.tracker.silence();
-                    }
+                    };
                     std::thread::sleep(Duration::from_millis(self.config.report_delay_ms));
                     if self.senses_collision(robot.pieces, tip.p) {
                         robot.report_at(
@@ -361,6 +354,9 @@ impl Lab {
                         .context("the host's step list broke off")?;
                     return Ok((posture, base0_deg, Some(steps)));
                 }
+                // Before the first piece too, a `hold` is answered at once (the host times
+                // these exchanges to bound the robot's clock).
+                Ok(RobotCommand::Hold) => robot.report(RobotReport::Holding),
                 Ok(RobotCommand::Stop) => {
                     // A host that gave up before steering (no registration came, a posture
                     // refused) hears it stopped.
@@ -379,6 +375,22 @@ impl Lab {
             Some(n) if k > n => 5.0,
             _ => 0.0,
         }
+    }
+
+    /// The tracker shows the tip as `m` measures it at the end of piece `k` (through its faults,
+    /// or not at all once silent): gives the instant the piece ended, as stamped.
+    fn show(&self, faults: &mut Tracker, m: &Measurement, k: u32) -> Result<Timestamp> {
+        if self.config.tracker_silent_after.is_some_and(|n| k > n) {
+            self.tracker.silence();
+            return Ok(now());
+        }
+        let (m, dropped) = tracked(faults, m);
+        let flag = if dropped {
+            Some(Flag::Metadata)
+        } else {
+            self.flag(k)
+        };
+        self.tracker.publish(&m, flag, k)
     }
 
     /// Whether the robot's contact sensor fires after piece `k` with the true tip at `tip`: the

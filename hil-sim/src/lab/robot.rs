@@ -23,10 +23,16 @@ pub(super) struct Robot {
     pub(super) commands: Receiver<RobotCommand>,
     pub(super) pieces: u32,
     silent_after: Option<u32>,
+    /// How far the robot's clock runs ahead of the machine's (ms; negative: behind).
+    clock_offset_ms: i64,
 }
 
 impl Robot {
-    pub(super) fn new(conn: TcpStream, silent_after: Option<u32>) -> Result<Robot> {
+    pub(super) fn new(
+        conn: TcpStream,
+        silent_after: Option<u32>,
+        clock_offset_ms: i64,
+    ) -> Result<Robot> {
         conn.set_nodelay(true)?;
         let (tx, commands) = channel();
         read_frames(
@@ -51,6 +57,7 @@ impl Robot {
             commands,
             pieces: 0,
             silent_after,
+            clock_offset_ms,
         })
     }
 
@@ -69,7 +76,7 @@ impl Robot {
         ) else {
             return;
         };
-        info.timestamp = at;
+        info.timestamp = on_own_clock(at, self.clock_offset_ms);
         // A host that left is seen when its next word does not come.
         let _ = send_with(&mut self.conn, &info, &Message::String(text));
     }
@@ -105,5 +112,32 @@ impl Robot {
                 }
             }
         }
+    }
+}
+
+/// `at` on a clock running `offset_ms` ahead (negative: behind); an unused stamp (0) stays so.
+fn on_own_clock(at: Timestamp, offset_ms: i64) -> Timestamp {
+    if at == Timestamp::default() {
+        return at;
+    }
+    // The 64-bit stamp counts 2^-32 s.
+    let shift = offset_ms.saturating_mul(1 << 32) / 1000;
+    let bits = i128::from(at.to_bits()) + i128::from(shift);
+    Timestamp::from_bits(bits.clamp(1, i128::from(u64::MAX)) as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A clock 300 ms behind stamps 0.3 s earlier; an unused stamp is left unused.
+    #[test]
+    fn a_clock_apart_shifts_the_stamps() {
+        let at = Timestamp::from_secs_nanos(100, 0);
+        let behind = on_own_clock(at, -300);
+        assert_eq!(behind.seconds, 99);
+        assert!((behind.subsec_nanos() as i64 - 700_000_000).abs() <= 1);
+        assert_eq!(on_own_clock(at, 0), at);
+        assert_eq!(on_own_clock(Timestamp::default(), 5), Timestamp::default());
     }
 }

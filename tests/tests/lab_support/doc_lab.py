@@ -191,6 +191,8 @@ class Robot:
                 self.base = r + 360.0 * math.floor((self.base - r) / 360.0 + 0.5)
                 self.needle.set_posture(kv["theta1_deg"], kv["theta2_deg"], r)
                 self.send(f"posture-set depth_mm=0 base_deg={self.base!r}")
+            elif word == "hold":
+                self.send("holding")
             elif word == "steps":
                 steps = self.steps(kv["count"])
             else:
