@@ -2,7 +2,6 @@
 //! and the names of its segments where the file gives them.
 
 use anyhow::{bail, Result};
-use std::path::Path;
 
 /// One labelled structure of a map.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,42 +26,6 @@ pub struct LabelMap {
 }
 
 impl LabelMap {
-    /// Reads a label map, by its extension: `.nrrd` (and `.seg.nrrd`), `.nii`, `.nii.gz`; or a
-    /// closed mesh (`.stl`, `.obj`) as the solid it bounds, in voxels of the default size.
-    pub fn read(path: &Path) -> Result<LabelMap> {
-        Self::read_with(path, super::mesh::DEFAULT_VOXEL_MM, None)
-    }
-
-    /// [`LabelMap::read`], a mesh voxelised at `voxel_mm`, its coordinates in `unit` (mm, cm, m
-    /// or um; `None`: millimetres, and a mesh whose extent is implausible for them is refused).
-    pub fn read_with(path: &Path, voxel_mm: f64, unit: Option<&str>) -> Result<LabelMap> {
-        let name = path.to_string_lossy().to_lowercase();
-        let mesh = name.ends_with(".stl") || name.ends_with(".obj");
-        if unit.is_some() && !mesh {
-            bail!(
-                "{}: a unit is given, but only a mesh takes one (a label map's header gives its \
-                 own)",
-                path.display()
-            );
-        }
-        let map = if mesh {
-            super::mesh::read(path, voxel_mm, unit)
-                .map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?
-        } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
-            super::nrrd::read(path)?
-        } else if name.ends_with(".nii") || name.ends_with(".nii.gz") {
-            super::nifti_file::read(path)?
-        } else {
-            bail!(
-                "{}: not a label map or mesh this reads (by its extension: .nrrd, .seg.nrrd, .nii, \
-                 .nii.gz, .stl, .obj)",
-                path.display()
-            )
-        };
-        map.validated()
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
-    }
-
     /// `self` if its grid, labels and affine are usable.
     pub fn validated(self) -> Result<LabelMap> {
         let n: usize = self.dims.iter().product();

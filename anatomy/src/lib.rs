@@ -49,6 +49,7 @@ pub mod nifti_file;
 pub mod nrrd;
 pub mod progress;
 pub mod reach;
+pub mod read;
 
 #[cfg(test)]
 mod tests;

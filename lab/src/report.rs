@@ -3,7 +3,6 @@
 //! or a setup that failed too).
 
 use super::outcome::{Class, ReadingTimes, SessionOutcome, SteerEnded};
-use super::steer::SteerArgs;
 use anyhow::Result;
 use serde::Serialize;
 use serde_json::json;
@@ -75,10 +74,21 @@ impl std::fmt::Display for Unreachable {
 
 impl std::error::Error for Unreachable {}
 
+/// What the printing of an insertion's end needs of the command line.
+#[derive(Clone, Copy, Debug)]
+pub struct Printing<'a> {
+    /// One JSON object instead of text.
+    pub json: bool,
+    /// The seed recorded (`--seed`).
+    pub seed: Option<u64>,
+    /// The registration awaited from the stream, and how long (ms).
+    pub registration: Option<(&'a str, u64)>,
+}
+
 /// `needle steer` failed before steering: with `--json` one object says why (`stop_reason`
 /// `tracker_unreachable` or `robot_unreachable`, exit status 6; else `setup_failed`, 1); the
 /// error goes on to stderr with its exit status.
-pub fn failed(a: &SteerArgs, form: Option<String>, e: anyhow::Error) -> Result<()> {
+pub fn failed(a: Printing<'_>, form: Option<String>, e: anyhow::Error) -> Result<()> {
     let (reason, outcome, code) = match e.downcast_ref::<Unreachable>() {
         Some(u) => (u.reason, "link_broken", Class::LinkBroken.exit_code()),
         None => ("setup_failed", "not_started", 1),
@@ -106,7 +116,7 @@ pub fn failed(a: &SteerArgs, form: Option<String>, e: anyhow::Error) -> Result<(
 
 /// Prints how the insertion ended; an ending other than reached is an error carrying its exit
 /// status.
-pub fn print(a: &SteerArgs, form: String, outcome: SessionOutcome) -> Result<()> {
+pub fn print(a: Printing<'_>, form: String, outcome: SessionOutcome) -> Result<()> {
     let latency = Latency::of(&outcome.latencies_ms);
     let (class, stop_reason, why) = (outcome.outcome, outcome.stop_reason, outcome.why.clone());
     let code = class.exit_code();
@@ -140,11 +150,10 @@ pub fn print(a: &SteerArgs, form: String, outcome: SessionOutcome) -> Result<()>
     if let Some(why) = why {
         message = format!("{message}: {why}");
     }
-    if let (Class::Stopped, "no_registration", Some(name)) = (class, reason, &a.registration_name) {
+    if let (Class::Stopped, "no_registration", Some((name, ms))) = (class, reason, a.registration) {
         message = format!(
-            "no registration TRANSFORM named {name} came from the tracker within {} ms: \
-             nothing was steered (the robot was told to stop)",
-            a.registration_timeout_ms
+            "no registration TRANSFORM named {name} came from the tracker within {ms} ms: \
+             nothing was steered (the robot was told to stop)"
         );
     }
     if reason == "interrupted" {

@@ -3,7 +3,7 @@
 //! controller in between, the interlocks of [`super::session`], an insertion log.
 
 use super::log::InsertionLog;
-use super::report::{self, Unreachable};
+use super::report::{self, Printing, Unreachable};
 use super::robot::step_list;
 use super::session::INTERRUPTED;
 use super::session::{Event, Inputs, LabController, Session, SessionConfig, SessionOutcome};
@@ -238,8 +238,8 @@ fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
 pub fn run_steer(a: &SteerArgs) -> Result<()> {
     let mut form = None;
     match steer(a, &mut form) {
-        Ok(outcome) => report::print(a, form.unwrap_or_default(), outcome),
-        Err(e) => report::failed(a, form, e),
+        Ok(outcome) => report::print(printing(a), form.unwrap_or_default(), outcome),
+        Err(e) => report::failed(printing(a), form, e),
     }
 }
 
@@ -332,4 +332,16 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
         eprintln!("needle steer: the insertion log is incomplete: {e}");
     }
     Ok(outcome)
+}
+
+/// What the end's printing needs of the flags.
+fn printing(a: &SteerArgs) -> Printing<'_> {
+    Printing {
+        json: a.json,
+        seed: a.seed,
+        registration: a
+            .registration_name
+            .as_deref()
+            .map(|n| (n, a.registration_timeout_ms)),
+    }
 }

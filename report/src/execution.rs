@@ -4,39 +4,12 @@
 //! each form's own schedule on the true obstacles, not taken from the planner's rounds), and the
 //! bound with the margins the plan kept.
 
-use super::json::{finite, PlanJson};
+use super::json::{finite, ExecutionJson, PlanJson};
 use needle_scenario::Execution;
 use planner_core::chance::ChancePlan;
-use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::risk::{risk_by_obstacle, ExecutionRisk, ObstacleRisk};
 use planner_core::execute::schedule::schedule;
 use planner_core::{PlanReport, Scenario};
-use serde::{Deserialize, Serialize};
-
-/// `execution` in `needle plan --json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ExecutionJson {
-    /// `open_loop` or `closed_loop`.
-    pub mode: String,
-    /// The perturbation model the predictions assume.
-    pub perturbation: Perturbation,
-    /// The bound, `null` when off.
-    pub max_collision_probability: Option<f64>,
-    /// Whether the best form's predicted collision probability is within the bound (`null`
-    /// without a bound or a best form).
-    pub within_bound: Option<bool>,
-    /// Plans made to find the margins (`null` without a bound).
-    pub rounds: Option<u32>,
-    /// How far each obstacle was grown for the plan (mm, scenario order; `null` without a bound).
-    pub margins: Option<Vec<f64>>,
-    /// The share of the curvature the plan leaves for steering (`planner.curvature_reserve`,
-    /// lowered where no path kept what was asked: `needle_scenario::reserve`).
-    #[serde(default)]
-    pub curvature_reserve: Option<f64>,
-    /// The share asked for: the scenario's, before any was given up.
-    #[serde(default)]
-    pub curvature_reserve_asked: Option<f64>,
-}
 
 /// Each form's predicted risk (`None` for an infeasible form or one the driver cannot
 /// execute), in the report's order.

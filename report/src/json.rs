@@ -7,6 +7,7 @@
 
 use super::schedule::ScheduleJson;
 use planner_core::check::{rebuild, sample_points};
+use planner_core::execute::perturbation::Perturbation;
 use planner_core::execute::schedule::Schedule;
 use planner_core::model::kinematics::V3;
 use planner_core::{FormOutcome, PlanReport, Scenario, SegmentKind};
@@ -38,7 +39,7 @@ pub struct PlanJson {
     /// With an `[execution]` table or a collision bound: the world assumed and what the plan
     /// predicts in it.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub execution: Option<super::execution::ExecutionJson>,
+    pub execution: Option<ExecutionJson>,
     /// One entry per form tried, in catalogue order.
     pub forms: Vec<FormEntry>,
     /// Time and effort of the whole plan.
@@ -262,4 +263,29 @@ impl fmt::Display for PlanJson {
 pub fn write_sorted(report: &impl Serialize, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let value = serde_json::to_value(report).map_err(|_| fmt::Error)?;
     write!(f, "{value}")
+}
+
+/// `execution` in `needle plan --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExecutionJson {
+    /// `open_loop` or `closed_loop`.
+    pub mode: String,
+    /// The perturbation model the predictions assume.
+    pub perturbation: Perturbation,
+    /// The bound, `null` when off.
+    pub max_collision_probability: Option<f64>,
+    /// Whether the best form's predicted collision probability is within the bound (`null`
+    /// without a bound or a best form).
+    pub within_bound: Option<bool>,
+    /// Plans made to find the margins (`null` without a bound).
+    pub rounds: Option<u32>,
+    /// How far each obstacle was grown for the plan (mm, scenario order; `null` without a bound).
+    pub margins: Option<Vec<f64>>,
+    /// The share of the curvature the plan leaves for steering (`planner.curvature_reserve`,
+    /// lowered where no path kept what was asked: `needle_scenario::reserve`).
+    #[serde(default)]
+    pub curvature_reserve: Option<f64>,
+    /// The share asked for: the scenario's, before any was given up.
+    #[serde(default)]
+    pub curvature_reserve_asked: Option<f64>,
 }

@@ -204,3 +204,18 @@ pub fn load_scenario(path: &Path) -> Result<Scenario> {
         .to_scenario()
         .with_context(|| format!("in scenario {}", path.display()))
 }
+
+/// The scenario file at `path` as a device is asked to plan it: the scenario, and the collision
+/// bound with its execution model if the file sets one.
+pub fn load_plan_request(
+    path: &Path,
+) -> Result<(
+    planner_core::Scenario,
+    Option<planner_core::wire::ChanceRequest>,
+)> {
+    let scenario = load_scenario(path)?;
+    Ok((
+        scenario,
+        super::execution::load_execution(path)?.chance_request(),
+    ))
+}

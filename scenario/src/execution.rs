@@ -204,18 +204,6 @@ pub fn load_execution(path: &Path) -> Result<Execution> {
     execution_of(&file).with_context(|| format!("in scenario {}", path.display()))
 }
 
-/// The scenario file at `path` as a device is asked to plan it: the scenario, and the collision
-/// bound with its execution model if the file sets one.
-pub fn load_plan_request(
-    path: &Path,
-) -> Result<(
-    planner_core::Scenario,
-    Option<planner_core::wire::ChanceRequest>,
-)> {
-    let scenario = super::build::load_scenario(path)?;
-    Ok((scenario, load_execution(path)?.chance_request()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

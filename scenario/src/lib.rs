@@ -42,7 +42,7 @@ pub mod steering;
 pub mod unseen;
 pub mod write;
 
-pub use build::{load_scenario, load_scenario_shapes, parse_form, restrict};
-pub use execution::{load_execution, load_plan_request, Execution, ExecutionMode};
+pub use build::{load_plan_request, load_scenario, load_scenario_shapes, parse_form, restrict};
+pub use execution::{load_execution, Execution, ExecutionMode};
 pub use file::ScenarioFile;
 pub use shapes::ObstacleShape;
