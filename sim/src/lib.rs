@@ -54,6 +54,8 @@ mod closed;
 mod drawn;
 pub mod effects;
 mod executed;
+mod factor;
+mod faults;
 mod layered;
 mod measure;
 mod outcome;
@@ -67,13 +69,15 @@ mod world;
 
 pub use closed::{
     closed_loop, closed_loop_in, closed_loop_observed, in_process, ClosedLoopError, ClosedRun,
-    Conditions, Controller, Seen, Tracker, TrackerFaults,
+    Conditions, Controller, Seen, Tracker,
 };
 pub use drawn::{Drawn, StepDraw};
 pub use effects::{
     EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, TWICE_CLINICAL_FAULT_KEYS,
     TWICE_CLINICAL_KEYS, WORLD_KEYS,
 };
+pub use factor::MIN_FACTOR;
+pub use faults::TrackerFaults;
 pub use outcome::{controller_verdict, Outcome};
 pub use planner_core::execute::perturbation::{
     PerturbError, Perturbation, DRIFT_REFERENCE_MM, KEYS, MAX_PIECE_MM, MEASURE_EVERY_MM_MIN,
@@ -82,4 +86,4 @@ pub use reach::nearest_reach;
 pub use reading::Measurement;
 pub use roll::{roll_error_deg, roll_trace, RollSample, RollSummary};
 pub use run::{finish, open_loop, open_loop_in, Planned, Rotations, Run};
-pub use world::{Executed, World, WorldError, MIN_FACTOR};
+pub use world::{Executed, World, WorldError};

@@ -30,6 +30,7 @@ use crate::drawn::{Drawn, StepDraw};
 use crate::effects::layers::Move;
 use crate::effects::{Active, EffectsError, WorldEffects};
 use crate::executed::executed_part;
+use crate::factor::MIN_FACTOR;
 use crate::random::{seeded, Draw, SplitMix64};
 use crate::reading::Measurement;
 use crate::{PerturbError, Perturbation, DRIFT_REFERENCE_MM};
@@ -42,9 +43,6 @@ use planner_core::model::scenario::Workspace;
 use planner_core::{Scenario, SegmentKind};
 use std::fmt;
 use std::ops::ControlFlow;
-
-/// The smallest curvature factor a draw may give (a wild spread cannot flip the bevel).
-pub const MIN_FACTOR: f32 = 0.2;
 
 /// Offsets the tracker stream from the physics stream of the same seed.
 const TRACKER_STREAM: u64 = 0x5452_4143_4B45_5221;

@@ -59,25 +59,12 @@ fn no_source_file_is_over_500_lines() {
     assert!(long.is_empty(), "split by concern: {long:#?}");
 }
 
-/// Tangles that were there before the reader saw `super::` paths, each a group of siblings that
-/// reach each other: a new tangle, or one of these growing, fails. The host crates carved out of
-/// the command-line crate brought theirs along, and sim is next; planner-core has none.
-const KNOWN_TANGLES: [(&str, &[&str]); 2] = [
-    ("sim/src", &["closed", "drawn", "effects", "run", "world"]),
-    ("sim/src", &["effects::depths", "effects::keys"]),
-];
-
 #[test]
 fn no_crate_has_an_import_cycle_between_sibling_modules() {
     let mut tangled = Vec::new();
     for dir in CRATES {
         for group in tangles(&between_siblings(&graph(&workspace().join(dir)))) {
-            let known = KNOWN_TANGLES
-                .iter()
-                .any(|(d, known)| d == dir && group.iter().all(|m| known.contains(&m.as_str())));
-            if !known {
-                tangled.push(format!("{dir}: {group:?}"));
-            }
+            tangled.push(format!("{dir}: {group:?}"));
         }
     }
     assert!(

@@ -1,9 +1,11 @@
 //! Layer boundaries given rather than drawn (`layer_depths_mm=12,30,55`): at most
 //! [`MAX_LAYERS`] depths along the tip's path, ascending, each in [0, 1000] mm.
 
-use super::keys::MAX_LAYERS;
 use serde::{Serialize, Serializer};
 use std::fmt;
+
+/// The most tissue boundaries a run may cross.
+pub const MAX_LAYERS: u8 = 8;
 
 /// The key of given layer boundaries.
 pub const LAYER_DEPTHS_KEY: &str = "layer_depths_mm";

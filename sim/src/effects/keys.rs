@@ -1,7 +1,7 @@
 //! The world effects' keys as `KEY=VALUE` (the flags of `needle simulate`): each key's range,
 //! and typed errors that start with the key.
 
-use super::depths::{LayerDepths, LAYER_DEPTHS_KEY};
+use super::depths::{LayerDepths, LAYER_DEPTHS_KEY, MAX_LAYERS};
 use super::WorldEffects;
 use std::fmt;
 
@@ -21,9 +21,6 @@ const fn spec(key: &'static str, min: f32, max: f32, whole: bool) -> Spec {
         whole,
     }
 }
-
-/// The most tissue boundaries a run may cross.
-pub const MAX_LAYERS: u8 = 8;
 
 const SPECS: [Spec; 11] = [
     spec("tracker_dof", 5.0, 6.0, true),

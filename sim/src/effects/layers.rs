@@ -4,8 +4,8 @@
 //! [`Layers::advance`] turns the advance the tip would make in a homogeneous tissue into the
 //! moves it makes here; the world executes them (each with its layer's curvature factor).
 
+use crate::factor::MIN_FACTOR;
 use crate::random::{Draw, SplitMix64};
-use crate::MIN_FACTOR;
 use serde::Serialize;
 
 /// One move of the tip: `length` mm along the needle's path with its curvature multiplied by

@@ -204,18 +204,23 @@ impl WorldEffects {
 
     /// The clinical world's tracker dropouts: a 2 mm gap starts on 1 % of millimetres (the
     /// line of sight of imaging and the field of a coil near metal are lost now and then).
-    pub fn clinical_faults() -> crate::TrackerFaults {
-        crate::TrackerFaults {
+    pub fn clinical_faults() -> crate::faults::TrackerFaults {
+        crate::faults::TrackerFaults {
             dropout_rate: 0.01,
             dropout_mm: 2.0,
-            ..crate::TrackerFaults::default()
+            ..crate::faults::TrackerFaults::default()
         }
     }
 
     /// A named world: `default` (today's) or `clinical`.
-    pub fn preset(name: &str) -> Result<(WorldEffects, crate::TrackerFaults), EffectsError> {
+    pub fn preset(
+        name: &str,
+    ) -> Result<(WorldEffects, crate::faults::TrackerFaults), EffectsError> {
         match name.trim() {
-            "default" => Ok((WorldEffects::default(), crate::TrackerFaults::default())),
+            "default" => Ok((
+                WorldEffects::default(),
+                crate::faults::TrackerFaults::default(),
+            )),
             "clinical" => Ok((WorldEffects::clinical(), WorldEffects::clinical_faults())),
             other => Err(EffectsError::UnknownPreset(other.into())),
         }
