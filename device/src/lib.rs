@@ -34,5 +34,6 @@
 pub mod checked;
 pub mod commands;
 pub mod motion;
+pub mod posture;
 pub mod send;
 pub mod verify;

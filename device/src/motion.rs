@@ -6,12 +6,15 @@
 //! stops with `LinkLost` after 1 s, by its own safety rules.
 
 use crate::commands::LinkArgs;
+use crate::posture::{board_steps, tilt_deg, turn_to_roll};
 use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use needle_link::{Client, LinkError, Transport};
 use needle_motion::State;
 use needle_report::local::plan_locally;
 use needle_scenario::{load_execution, load_scenario};
+use planner_core::execute::schedule::Schedule;
+use planner_core::model::scenario::Driver;
 use planner_core::wire::{Fault, MotionFault, MotionRequest, MotionStatus};
 use serde_json::{json, Value};
 use std::io::Write;
@@ -58,6 +61,10 @@ pub struct MotionArgs {
     /// The scenario whose plan `move` executes (planned here as `needle plan` plans it).
     #[arg(required_if_eq("action", "move"))]
     pub scenario: Option<PathBuf>,
+    /// With `move`: the needle guide is set at the plan's tilt (this board only turns and
+    /// inserts; a tilted plan is refused without it).
+    #[arg(long)]
+    pub tilt_set: bool,
     /// Print the final status as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -81,7 +88,14 @@ pub fn motion(args: &MotionArgs) -> Result<()> {
             INTERRUPTS.fetch_add(1, Ordering::SeqCst);
         });
     }
-    let request = request(args)?;
+    if args.tilt_set && args.action != Action::Move {
+        bail!("only `needle motion move` takes --tilt-set");
+    }
+    // Planned before connecting: a scenario that does not plan never reaches the board.
+    let planned = match args.action {
+        Action::Move => Some(plan_move(args)?),
+        _ => None,
+    };
     let mut config = args.link.config()?;
     // A move lasts as long as it lasts: each exchange is bounded by --timeout, not the whole.
     config.deadline = None;
@@ -92,6 +106,13 @@ pub fn motion(args: &MotionArgs) -> Result<()> {
             action_name(args.action)
         );
     }
+    let request = match planned {
+        Some(plan) => {
+            let now = ask(&mut client, MotionRequest::Status, Action::Status)?;
+            plan.request(now.position[1], args.tilt_set)?
+        }
+        None => request(args)?,
+    };
     let mut status = ask(&mut client, request, args.action)?;
     let mut interrupted = false;
     if waits {
@@ -126,21 +147,57 @@ fn request(args: &MotionArgs) -> Result<MotionRequest> {
         Action::Estop => MotionRequest::EStop,
         Action::ClearFault => MotionRequest::ClearFault,
         Action::Reset => MotionRequest::Reset,
-        Action::Move => {
-            let file = args.scenario.as_ref().context("`move` needs a scenario")?;
-            let scenario = load_scenario(file)?;
-            let execution = load_execution(file)?;
-            let made = plan_locally(&scenario, &execution)?;
-            let schedule = made
-                .schedule()?
-                .ok_or_else(|| anyhow!("{}: no feasible path, nothing to move", file.display()))?;
-            MotionRequest::Move {
-                driver: made.scenario.driver,
-                needle_mm: made.scenario.needle.length,
-                steps: schedule.steps.clone(),
-            }
-        }
+        Action::Move => bail!("`move` is planned first (plan_move)"),
     })
+}
+
+/// A plan for `move`, made here as `needle plan` makes it.
+struct PlannedMove {
+    driver: Driver,
+    needle_mm: f32,
+    schedule: Schedule,
+}
+
+fn plan_move(args: &MotionArgs) -> Result<PlannedMove> {
+    let file = args.scenario.as_ref().context("`move` needs a scenario")?;
+    let scenario = load_scenario(file)?;
+    let execution = load_execution(file)?;
+    let made = plan_locally(&scenario, &execution)?;
+    let schedule = made
+        .schedule()?
+        .ok_or_else(|| anyhow!("{}: no feasible path, nothing to move", file.display()))?;
+    Ok(PlannedMove {
+        driver: made.scenario.driver,
+        needle_mm: made.scenario.needle.length,
+        schedule: schedule.clone(),
+    })
+}
+
+impl PlannedMove {
+    /// The move for a shaft now at `rotation_deg`: the turn to the plan's roll, then its steps;
+    /// said on stderr.
+    fn request(&self, rotation_deg: f32, tilt_set: bool) -> Result<MotionRequest> {
+        let p = &self.schedule.posture;
+        let steps = board_steps(
+            p,
+            &self.schedule.steps,
+            &self.driver,
+            rotation_deg,
+            tilt_set,
+        )?;
+        let turn = turn_to_roll(rotation_deg, p.roll_deg);
+        eprintln!(
+            "posture: tilt {:.2} deg (the guide's), bevel roll {} deg: the shaft turns {turn} deg \
+             first",
+            tilt_deg(p),
+            p.roll_deg
+        );
+        Ok(MotionRequest::Move {
+            driver: self.driver,
+            needle_mm: self.needle_mm,
+            steps,
+        })
+    }
 }
 
 /// One request; a refusal as an error that says why.

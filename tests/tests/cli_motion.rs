@@ -1,5 +1,6 @@
 //! `needle motion` against `hil-sim --axes` (simulated motors in real time, over TCP): refused
-//! before arming and homing, homes to the switch, moves the paper's plan to its insertion, keeps
+//! before arming and homing, homes to the switch, refuses a tilted plan until the guide is said
+//! to be set, turns the shaft to the plan's roll and moves the plan to its insertion, keeps
 //! the watchdog fed while it waits, stops the moves on Ctrl-C, and the e-stop latches until
 //! cleared.
 
@@ -52,13 +53,13 @@ fn needle_motion_homes_moves_stops_and_estops_the_simulated_axes() {
         (s["state"].as_str(), s["homed"].as_bool()),
         (Some("disarmed"), Some(false))
     );
-    let (ok, _, err) = motion(&addr, "move", &[paper]);
+    let (ok, _, err) = motion(&addr, "move", &[paper, "--tilt-set"]);
     assert!(
         !ok && err.contains("refused `move`") && err.contains("disarmed"),
         "{err}"
     );
     assert!(motion(&addr, "arm", &[]).0);
-    let (ok, _, err) = motion(&addr, "move", &[paper]);
+    let (ok, _, err) = motion(&addr, "move", &[paper, "--tilt-set"]);
     assert!(!ok && err.contains("home"), "{err}");
 
     // Homing waits for the switch (the stage starts 5 mm out at 2 mm/s).
@@ -70,9 +71,30 @@ fn needle_motion_homes_moves_stops_and_estops_the_simulated_axes() {
     );
     assert_eq!(s["insertion_mm"].as_f64(), Some(0.0));
 
+    // The paper's plan tilts the needle 28.67 deg: refused until the guide is said to be set,
+    // and nothing moves.
+    let (ok, _, err) = motion(&addr, "move", &[paper]);
+    assert!(
+        !ok && err.contains("tilts the needle 28.67 deg") && err.contains("--tilt-set"),
+        "{err}"
+    );
+    let (_, s, _) = motion(&addr, "status", &[]);
+    assert_eq!(
+        (s["insertion_mm"].as_f64(), s["rotation_deg"].as_f64()),
+        (Some(0.0), Some(0.0))
+    );
+
     // Ctrl-C mid-move: the board stops and drops the moves; the command fails.
     let child = Command::new(needle_bin())
-        .args(["motion", "move", paper, "--tcp", &addr, "--json"])
+        .args([
+            "motion",
+            "move",
+            paper,
+            "--tilt-set",
+            "--tcp",
+            &addr,
+            "--json",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -105,8 +127,12 @@ fn needle_motion_homes_moves_stops_and_estops_the_simulated_axes() {
 
     // Home again (a few mm), then the paper's plan, about 37 s of simulated motors: the command feeds the watchdog all along.
     assert!(motion(&addr, "home", &[]).0);
-    let (ok, s, err) = motion(&addr, "move", &[paper]);
+    let (ok, s, err) = motion(&addr, "move", &[paper, "--tilt-set"]);
     assert!(ok, "{err}");
+    // The shaft turns to the posture's roll (180 deg) first; the plan's line spins whole turns.
+    assert!(err.contains("bevel roll 180 deg: the shaft turns"), "{err}");
+    let roll = s["rotation_deg"].as_f64().unwrap();
+    assert!(((roll - 180.0) / 360.0).fract().abs() < 1e-3, "{s}");
     assert_eq!(s["state"].as_str(), Some("armed"));
     assert!(s["last_fault"].is_null(), "{s}");
     let inserted = s["insertion_mm"].as_f64().unwrap();
@@ -115,16 +141,20 @@ fn needle_motion_homes_moves_stops_and_estops_the_simulated_axes() {
         "{inserted} mm"
     );
 
-    // The e-stop latches through a reset and an arm until cleared.
-    let (ok, s, _) = motion(&addr, "estop", &[]);
+    estop_latches_until_cleared(&addr);
+}
+
+/// The e-stop latches through a reset and an arm until cleared.
+fn estop_latches_until_cleared(addr: &str) {
+    let (ok, s, _) = motion(addr, "estop", &[]);
     assert!(ok);
     assert_eq!(s["state"].as_str(), Some("faulted"));
     assert_eq!(s["last_fault"]["cause"].as_str(), Some("e-stop"), "{s}");
     for action in ["reset", "arm"] {
-        let (ok, _, err) = motion(&addr, action, &[]);
+        let (ok, _, err) = motion(addr, action, &[]);
         assert!(!ok && err.contains("e-stop"), "{action}: {err}");
     }
-    let (ok, s, err) = motion(&addr, "clear-fault", &[]);
+    let (ok, s, err) = motion(addr, "clear-fault", &[]);
     assert!(ok, "{err}");
     assert_eq!(
         (s["state"].as_str(), s["homed"].as_bool()),
@@ -148,6 +178,11 @@ fn needle_motion_says_what_is_wrong_with_its_arguments_and_devices_without_axes(
     ]);
     assert!(
         !ok && err.contains("only `needle motion move` takes a scenario"),
+        "{err}"
+    );
+    let (ok, _, err) = run_needle(&["motion", "arm", "--tilt-set", "--tcp", "127.0.0.1:9"]);
+    assert!(
+        !ok && err.contains("only `needle motion move` takes --tilt-set"),
         "{err}"
     );
     // A device without axes says so.
