@@ -40,6 +40,7 @@ pub mod reserve;
 pub mod shapes;
 pub mod steering;
 pub mod unseen;
+pub mod voxels;
 pub mod write;
 
 pub use build::{load_plan_request, load_scenario, load_scenario_shapes, parse_form, restrict};

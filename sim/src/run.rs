@@ -36,10 +36,15 @@ pub struct Run {
     /// towards where the target ended, comes to it (mm;
     /// [`World::nearest_reach`](crate::World::nearest_reach)).
     pub nearest_reach_mm: f32,
-    /// The true path entered an obstacle.
+    /// The true path entered an obstacle (a sphere, or a voxel of an organ: see
+    /// `entered_voxels`).
     pub collided: bool,
-    /// Smallest clearance of the true path (mm).
+    /// Smallest clearance of the true path to the spheres (mm).
     pub min_clearance: f32,
+    /// Whether the true path entered a voxel of the segments the spheres cover, as the caller
+    /// judged it against the label map (`None`: no label map; the world knows only spheres).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entered_voxels: Option<bool>,
     /// The bevel rotations the driver executed.
     pub rotations: Rotations,
     /// The true tip path, at most 1 mm apart.
@@ -191,6 +196,7 @@ pub fn finish(world: &World, planned: &Planned, seed: u64) -> Run {
         nearest_reach_mm: world.nearest_reach(),
         collided: world.min_clearance() < 0.0,
         min_clearance: world.min_clearance(),
+        entered_voxels: None,
         rotations: Rotations::of(world.executed()),
         points,
         steps: world.executed().to_vec(),

@@ -63,9 +63,10 @@ pub fn on_device(
         let mut out = Vec::with_capacity(items.len());
         for &(i, seed) in items {
             start_steering(&mut client, setup)?;
-            let run = setup
+            let mut run = setup
                 .steer(&mut LinkController(&mut client), seed)
                 .map_err(|e| anyhow!("run {}: {e}", i + 1))?;
+            setup.judge(&mut run.run);
             out.push(keep.trim_closed(i, run));
             done();
         }

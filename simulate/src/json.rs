@@ -90,6 +90,10 @@ pub struct SummaryJson {
     pub path_deviation: DeviationJson,
     /// Runs whose true path entered an obstacle.
     pub collisions: usize,
+    /// With `[[anatomy]]`: of the collisions, the runs whose true path entered a voxel of a
+    /// covered segment, judged against the label map.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub entered_voxels: Option<usize>,
     /// Smallest clearance over all runs (mm; null without obstacles).
     pub min_clearance: f32,
     /// Bevel rotations per insertion: `median_per_run`, `max_per_run`, `mean_total_deg`,
@@ -220,6 +224,7 @@ fn summary_json(summary: &Summary) -> SummaryJson {
             max: summary.path_max.max,
         },
         collisions: summary.collisions,
+        entered_voxels: summary.entered_voxels,
         min_clearance: summary.min_clearance,
         rotations: summary.rotations,
     }

@@ -217,6 +217,9 @@ pub struct Summary {
     pub path_max_in_plane: Option<Spread>,
     /// Runs whose true path entered an obstacle.
     pub collisions: usize,
+    /// Of them, the runs whose true path entered a voxel of an organ the spheres cover, judged
+    /// against the label map (`None`: no label map).
+    pub entered_voxels: Option<usize>,
     /// Smallest clearance over all runs (mm).
     pub min_clearance: f32,
     /// The bevel rotations per insertion.
@@ -272,6 +275,11 @@ where
         path_rms_in_plane: in_plane(runs.clone(), |r| r.path_rms_in_plane),
         path_max_in_plane: in_plane(runs.clone(), |r| r.path_max_in_plane),
         collisions: runs.clone().filter(|r| r.collided).count(),
+        entered_voxels: runs.clone().any(|r| r.entered_voxels.is_some()).then(|| {
+            runs.clone()
+                .filter(|r| r.entered_voxels == Some(true))
+                .count()
+        }),
         rotations: RotationFigures::of(runs.clone()),
         min_clearance: runs.map(|r| r.min_clearance).fold(f32::INFINITY, f32::min),
     }

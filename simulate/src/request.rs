@@ -173,7 +173,9 @@ pub fn set_up(
     path: Option<&Path>,
     r: &Request,
 ) -> Result<(Setup, Vec<ObstacleShape>)> {
-    asked(file, path, r)?.set_up()
+    let (mut setup, shapes) = asked(file, path, r)?.set_up()?;
+    setup.voxels = in_scenario(file.voxel_judge(), path)?.map(std::sync::Arc::new);
+    Ok((setup, shapes))
 }
 
 /// The `needle simulate --json` object of the runs made (`detail`: every run's record).

@@ -7,12 +7,14 @@
 use super::{prepare_keeping_reserve, run_seed, PlanBound, Prepared};
 use anyhow::{anyhow, Result};
 use needle_analysis::parallel;
+use needle_scenario::voxels::VoxelJudge;
 use needle_sim::{
     closed_loop_in, in_process, open_loop_in, ClosedLoopError, ClosedRun, Conditions, Controller,
     Perturbation, Planned, Run, TrackerFaults, WorldEffects,
 };
 use planner_core::steer::SteerConfig;
 use planner_core::Scenario;
+use std::sync::Arc;
 
 /// Runs executed between two prunings of the paths kept for the plot.
 const CHUNK: usize = 1024;
@@ -42,6 +44,8 @@ pub struct Setup {
     /// The curvature reserve the scenario asked for; `scenario` holds the one planned with,
     /// less where no path kept this much ([`prepare_keeping_reserve`]).
     pub reserve_asked: f32,
+    /// The organs' voxels each run's true path is judged against, with `[[anatomy]]`.
+    pub voxels: Option<Arc<VoxelJudge>>,
 }
 
 /// What is kept of each run beyond its figures.
@@ -147,6 +151,7 @@ impl Setup {
             seed,
             bound: bound.copied(),
             reserve_asked,
+            voxels: None,
         })
     }
 
@@ -177,6 +182,16 @@ impl Setup {
             }
         }
         Ok(out)
+    }
+
+    /// Judges `run`'s true path against the organs' voxels, if there are any: a path that
+    /// entered one collided, whatever the spheres say.
+    pub fn judge(&self, run: &mut Run) {
+        if let Some(j) = &self.voxels {
+            let entered = j.entered(&run.points);
+            run.entered_voxels = Some(entered);
+            run.collided |= entered;
+        }
     }
 
     /// The world the runs are simulated in: the perturbation, the effects and the faults.
@@ -233,6 +248,7 @@ impl Setup {
             let p = &self.perturbation;
             let (s, planned, e) = (&self.scenario, &self.planned, &self.effects);
             let mut run = open_loop_in(s, planned, schedule, p, e, seed)?;
+            self.judge(&mut run);
             keep.trim(i, false, &mut run);
             Ok(run)
         })
@@ -248,7 +264,8 @@ impl Setup {
         self.in_parallel(keep, threads, done, |i, seed| {
             let mut ctl = in_process(&self.scenario, &self.prepared.schedule, &self.config)
                 .map_err(|e| anyhow!("steering cannot start: {e}"))?;
-            let run = self.steer(&mut ctl, seed).map_err(|e| anyhow!("{e}"))?;
+            let mut run = self.steer(&mut ctl, seed).map_err(|e| anyhow!("{e}"))?;
+            self.judge(&mut run.run);
             Ok(keep.trim_closed(i, run))
         })
     }

@@ -92,9 +92,21 @@ pub fn to_table(h: &Header<'_>, p: &Perturbation, s: &Summary) -> String {
         "collisions: {} of {} runs; smallest clearance {clear}",
         s.collisions, h.runs
     );
+    voxels_line(&mut out, s, h.runs);
     rotations_line(&mut out, &s.rotations);
     perturbation_line(&mut out, p);
     out
+}
+
+/// With `[[anatomy]]`: the runs whose true path entered an organ's voxels.
+fn voxels_line(out: &mut String, s: &Summary, runs: usize) {
+    if let Some(n) = s.entered_voxels {
+        let _ = writeln!(
+            out,
+            "against the label map: {n} of {runs} runs' true paths entered a voxel of the \
+             covered segments (counted in the collisions; the clearance is to the spheres)"
+        );
+    }
 }
 
 /// The bevel rotations per insertion.
@@ -193,6 +205,7 @@ pub fn closed_table(
         );
     }
     let _ = writeln!(out);
+    voxels_line(&mut out, s, h.runs);
     rotations_line(&mut out, &s.rotations);
     steering_lines(&mut out, h.runs, steering);
     let _ = writeln!(
