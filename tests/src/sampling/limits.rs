@@ -39,6 +39,8 @@ pub struct Limits {
     pub plane: bool,
     /// Most segments a path may have (the scenario's N).
     pub max_segments: usize,
+    /// The longest path the needle can be pushed along: its insertable length (mm).
+    pub max_length: f64,
 }
 
 impl Limits {
@@ -62,6 +64,7 @@ impl Limits {
             clearance: f64::from(s.options.min_clearance) + CLEARANCE_MARGIN,
             plane: s.options.workspace == Workspace::PlaneYz,
             max_segments: usize::from(s.options.max_control_degree),
+            max_length: f64::from(s.needle.length) * shrink,
         }
     }
 

@@ -9,8 +9,8 @@
 //! segments. From every new node an exact goal connection is tried (arc then line or line then
 //! arc in closed form; two arcs by a scanned root when neither passes); each tree's shortest
 //! connected path is then shortened by a local search over its parameters, and the shortest of
-//! them returned. Every point of a returned path keeps `min_clearance` plus
-//! [`CLEARANCE_MARGIN`] from every sphere.
+//! them returned (none longer than the needle's insertable length). Every point of a returned
+//! path keeps `min_clearance` plus [`CLEARANCE_MARGIN`] from every sphere.
 
 pub mod arc_arc;
 pub mod connect;
@@ -118,6 +118,10 @@ pub fn sample(scenario: &Scenario, budget: Budget, seed: u64) -> Option<SampledP
         let Some(p) = shortened(&l, &found, budget.shortening, tree_seed) else {
             continue;
         };
+        // A path longer than the needle cannot be inserted: the planner's check refuses it too.
+        if p.length > l.max_length {
+            continue;
+        }
         if best.as_ref().is_none_or(|b| p.length < b.length) {
             best = Some(p);
         }
