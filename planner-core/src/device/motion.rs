@@ -9,7 +9,9 @@
 
 use super::{Core, DeviceService};
 use crate::wire::{motion_move, Fault, MotionRequest, MotionStatus, ReplyBody};
-use needle_motion::{Controller, MotionConfig, MotionError, Move, Rates, SafetyConfig, QUEUE};
+use needle_motion::{Controller, MotionError, Move, Rates, QUEUE};
+#[cfg(feature = "owned-motion")]
+use needle_motion::{MotionConfig, SafetyConfig};
 
 /// The motion core, if the board drives axes.
 // An explicit tag rather than an `Option`, as for steering: a niche would put the whole
@@ -20,6 +22,7 @@ pub(super) enum Motion {
     /// No axes.
     Off,
     /// The board's axes.
+    #[cfg(feature = "owned-motion")]
     On(Controller),
     /// The board's axes, kept by the board and lent for each request.
     Port(&'static dyn MotionPort),
@@ -36,6 +39,7 @@ pub trait MotionPort: Sync {
 impl DeviceService {
     /// Drive axes: the board's motion set-up (the rates and soft limits are replaced by each
     /// move request's plan). The core starts disarmed and unhomed.
+    #[cfg(feature = "owned-motion")]
     pub fn set_motion(
         &mut self,
         config: MotionConfig,
@@ -54,6 +58,7 @@ impl DeviceService {
     /// `None` without axes, or when the board keeps the core ([`Self::set_motion_port`]).
     pub fn motion(&mut self) -> Option<&mut Controller> {
         match &mut self.core.motion {
+            #[cfg(feature = "owned-motion")]
             Motion::On(c) => Some(c),
             Motion::Off | Motion::Port(_) => None,
         }
@@ -69,6 +74,7 @@ impl Core {
         tx: &mut dyn FnMut(&[u8]),
     ) {
         let body = match &mut self.motion {
+            #[cfg(feature = "owned-motion")]
             Motion::On(c) => answer(c, req),
             Motion::Port(port) => {
                 let mut body = None;
