@@ -39,7 +39,7 @@ pub fn prescaler(timer_hz: u32, tick_hz: u32) -> Result<u16, TimerError> {
     if tick_hz == 0 || tick_hz > timer_hz {
         return Err(TimerError::TickRate);
     }
-    if timer_hz % tick_hz != 0 {
+    if !timer_hz.is_multiple_of(tick_hz) {
         return Err(TimerError::Prescaler);
     }
     u16::try_from(timer_hz / tick_hz - 1).map_err(|_| TimerError::Prescaler)
