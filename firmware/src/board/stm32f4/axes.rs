@@ -19,6 +19,7 @@ use cortex_m::interrupt::Mutex;
 use needle_motion::bench::bench_config;
 use needle_motion::step_clock::{
     encoder_steps, prescaler, ticks_for_ns, Action, EncoderCount, Millis, StepClock, TimerError,
+    MIN_LEAD,
 };
 use needle_motion::{Controller, Inputs, MotionError, SafetyConfig, State};
 use planner_core::device::{DeviceService, MotionPort};
@@ -187,11 +188,9 @@ impl Drive {
         let moving = matches!(state, State::Moving | State::Homing | State::Holding);
         hw::drivers_enabled(moving || state == State::Armed);
         if !moving {
-            if self.clock.is_running() {
-                self.clock.stop();
-                hw::disarm(STEP_IRQ);
-                hw::steps_low();
-            }
+            self.clock.stop();
+            hw::disarm(STEP_IRQ);
+            hw::steps_low();
             if self.ticking {
                 self.ticking = false;
                 hw::disarm(TICK_IRQ);
@@ -204,15 +203,20 @@ impl Drive {
             hw::arm(TICK_IRQ, self.next_tick);
         }
         if !self.clock.is_running() {
-            if let Some(first) = self.core.next_step() {
-                self.clock.start(hw::now(), first);
-                self.serve();
-            }
+            // The step interrupt draws the first step itself: the core's deepest call (a
+            // segment set up in `next_step`) then never stacks on the control tick's frames.
+            hw::arm(STEP_IRQ, hw::now().wrapping_add(MIN_LEAD));
         }
     }
 
     /// The step interrupt's work: the events due, then the compare set for the next.
     fn serve(&mut self) {
+        if !self.clock.is_running() {
+            let Some(first) = self.core.next_step() else {
+                return hw::disarm(STEP_IRQ);
+            };
+            self.clock.start(hw::now(), first);
+        }
         for _ in 0..BURST {
             match self.clock.action(hw::now()) {
                 Action::Arm(at) => return hw::arm(STEP_IRQ, at),
