@@ -229,10 +229,7 @@ impl Drive {
             }
         }
         // Still behind after a burst: the rest after the other interrupts had their turn.
-        hw::arm(
-            STEP_IRQ,
-            hw::now().wrapping_add(needle_motion::step_clock::MIN_LEAD),
-        );
+        hw::arm(STEP_IRQ, hw::now().wrapping_add(MIN_LEAD));
     }
 
     /// Gives the pending event's pulses and draws the next; `false` when the train is over.
