@@ -1,5 +1,6 @@
 //! The board's axes, as the main loop sees them: between polls it lets them run for the time
-//! that passed. A board without axes answers motion requests with `NoMotion`.
+//! that passed (or, where interrupts step them, reads their inputs at rest). A board whose
+//! axes failed to set up answers motion requests with `NoMotion`.
 
 use planner_core::device::DeviceService;
 
@@ -7,15 +8,6 @@ use planner_core::device::DeviceService;
 pub trait Axes {
     /// Lets the service's motion core run the axes for the time since the last call.
     fn advance(&mut self, service: &mut DeviceService);
-}
-
-/// A board that drives no axes.
-#[cfg(feature = "stm32f4")]
-pub struct NoAxes;
-
-#[cfg(feature = "stm32f4")]
-impl Axes for NoAxes {
-    fn advance(&mut self, _service: &mut DeviceService) {}
 }
 
 /// Axes the board may have failed to set up.

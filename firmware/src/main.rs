@@ -58,8 +58,8 @@ fn main() -> ! {
         env!("CARGO_PKG_VERSION"),
         board::NAME
     );
-    let mut board = board::init();
+    let (mut board, parts) = board::init();
     SERVICE.set_identity(IDENTITY);
-    let mut axes = board::axes(SERVICE);
+    let mut axes = board::axes(SERVICE, parts);
     pump::run(&mut board, &mut axes, SERVICE, INBOX, OUTBOX)
 }

@@ -10,6 +10,8 @@
 //!   both axes on the same profile shape; constant work per step, for the timer interrupt.
 //! - [`safety`] and [`Controller`]: disarmed at power-up, homing against a switch, e-stop,
 //!   limit switches, following error and the host link's watchdog; faults latch.
+//! - [`step_clock`]: a board's step timer in integers (prescaler, the absolute schedule on a
+//!   free-running counter, the clock, encoder counts), tested on the host.
 //! - [`plant`]: simulated axes (inertia, missed steps, end switches, encoders); [`bench`]: the
 //!   bench driver with them, as hil-sim and the QEMU board run it.
 //!
@@ -67,6 +69,7 @@ pub mod plant;
 pub mod profile;
 pub mod runner;
 pub mod safety;
+pub mod step_clock;
 
 pub use config::{AxisConfig, MotionConfig, Rates};
 pub use controller::{Controller, Status, QUEUE};

@@ -255,3 +255,60 @@ fn a_device_without_axes_says_so() {
         ReplyBody::Fault(Fault::NoMotion)
     );
 }
+
+/// A board that keeps the core where its interrupts reach it, and lends it per request.
+struct KeptCore(std::sync::Mutex<Option<needle_motion::Controller>>);
+
+impl planner_core::device::MotionPort for KeptCore {
+    fn with_motion(&self, f: &mut dyn FnMut(&mut needle_motion::Controller)) {
+        if let Some(c) = self.0.lock().unwrap().as_mut() {
+            f(c);
+        }
+    }
+}
+
+#[test]
+fn a_core_the_board_keeps_answers_through_its_port() {
+    let cfg = needle_motion::bench::bench_config();
+    let core = needle_motion::Controller::new(cfg, SafetyConfig::BENCH).unwrap();
+    let kept: &'static KeptCore = Box::leak(Box::new(KeptCore(Some(core).into())));
+    let mut dev = DeviceService::new();
+    dev.set_motion_port(kept);
+    assert!(dev.motion().is_none());
+    assert_eq!(
+        status(ask(&mut dev, 1, MotionRequest::Arm)).state,
+        State::Armed
+    );
+    assert_eq!(
+        status(ask(&mut dev, 2, MotionRequest::Home)).state,
+        State::Homing
+    );
+    // The board's timer steps the core between requests; the service sees where it got.
+    let stepped = {
+        let mut guard = kept.0.lock().unwrap();
+        let c = guard.as_mut().unwrap();
+        (0..100).filter_map(|_| c.next_step()).count()
+    };
+    assert_eq!(stepped, 100);
+    let s = status(ask(&mut dev, 3, MotionRequest::EStop));
+    // 100 steps of homing back, at 1600 steps a millimetre.
+    let f = s.last_fault.unwrap();
+    assert_eq!(
+        (s.state, f.position),
+        (State::Faulted, [-100.0 / 1600.0, 0.0])
+    );
+    assert!(kept
+        .0
+        .lock()
+        .unwrap()
+        .as_mut()
+        .unwrap()
+        .next_step()
+        .is_none());
+    // A board that cannot lend its core (its set-up failed) answers as one without axes.
+    *kept.0.lock().unwrap() = None;
+    assert_eq!(
+        ask(&mut dev, 4, MotionRequest::Status),
+        ReplyBody::Fault(Fault::NoMotion)
+    );
+}

@@ -10,10 +10,4 @@ pub use mps2_an386::{axes, fatal_stop, init, panic_link, NAME};
 #[cfg(feature = "stm32f4")]
 mod stm32f4;
 #[cfg(feature = "stm32f4")]
-pub use stm32f4::{fatal_stop, init, panic_link, NAME};
-
-/// The STM32F4 board drives no axes yet: its step timers and switch inputs are still to come.
-#[cfg(feature = "stm32f4")]
-pub fn axes(_service: &mut planner_core::device::DeviceService) -> crate::axes::NoAxes {
-    crate::axes::NoAxes
-}
+pub use stm32f4::{axes, fatal_stop, init, panic_link, NAME};

@@ -39,18 +39,23 @@ fn reg_write(addr: usize, value: u32) {
     unsafe { write_volatile(addr as *mut u32, value) }
 }
 
+/// What the axes take: the core peripherals (SysTick), if not already taken.
+pub type AxesParts = Option<cortex_m::Peripherals>;
+
 /// Enables UART0 for transmit and receive.
-pub fn init() -> Uart0 {
+pub fn init() -> (Uart0, AxesParts) {
     reg_write(BAUDDIV, BAUD_DIVISOR);
     reg_write(CTRL, CTRL_TX_RX_ENABLE);
-    Uart0 { _private: () }
+    (Uart0 { _private: () }, cortex_m::Peripherals::take())
 }
 
 /// The simulated axes, on SysTick's clock (`None` if the core peripherals were already taken
 /// or the motion set-up was refused: motion requests are then answered `NoMotion`).
-pub fn axes(service: &mut planner_core::device::DeviceService) -> Option<SimulatedAxes> {
-    let core = cortex_m::Peripherals::take()?;
-    SimulatedAxes::attach(service, core.SYST)
+pub fn axes(
+    service: &mut planner_core::device::DeviceService,
+    parts: AxesParts,
+) -> Option<SimulatedAxes> {
+    SimulatedAxes::attach(service, parts?.SYST)
 }
 
 /// The UART for the panic handler's last words (the main loop is gone by then).

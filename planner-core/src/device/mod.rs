@@ -24,6 +24,7 @@ use crate::wire::{
 };
 pub use job::plan_as_device;
 use job::Job;
+pub use motion::MotionPort;
 use receive::Inbox;
 pub use receive::RX_QUEUE;
 

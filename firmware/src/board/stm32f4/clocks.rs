@@ -20,6 +20,8 @@ pub struct Clocks {
     /// APB2 clock, which drives USART1 (Hz).
     #[cfg_attr(feature = "usb", allow(dead_code))]
     pub pclk2_hz: u32,
+    /// The clock of APB1's timers (TIM2..TIM5): twice APB1's when APB1 is divided (Hz).
+    pub apb1_timer_hz: u32,
     /// The external crystal started.
     pub hse: bool,
     /// The PLL locked and drives the core (else the core runs on the 16 MHz internal oscillator).
@@ -57,6 +59,7 @@ pub fn init(rcc: &pac::RCC, flash: &pac::FLASH) -> Clocks {
         return Clocks {
             sysclk_hz: u32::from(HSI_MHZ) * 1_000_000,
             pclk2_hz: u32::from(HSI_MHZ) * 1_000_000,
+            apb1_timer_hz: u32::from(HSI_MHZ) * 1_000_000,
             hse,
             pll: false,
         };
@@ -76,9 +79,13 @@ pub fn init(rcc: &pac::RCC, flash: &pac::FLASH) -> Clocks {
         w.sw().pll()
     });
     let switched = wait_for(|| rcc.cfgr().read().sws().is_pll());
+    // Not switched: the core still runs on the internal oscillator, behind the dividers above
+    // (APB1 16/4 MHz, its timers twice that).
+    let apb1_timer_hz = if switched { 84_000_000 } else { 8_000_000 };
     Clocks {
         sysclk_hz: 168_000_000,
         pclk2_hz: 84_000_000,
+        apb1_timer_hz,
         hse,
         pll: switched,
     }

@@ -1,10 +1,15 @@
 //! STM32F405/F407 at 168 MHz: the link on USART1 (PA9 TX, PA10 RX, 115200 8N1) or, with the
-//! `usb` feature, on a USB CDC-ACM port (PA11/PA12); an independent watchdog; logs over RTT.
+//! `usb` feature, on a USB CDC-ACM port (PA11/PA12); an independent watchdog; logs over RTT; the
+//! needle's two stages on step/dir outputs, switch inputs and an e-stop interrupt (`axes`, with
+//! every pin and timer in `pins`).
 //!
 //! Also boots in QEMU's `netduinoplus2` (an STM32F405 without a clock tree model): clock bring-up
 //! waits are bounded and fall back to the 16 MHz internal oscillator.
 
+mod axes;
 mod clocks;
+mod hw;
+mod pins;
 #[cfg(not(feature = "usb"))]
 mod usart;
 #[cfg(feature = "usb")]
@@ -23,8 +28,10 @@ pub type BoardLink = usart::Usart1;
 #[cfg(feature = "usb")]
 pub type BoardLink = usb::UsbSerial;
 
-/// Brings up clocks, watchdog and link.
-pub fn init() -> BoardLink {
+pub use axes::AxesParts;
+
+/// Brings up clocks, watchdog and link, and hands out what the axes take.
+pub fn init() -> (BoardLink, AxesParts) {
     let Some(dp) = pac::Peripherals::take() else {
         // `init` runs once, from `main`; a second call is a bug that a reset clears.
         fatal_stop()
@@ -41,21 +48,49 @@ pub fn init() -> BoardLink {
         clocks.pll
     );
     let watchdog = watchdog::start(dp.IWDG);
+    dp.RCC.ahb1enr().modify(|_, w| {
+        w.gpioben().set_bit();
+        w.gpiocen().set_bit()
+    });
+    dp.RCC.apb1enr().modify(|_, w| {
+        w.tim2en().set_bit();
+        w.tim3en().set_bit();
+        w.tim4en().set_bit()
+    });
+    dp.RCC.apb2enr().modify(|_, w| w.syscfgen().set_bit());
+    let parts = AxesParts {
+        timer_hz: clocks.apb1_timer_hz,
+        _owned: (
+            dp.TIM2, dp.TIM3, dp.TIM4, dp.GPIOB, dp.GPIOC, dp.EXTI, dp.SYSCFG,
+        ),
+    };
     #[cfg(not(feature = "usb"))]
-    {
-        usart::Usart1::init(dp.USART1, &dp.RCC, &dp.GPIOA, clocks, watchdog)
-    }
+    let link = usart::Usart1::init(dp.USART1, &dp.RCC, &dp.GPIOA, clocks, watchdog);
     #[cfg(feature = "usb")]
-    {
-        usb::UsbSerial::init(
-            dp.OTG_FS_GLOBAL,
-            dp.OTG_FS_DEVICE,
-            dp.OTG_FS_PWRCLK,
-            &dp.RCC,
-            &dp.GPIOA,
-            clocks,
-            watchdog,
-        )
+    let link = usb::UsbSerial::init(
+        dp.OTG_FS_GLOBAL,
+        dp.OTG_FS_DEVICE,
+        dp.OTG_FS_PWRCLK,
+        &dp.RCC,
+        &dp.GPIOA,
+        clocks,
+        watchdog,
+    );
+    (link, parts)
+}
+
+/// The needle's stages (`None`, and motion requests answered `NoMotion`, if their set-up
+/// failed: the reason is logged).
+pub fn axes(
+    service: &mut planner_core::device::DeviceService,
+    parts: AxesParts,
+) -> Option<axes::StepperAxes> {
+    match axes::attach(service, parts) {
+        Ok(a) => Some(a),
+        Err(e) => {
+            defmt::error!("no axes: {}", e);
+            None
+        }
     }
 }
 
