@@ -4,7 +4,8 @@
 //! voxels isotropic (1 mm) or anisotropic (0.7 × 0.7 × 2.5 mm), the files LPS or RAS by seed.
 //! The same seed gives the same map, bit for bit.
 
-use crate::label_files::Labels;
+use crate::label_files::{write_nrrd, Labels, NrrdStyle};
+use std::path::{Path, PathBuf};
 
 /// Labels of the family: organs 1–3, the vessel tree 4, the capsule 5.
 pub const VESSELS: i16 = 4;
@@ -173,4 +174,35 @@ fn lesion(rng: &mut Rng, m: &Labels, world: &dyn Fn(i64, i64, i64) -> [f64; 3]) 
             return p;
         }
     }
+}
+
+/// Writes map `seed` of the family (scale 0.6) to `dir/caseSEED.nrrd` and a scenario that plans
+/// from above it to its lesion, every segment covered with a 1 mm margin, `extra` appended (a
+/// table of keys; the file is then `caseSEED-x.toml`); the case and the scenario's path.
+pub fn write_scenario(dir: &Path, seed: u64, extra: &str) -> (AnatomyCase, PathBuf) {
+    let case = anatomy_case(seed, 0.6);
+    let space = if case.lps {
+        "left-posterior-superior"
+    } else {
+        "right-anterior-superior"
+    };
+    let style = NrrdStyle {
+        space,
+        gzip: true,
+        pairs: &[],
+    };
+    write_nrrd(&dir.join(format!("case{seed}.nrrd")), &case.labels, &style);
+    let (d, a) = (case.labels.dims, case.labels.ijk_to_ras);
+    let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
+    let top = [0, 1, 2].map(|r| a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]);
+    let t = case.target;
+    let to: Vec<f64> = (0..3).map(|k| t[k] - top[k]).collect();
+    let text = format!(
+        "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = {top:?}\ndirection = {to:?}\n\n\
+         [target]\nposition = {t:?}\n\n[[anatomy]]\nfile = \"case{seed}.nrrd\"\nmargin_mm = 1.0\n{extra}"
+    );
+    let name = if extra.is_empty() { "" } else { "-x" };
+    let path = dir.join(format!("case{seed}{name}.toml"));
+    std::fs::write(&path, text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (case, path)
 }

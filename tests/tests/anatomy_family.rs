@@ -5,7 +5,7 @@
 //! segment's cover as tight as asked, takes more than 256 spheres a map; a scenario keeps to
 //! the device's 256.
 
-use needle_e2e::anatomy_family::anatomy_case;
+use needle_e2e::anatomy_family::{anatomy_case, write_scenario};
 use needle_e2e::label_files::{cover_spheres, write_nrrd, Labels, NrrdStyle};
 use needle_e2e::needle_json;
 
@@ -156,42 +156,6 @@ fn the_family_is_covered_whole() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Writes map `seed` of the family and a scenario that plans from above it to its lesion,
-/// covering every segment with the margin; returns the scenario's path.
-fn family_scenario(
-    dir: &std::path::Path,
-    seed: u64,
-) -> (needle_e2e::anatomy_family::AnatomyCase, std::path::PathBuf) {
-    let case = anatomy_case(seed, 0.6);
-    let map = dir.join(format!("case{seed}.nrrd"));
-    let space = if case.lps {
-        "left-posterior-superior"
-    } else {
-        "right-anterior-superior"
-    };
-    let style = NrrdStyle {
-        space,
-        gzip: true,
-        pairs: &[],
-    };
-    write_nrrd(&map, &case.labels, &style);
-    let d = case.labels.dims;
-    let top = world(
-        &case.labels,
-        [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0],
-    );
-    let t = case.target;
-    let dir_to: Vec<f64> = (0..3).map(|k| t[k] - top[k]).collect();
-    let text = format!(
-        "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = {top:?}\ndirection = \
-         {dir_to:?}\n\n[target]\nposition = {t:?}\n\n[[anatomy]]\nfile = \"case{seed}.nrrd\"\n\
-         margin_mm = {MARGIN:?}\n"
-    );
-    let path = dir.join(format!("case{seed}.toml"));
-    std::fs::write(&path, text).unwrap();
-    (case, path)
-}
-
 /// The family as scenarios: each within the device's 256 spheres (the scenario's budget), every
 /// voxel of every segment held whole with the margin to spare, checked here apart from the
 /// planner; the spheres and the volume outside the dilated segments (all of them together,
@@ -203,7 +167,7 @@ fn the_family_fits_the_devices_sphere_budget() {
     std::fs::create_dir_all(&dir).unwrap();
     let (mut counts, mut ratios) = (Vec::new(), Vec::new());
     for seed in 0..20 {
-        let (case, path) = family_scenario(&dir, seed);
+        let (case, path) = write_scenario(&dir, seed, "");
         let shapes = ScenarioFile::load(&path)
             .and_then(|f| f.obstacle_shapes(None))
             .unwrap_or_else(|e| panic!("seed {seed}: {e:#}"));

@@ -6,8 +6,8 @@
 //! command's own count (`summary.entered_voxels`) must agree. In a wild open-loop world, where
 //! paths do stray into the organs, the two counts agree too.
 
-use needle_e2e::anatomy_family::anatomy_case;
-use needle_e2e::label_files::{write_nrrd, Labels, NrrdStyle};
+use needle_e2e::anatomy_family::write_scenario;
+use needle_e2e::label_files::Labels;
 use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
@@ -60,39 +60,6 @@ fn enters(m: &Labels, points: &[Value]) -> bool {
     })
 }
 
-/// Writes map `seed` of the family and a plain scenario from above it to its lesion, every
-/// segment covered with a 1 mm margin; the map and the scenario's path.
-fn scenario(dir: &Path, seed: u64, extra: &str) -> (Labels, std::path::PathBuf) {
-    let case = anatomy_case(seed, 0.6);
-    let map = dir.join(format!("case{seed}.nrrd"));
-    let space = if case.lps {
-        "left-posterior-superior"
-    } else {
-        "right-anterior-superior"
-    };
-    let style = NrrdStyle {
-        space,
-        gzip: true,
-        pairs: &[],
-    };
-    write_nrrd(&map, &case.labels, &style);
-    let (d, a) = (case.labels.dims, case.labels.ijk_to_ras);
-    let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
-    let top = [0, 1, 2].map(|r| a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]);
-    let t = case.target;
-    let to: Vec<f64> = (0..3).map(|k| t[k] - top[k]).collect();
-    let text = format!(
-        "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = {top:?}\ndirection = {to:?}\n\n\
-         [target]\nposition = {t:?}\n\n[[anatomy]]\nfile = \"case{seed}.nrrd\"\nmargin_mm = 1.0\n{extra}"
-    );
-    let path = dir.join(format!(
-        "case{seed}{}.toml",
-        if extra.is_empty() { "" } else { "-x" }
-    ));
-    std::fs::write(&path, text).unwrap();
-    (case.labels, path)
-}
-
 /// `needle simulate FILE --runs 20 --json --detail` with `extra`: the JSON, or `None` when the
 /// scenario is refused (its reason printed).
 fn simulate(path: &Path, extra: &[&str]) -> Option<Value> {
@@ -129,7 +96,10 @@ fn entered(m: &Labels, v: &Value) -> usize {
 fn steer_family(dir: &Path, extra: &str) -> (u64, u64, u64) {
     let (mut planned, mut runs, mut reached) = (0, 0, 0);
     for seed in 0..10 {
-        let (map, path) = scenario(dir, seed, extra);
+        let (map, path) = {
+            let (case, path) = write_scenario(dir, seed, extra);
+            (case.labels, path)
+        };
         let Some(v) = simulate(&path, &["--closed-loop"]) else {
             continue;
         };
@@ -168,7 +138,10 @@ fn steered_runs_keep_out_of_the_organs_voxels() {
     ];
     let mut strayed = 0;
     for seed in 0..10 {
-        let (map, path) = scenario(&dir, seed, unbounded);
+        let (map, path) = {
+            let (case, path) = write_scenario(&dir, seed, unbounded);
+            (case.labels, path)
+        };
         let Some(v) = simulate(&path, &wild) else {
             continue;
         };
