@@ -6,7 +6,7 @@
 use crate::qemu::Qemu;
 use anyhow::{anyhow, bail, Context, Result};
 use needle_link::{Client, LinkError, Transport};
-use needle_motion::State;
+use needle_motion::{FaultCause, State};
 use planner_core::execute::schedule::schedule;
 use planner_core::wire::{Fault, MotionRequest, MotionStatus};
 use planner_core::{plan, Scenario};
@@ -45,36 +45,56 @@ pub fn measure<T: Transport>(device: &mut Client<T>, qemu: &Qemu) -> Result<Opti
     let best = report.best().context("the paper's scenario has no plan")?;
     let sched = schedule(&scenario, best).map_err(|e| anyhow!("its schedule: {e:?}"))?;
     let before = qemu.reports()?.len();
-    device.motion(MotionRequest::Arm)?;
-    home(device)?;
-    device.motion(MotionRequest::Move {
+    let move_request = MotionRequest::Move {
         driver: scenario.driver,
         needle_mm: scenario.needle.length,
         steps: sched.steps.clone(),
-    })?;
-    let end = wait_at_rest(device)?;
-    if end.state != State::Armed || end.last_fault.is_some() {
-        bail!("the board's move of the paper's schedule ended {end:?}");
+    };
+    for tries in 1.. {
+        device.motion(MotionRequest::Arm)?;
+        home(device)?;
+        device.motion(move_request.clone())?;
+        let end = wait_at_rest(device)?;
+        let lost = end
+            .last_fault
+            .is_some_and(|f| f.cause == FaultCause::LinkLost);
+        // A loaded machine may keep the host from the board past the watchdog's second: the
+        // move is made again (its steps so far are still steps the interrupt took).
+        if lost && tries < 3 {
+            device.motion(MotionRequest::ClearFault)?;
+            continue;
+        }
+        if end.state != State::Armed || end.last_fault.is_some() {
+            bail!("the board's move of the paper's schedule ended {end:?}");
+        }
+        break;
     }
-    // The firmware reports each homing and move as its axes come to rest.
+    step_runs(qemu, before)
+}
+
+/// The figures of the step runs the firmware reported since the `before`th (each homing and
+/// move, as its axes come to rest): at least a homing and a move, once no more come.
+fn step_runs(qemu: &Qemu, before: usize) -> Result<Option<StepFigures>> {
     let deadline = Instant::now() + Duration::from_secs(10);
+    let mut seen = 0;
     loop {
         let reports = qemu.reports()?;
-        if reports.len() >= before + 2 {
-            let runs = &reports[before..];
+        let runs = &reports[before.min(reports.len())..];
+        if runs.len() >= 2 && runs.len() == seen {
             return Ok(Some(StepFigures {
                 steps: runs.iter().map(|r| r.regions).sum(),
                 max: runs.iter().map(|r| r.largest).max().unwrap_or(0),
                 sum: runs.iter().map(|r| r.sum).sum(),
             }));
         }
+        seen = runs.len();
         if Instant::now() > deadline {
             bail!(
-                "the plugin reported {} step runs, not 2 (homing, move)",
-                reports.len() - before
+                "the plugin reported {} step runs, not 2 or more (homing, move)",
+                runs.len()
             );
         }
-        std::thread::sleep(POLL);
+        std::thread::sleep(Duration::from_millis(500));
     }
 }
 

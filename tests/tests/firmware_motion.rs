@@ -51,6 +51,23 @@ fn wait_at_rest(link: &mut Link, limit: Duration) -> MotionStatus {
     }
 }
 
+/// Homes the armed stage. A loaded machine may keep this test from the board long enough for
+/// the link watchdog to hold, which ends a homing unhomed: then it homes again.
+fn home(link: &mut Link) {
+    let mut homed = ask(link, MotionRequest::Status);
+    for _ in 0..3 {
+        assert_eq!(ask(link, MotionRequest::Home).state, State::Homing);
+        homed = wait_at_rest(link, Duration::from_secs(60));
+        if homed.homed {
+            break;
+        }
+    }
+    assert_eq!(
+        (homed.state, homed.homed, homed.position),
+        (State::Armed, true, [0.0, 0.0])
+    );
+}
+
 /// The host's simulation of the same requests: the simulated device with `hil-sim --axes`.
 fn host_simulation(job: &MotionRequest) -> MotionStatus {
     let mut dev = DeviceService::with_identity(IDENTITY);
@@ -116,24 +133,25 @@ fn the_qemu_board_moves_the_papers_schedule_like_the_host_and_obeys_an_estop() {
         refused(link.motion(job.clone())),
         Fault::Motion(MotionError::NotHomed)
     );
-    // A loaded machine may keep this test from the board long enough for the link watchdog to
-    // hold, which ends a homing unhomed: then it homes again.
-    let mut homed = ask(&mut link, MotionRequest::Status);
+    home(&mut link);
+
+    // The paper's schedule, on the board and in the host's simulation. A loaded machine may
+    // keep this test from the board past the watchdog's second (LinkLost): homed again, the
+    // move is made again.
+    let mut board = ask(&mut link, MotionRequest::Status);
     for _ in 0..3 {
-        assert_eq!(ask(&mut link, MotionRequest::Home).state, State::Homing);
-        homed = wait_at_rest(&mut link, Duration::from_secs(60));
-        if homed.homed {
+        assert_eq!(ask(&mut link, job.clone()).state, State::Moving);
+        board = wait_at_rest(&mut link, Duration::from_secs(600));
+        if board
+            .last_fault
+            .is_none_or(|f| f.cause != FaultCause::LinkLost)
+        {
             break;
         }
+        ask(&mut link, MotionRequest::ClearFault);
+        ask(&mut link, MotionRequest::Arm);
+        home(&mut link);
     }
-    assert_eq!(
-        (homed.state, homed.homed, homed.position),
-        (State::Armed, true, [0.0, 0.0])
-    );
-
-    // The paper's schedule, on the board and in the host's simulation.
-    assert_eq!(ask(&mut link, job.clone()).state, State::Moving);
-    let board = wait_at_rest(&mut link, Duration::from_secs(600));
     let host = host_simulation(&job);
     assert_eq!((board.state, board.last_fault), (State::Armed, None));
     assert_eq!(
