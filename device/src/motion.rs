@@ -189,7 +189,7 @@ impl PlannedMove {
         eprintln!(
             "posture: tilt {:.2} deg (the guide's), bevel roll {} deg: the shaft turns {turn} deg \
              first",
-            tilt_deg(p),
+            tilt_deg(p.theta1_deg, p.theta2_deg),
             p.roll_deg
         );
         Ok(MotionRequest::Move {

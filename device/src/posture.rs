@@ -10,27 +10,18 @@ use planner_core::execute::schedule::{Op, Posture, Step, Steps};
 use planner_core::model::scenario::Driver;
 
 /// A tilt below this (degrees) is none: the rounding of the plan's angles.
-const NO_TILT_DEG: f64 = 0.01;
+const NO_TILT_DEG: f32 = 0.01;
 
-/// The posture's tilt from the entry axis (degrees).
-pub fn tilt_deg(p: &Posture) -> f64 {
-    let (a, b) = (
-        f64::from(p.theta1_deg).to_radians(),
-        f64::from(p.theta2_deg).to_radians(),
-    );
-    (a.cos() * b.cos()).clamp(-1.0, 1.0).acos().to_degrees()
+/// The tilt of a posture from the entry axis (degrees): cos(tilt) = cos(theta1) cos(theta2).
+pub fn tilt_deg(theta1_deg: f32, theta2_deg: f32) -> f32 {
+    let c = f64::from(theta1_deg).to_radians().cos() * f64::from(theta2_deg).to_radians().cos();
+    c.clamp(-1.0, 1.0).acos().to_degrees() as f32
 }
 
 /// The turn (degrees, in (-180, 180]) from a shaft at `rotation_deg` to the roll `roll_deg`.
 pub fn turn_to_roll(rotation_deg: f32, roll_deg: f32) -> f32 {
     let d = f64::from(roll_deg) - f64::from(rotation_deg);
-    let wrapped = d - 360.0 * (d / 360.0).ceil() + 360.0;
-    let turn = if wrapped > 180.0 {
-        wrapped - 360.0
-    } else {
-        wrapped
-    };
-    turn as f32
+    (180.0 - (180.0 - d).rem_euclid(360.0)) as f32
 }
 
 /// The steps a board executes for a plan of `posture` and `steps` with its shaft at
@@ -43,7 +34,7 @@ pub fn board_steps(
     rotation_deg: f32,
     tilt_set: bool,
 ) -> Result<Steps> {
-    let tilt = tilt_deg(posture);
+    let tilt = tilt_deg(posture.theta1_deg, posture.theta2_deg);
     if tilt >= NO_TILT_DEG && !tilt_set {
         bail!(
             "the plan tilts the needle {tilt:.2} deg from the entry axis (theta1 {} deg, theta2 \

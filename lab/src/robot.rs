@@ -34,6 +34,8 @@
 //!   posture's `base_deg` plus the rotations since, accumulated, not wrapped);
 //! - `done`: the step list ran out; `holding`; `stopped`.
 
+/// The tilt of a posture from the entry axis, as the board's `needle motion` judges it.
+pub use needle_device::posture::tilt_deg;
 use planner_core::execute::schedule::{Op, Posture, Step, MAX_STEPS};
 use std::fmt;
 
@@ -423,12 +425,6 @@ pub fn posture_command(posture: &Posture) -> RobotCommand {
         theta2_deg: posture.theta2_deg,
         roll_deg: posture.roll_deg,
     }
-}
-
-/// The tilt of a posture from the entry axis (degrees): cos(tilt) = cos(theta1) cos(theta2).
-pub fn tilt_deg(theta1_deg: f32, theta2_deg: f32) -> f32 {
-    let c = f64::from(theta1_deg).to_radians().cos() * f64::from(theta2_deg).to_radians().cos();
-    c.clamp(-1.0, 1.0).acos().to_degrees() as f32
 }
 
 /// The messages that send a whole step list: `steps count=N`, then each step.
