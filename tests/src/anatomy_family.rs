@@ -176,22 +176,29 @@ fn lesion(rng: &mut Rng, m: &Labels, world: &dyn Fn(i64, i64, i64) -> [f64; 3]) 
     }
 }
 
+impl AnatomyCase {
+    /// Writes the map to `path` as gzipped NRRD, in the space the case says (LPS or RAS).
+    pub fn write_map(&self, path: &Path) {
+        let space = if self.lps {
+            "left-posterior-superior"
+        } else {
+            "right-anterior-superior"
+        };
+        let style = NrrdStyle {
+            space,
+            gzip: true,
+            pairs: &[],
+        };
+        write_nrrd(path, &self.labels, &style);
+    }
+}
+
 /// Writes map `seed` of the family (scale 0.6) to `dir/caseSEED.nrrd` and a scenario that plans
 /// from above it to its lesion, every segment covered with a 1 mm margin, `extra` appended (a
 /// table of keys; the file is then `caseSEED-x.toml`); the case and the scenario's path.
 pub fn write_scenario(dir: &Path, seed: u64, extra: &str) -> (AnatomyCase, PathBuf) {
     let case = anatomy_case(seed, 0.6);
-    let space = if case.lps {
-        "left-posterior-superior"
-    } else {
-        "right-anterior-superior"
-    };
-    let style = NrrdStyle {
-        space,
-        gzip: true,
-        pairs: &[],
-    };
-    write_nrrd(&dir.join(format!("case{seed}.nrrd")), &case.labels, &style);
+    case.write_map(&dir.join(format!("case{seed}.nrrd")));
     let (d, a) = (case.labels.dims, case.labels.ijk_to_ras);
     let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
     let top = [0, 1, 2].map(|r| a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]);

@@ -128,6 +128,16 @@ pub fn needle() -> Command {
     c
 }
 
+/// The keys of a JSON object, sorted (a JSON contract's test compares them).
+pub fn json_keys(v: &serde_json::Value) -> Vec<String> {
+    let mut k: Vec<String> = v
+        .as_object()
+        .map(|o| o.keys().cloned().collect())
+        .unwrap_or_default();
+    k.sort();
+    k
+}
+
 /// Runs `needle` with `args`, asserts that it succeeds and returns what it printed, byte for
 /// byte (compare these for bit-for-bit equality: parsing JSON may round a float's last bit).
 pub fn needle_stdout(args: &[&str]) -> Vec<u8> {

@@ -108,17 +108,7 @@ fn the_family_is_covered_whole() {
     for seed in 0..20 {
         let case = anatomy_case(seed, 0.6);
         let path = dir.join(format!("case{seed}.nrrd"));
-        let space = if case.lps {
-            "left-posterior-superior"
-        } else {
-            "right-anterior-superior"
-        };
-        let style = NrrdStyle {
-            space,
-            gzip: true,
-            pairs: &[],
-        };
-        write_nrrd(&path, &case.labels, &style);
+        case.write_map(&path);
         let margin = MARGIN.to_string();
         let r = needle_json(&[
             "cover",

@@ -2,7 +2,7 @@
 //! rows and totals, the scenarios it writes (they plan with `needle plan`), repeatability over
 //! thread counts, and bad input refused as usage errors.
 
-use needle_e2e::{needle, needle_json};
+use needle_e2e::{json_keys, needle, needle_json};
 use serde_json::Value;
 
 const SHORT: [&str; 7] = [
@@ -21,12 +21,6 @@ fn f(v: &Value) -> f64 {
 
 fn u(v: &Value) -> u64 {
     v.as_u64().unwrap_or_else(|| panic!("not a count: {v}"))
-}
-
-fn keys(v: &Value) -> Vec<String> {
-    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
-    k.sort();
-    k
 }
 
 fn scratch(test: &str) -> std::path::PathBuf {
@@ -72,7 +66,7 @@ fn rows_and_totals_add_up_and_the_written_scenarios_plan() {
     assert!(!err.contains("scenario "), "{err}");
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
-        keys(&v),
+        json_keys(&v),
         [
             "by_form",
             "controller",

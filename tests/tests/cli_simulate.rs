@@ -1,7 +1,7 @@
 //! `needle simulate` end to end: the JSON contract, repeatability over thread counts, the plot,
 //! the table, and bad input.
 
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, json_keys, needle, needle_json};
 use needle_sim::KEYS;
 use serde_json::Value;
 
@@ -9,17 +9,11 @@ fn paper() -> String {
     example("paper").to_str().unwrap().to_string()
 }
 
-fn keys(v: &Value) -> Vec<String> {
-    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
-    k.sort();
-    k
-}
-
 #[test]
 fn json_has_exactly_the_contracted_keys() {
     let v = needle_json(&["simulate", &paper(), "--runs", "8", "--json"]);
     assert_eq!(
-        keys(&v),
+        json_keys(&v),
         [
             "closed_loop",
             "perturbation",
@@ -33,11 +27,11 @@ fn json_has_exactly_the_contracted_keys() {
     assert_eq!(v["runs"], 8);
     assert_eq!(v["closed_loop"], false);
     let p = &v["perturbation"];
-    assert_eq!(keys(p).len(), 11);
+    assert_eq!(json_keys(p).len(), 11);
     assert_eq!(p["measure_every_mm"], 1.0);
     let s = &v["summary"];
     assert_eq!(
-        keys(s),
+        json_keys(s),
         [
             "collisions",
             "min_clearance",
@@ -47,7 +41,7 @@ fn json_has_exactly_the_contracted_keys() {
         ]
     );
     assert_eq!(
-        keys(&s["rotations"]),
+        json_keys(&s["rotations"]),
         [
             "max_per_run",
             "mean_total_deg",
@@ -55,8 +49,8 @@ fn json_has_exactly_the_contracted_keys() {
             "smallest_deg"
         ]
     );
-    assert_eq!(keys(&s["target_error"]), ["max", "mean", "p95", "rms"]);
-    assert_eq!(keys(&s["path_deviation"]), ["max", "rms"]);
+    assert_eq!(json_keys(&s["target_error"]), ["max", "mean", "p95", "rms"]);
+    assert_eq!(json_keys(&s["path_deviation"]), ["max", "rms"]);
     let t = &s["target_error"];
     let f = |x: &Value| x.as_f64().unwrap();
     assert!(f(&t["mean"]) > 0.0 && f(&t["mean"]) <= f(&t["rms"]) + 1e-12);

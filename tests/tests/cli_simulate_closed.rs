@@ -1,17 +1,11 @@
 //! `needle simulate --closed-loop` end to end: the steering figures in the JSON, stops and
 //! their reasons, the executed part of a step broken off, and a collision never counted reached.
 
-use needle_e2e::{example, needle, needle_json};
+use needle_e2e::{example, json_keys, needle, needle_json};
 use serde_json::Value;
 
 fn paper() -> String {
     example("paper").to_str().unwrap().to_string()
-}
-
-fn keys(v: &Value) -> Vec<String> {
-    let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
-    k.sort();
-    k
 }
 
 #[test]
@@ -53,7 +47,7 @@ fn closed_loop_json_adds_the_steering_figures_and_beats_the_open_loop() {
         assert!(s.get(k).is_some(), "summary lacks {k}");
     }
     assert_eq!(
-        keys(&s["stops"]),
+        json_keys(&s["stops"]),
         [
             "bad_measurement",
             "missed",

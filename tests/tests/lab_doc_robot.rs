@@ -9,7 +9,7 @@
 mod lab_support;
 
 use lab_support::{log_lines, temp_path};
-use needle_e2e::{example, needle, venv_python as python, workspace};
+use needle_e2e::{example, needle, needle_stdout, venv_python as python, workspace};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -117,30 +117,21 @@ fn space_from_the_docs_alone() {
 /// planned as the optimiser plans (open loop, unbounded, no reserve); those keys are taken out,
 /// so each is planned with the safe defaults (steered, 1 % bound, curvature in hand).
 fn plain_planted(dir: &Path, first: u64, count: u64) -> Vec<std::path::PathBuf> {
-    let out = needle()
-        .args([
-            "benchmark",
-            "--generator",
-            "planted",
-            "--runs",
-            "1",
-            "--open-loop-only",
-        ])
-        .args([
-            "--seed",
-            &first.to_string(),
-            "--scenarios",
-            &count.to_string(),
-        ])
-        .arg("--write-scenarios")
-        .arg(dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (first_s, count_s) = (first.to_string(), count.to_string());
+    needle_stdout(&[
+        "benchmark",
+        "--generator",
+        "planted",
+        "--runs",
+        "1",
+        "--open-loop-only",
+        "--seed",
+        &first_s,
+        "--scenarios",
+        &count_s,
+        "--write-scenarios",
+        dir.to_str().unwrap(),
+    ]);
     (first..first + count)
         .map(|seed| {
             let path = dir.join(format!("planted-{seed}.toml"));
