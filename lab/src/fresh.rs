@@ -59,6 +59,12 @@ impl HostClock {
     }
 }
 
+/// A peer clock proven behind by no more than this (s) is taken as this program's: clocks of one
+/// machine, read here through `Instant` and `SystemTime`, disagree by microseconds (and moving a
+/// lock-step lab's piece end later by them would make its one pose, stamped at that end, stale).
+/// A pose sampled this little before a piece's end may then pass as fresh.
+pub const BEHIND_WITHIN_S: f64 = 1e-3;
+
 /// Bounds on a peer clock's offset from this program's (s): the smallest `arrival - stamp` seen
 /// (above), and the largest `sent - stamp` of a reply (below).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -96,10 +102,11 @@ impl Offset {
     }
 
     /// What the peer's stamps are moved by into this program's clock: the upper bound where the
-    /// bounds prove the clocks apart, else nothing.
+    /// bounds prove the clocks apart (behind by more than [`BEHIND_WITHIN_S`]), else nothing.
     pub fn correction(self) -> f64 {
+        let behind = |lo: f64| lo > BEHIND_WITHIN_S;
         match self.upper {
-            Some(hi) if hi < 0.0 || self.lower.is_some_and(|lo| lo > 0.0 && lo <= hi) => hi,
+            Some(hi) if hi < 0.0 || self.lower.is_some_and(|lo| behind(lo) && lo <= hi) => hi,
             _ => 0.0,
         }
     }
@@ -151,6 +158,11 @@ mod tests {
         assert!((behind.correction() - 0.301).abs() < 1e-9);
         assert!(!fresh(Some(20.299), Some(20.0), none, behind));
         assert!(fresh(Some(20.302), Some(20.0), none, behind));
+        // Proven behind by a tenth of a millisecond: the clocks are taken as one.
+        let mut hair = Offset::default();
+        hair.observe_sent(10.0001, 10.0);
+        hair.observe(10.0003, 10.0);
+        assert_eq!(hair.correction(), 0.0);
         // Within the exchange's bounds the clocks are one.
         let mut one = Offset::default();
         one.observe_sent(10.0, 10.001);
