@@ -1,7 +1,9 @@
 //! The device and its line in one object, for tests: no threads, no clock. Reading runs the
 //! device until it has nothing left to do, so a "timeout" costs no time at all.
 
+use crate::axes::SimulatedAxes;
 use crate::line::{FaultyLine, LineConfig, LineStats};
+use needle_motion::MotionError;
 use planner_core::device::{DeviceService, DeviceStats};
 use planner_core::wire::{
     encode_frame, FrameDecoder, Header, Reply, Request, RequestBody, ENCODE_SCRATCH, MAX_FRAME,
@@ -73,6 +75,8 @@ pub struct AuditReport {
 /// A simulated device reached through a (possibly faulty) line in each direction.
 pub struct InProcess {
     device: Box<DeviceService>,
+    /// The simulated stages behind the device's motion core, if it drives any.
+    axes: Option<SimulatedAxes>,
     to_device: FaultyLine,
     to_host: FaultyLine,
     inbox: Vec<u8>,
@@ -91,6 +95,7 @@ impl InProcess {
     pub fn with_lines(to_device: LineConfig, to_host: LineConfig) -> Self {
         InProcess {
             device: Box::new(DeviceService::with_identity(crate::IDENTITY)),
+            axes: None,
             to_device: FaultyLine::new(to_device),
             to_host: FaultyLine::new(to_host),
             inbox: Vec::new(),
@@ -98,6 +103,33 @@ impl InProcess {
             outbox: Vec::new(),
             audit: None,
         }
+    }
+
+    /// The device drives the bench's simulated stages ([`SimulatedAxes`]); they move only as
+    /// [`InProcess::advance`] lets simulated time pass.
+    pub fn with_axes(mut self) -> Result<Self, MotionError> {
+        self.axes = Some(SimulatedAxes::attach(&mut self.device)?);
+        Ok(self)
+    }
+
+    /// `ms` of simulated time for the stages (nothing without axes).
+    pub fn advance(&mut self, ms: u32) {
+        if let Some(axes) = &mut self.axes {
+            axes.advance(&mut self.device, ms);
+        }
+    }
+
+    /// Presses the stages' e-stop input (nothing without axes); the core sees it at the next
+    /// [`InProcess::advance`].
+    pub fn press_estop(&mut self) {
+        if let Some(axes) = &mut self.axes {
+            axes.plant_mut().estop = true;
+        }
+    }
+
+    /// The simulated stages, if the device drives any.
+    pub fn axes(&self) -> Option<&SimulatedAxes> {
+        self.axes.as_ref()
     }
 
     /// Starts checking every frame accepted in either direction against the frames sent.

@@ -218,6 +218,11 @@ impl<T: Transport> Client<T> {
         &self.link
     }
 
+    /// The transport, to act on it between requests (an in-process device's simulated time).
+    pub fn link_mut(&mut self) -> &mut T {
+        &mut self.link
+    }
+
     pub(crate) fn new_id(&mut self) -> u16 {
         self.next_id = self.next_id.wrapping_add(1).max(1);
         self.next_id

@@ -9,7 +9,7 @@ use crate::error::LinkError;
 use crate::transport::Transport;
 use planner_core::execute::schedule::Steps;
 use planner_core::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
-use planner_core::wire::{Fault, ReplyBody, RequestBody};
+use planner_core::wire::{Fault, MotionStatus, ReplyBody, RequestBody};
 
 /// A steering answer: here, or announced for fetching.
 enum Answer<R> {
@@ -86,6 +86,21 @@ impl<T: Transport> Client<T> {
         };
         self.steer_exchange("steer reading", (id, Some(seq)), make, |b| match b {
             ReplyBody::Steer(r) if r.seq == seq => Some(r.clone()),
+            _ => None,
+        })
+    }
+
+    /// Has the board move the steered insertion itself, at most `piece_mm` of insertion between
+    /// readings: its motion status with the first piece queued. Each reading is then sent with
+    /// [`Client::steer`] once the piece has ended (the motion status: armed, no moves left); the
+    /// board fills in its own depth and base roll and moves the next piece. A repeat after a lost
+    /// answer is answered with the status, the piece not queued twice.
+    pub fn steer_drive(&mut self, piece_mm: f32) -> Result<MotionStatus, LinkError> {
+        self.begin();
+        let id = self.steered_plan()?;
+        let body = RequestBody::SteerDrive { piece_mm };
+        self.exchange("steer drive", id, &body, |b| match b {
+            ReplyBody::Motion(s) => Some(*s),
             _ => None,
         })
     }

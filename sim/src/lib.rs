@@ -52,6 +52,7 @@
 
 mod closed;
 mod drawn;
+mod driven;
 pub mod effects;
 mod executed;
 mod factor;
@@ -72,6 +73,7 @@ pub use closed::{
     Conditions, Controller, Seen, Tracker,
 };
 pub use drawn::{Drawn, StepDraw};
+pub use driven::{driven_loop, Board};
 pub use effects::{
     EffectsError, LayerDepths, WorldEffects, LAYER_DEPTHS_KEY, TWICE_CLINICAL_FAULT_KEYS,
     TWICE_CLINICAL_KEYS, WORLD_KEYS,

@@ -100,6 +100,7 @@ impl Core {
                 self.steer_fetch(id, offset, max_len, tx)
             }
             RequestBody::SteerStatus => self.steer_status(id, tx),
+            RequestBody::SteerDrive { piece_mm } => self.drive_start(id, piece_mm, tx),
             RequestBody::Motion(m) => self.motion_request(id, &m, tx),
         }
     }

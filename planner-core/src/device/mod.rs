@@ -12,6 +12,7 @@
 //! form by form and serving the result).
 
 mod dispatch;
+mod drive;
 mod job;
 mod motion;
 pub mod receive;
@@ -91,6 +92,8 @@ struct Core {
     steer_answer_len: u16,
     /// The board's axes, if it drives any.
     motion: motion::Motion,
+    /// The steered insertion the board moves itself, if any.
+    driven: drive::Driven,
 }
 
 /// The device's request handler.
@@ -161,6 +164,7 @@ impl DeviceService {
                 steer_answer: [0; MAX_STEER_ANSWER],
                 steer_answer_len: 0,
                 motion: motion::Motion::Off,
+                driven: drive::Driven::Off,
             },
         }
     }

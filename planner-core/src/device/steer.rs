@@ -37,6 +37,7 @@ impl Core {
             Ok(steering) => {
                 let steps = steering.steps().iter().copied().collect();
                 self.steering = Steered::On { plan: id, steering };
+                self.driven = super::drive::Driven::Off;
                 self.answer(id, ReplyBody::SteerStarted { steps }, None, max_len, tx);
             }
             Err(fault) => self.fault(id, fault, tx),
@@ -82,7 +83,8 @@ impl Core {
         })
     }
 
-    /// Answers one reading of the insertion steered under plan `id`.
+    /// Answers one reading of the insertion steered under plan `id` (on a board that drives it,
+    /// after its piece has ended, and then moves the next).
     pub(super) fn steer_reading(
         &mut self,
         id: u16,
@@ -90,25 +92,30 @@ impl Core {
         max_len: u16,
         tx: &mut dyn FnMut(&[u8]),
     ) {
-        match &mut self.steering {
-            Steered::On { plan, steering } if *plan == id => {
-                let reply = steering.update(m);
-                self.stats.steer_readings = self.stats.steer_readings.wrapping_add(1);
-                let stored = usize::from(self.steer_answer_len);
-                if reply.reading == Reading::Repeated && stored > usize::from(max_len) {
-                    // The host may be fetching the first answer's parts: announce the same
-                    // bytes again rather than a re-encoding that says "repeated".
-                    let crc = crc32(&self.steer_answer[..stored]);
-                    let len = self.steer_answer_len;
-                    let reading = Some(m.seq);
-                    let pending = ReplyBody::SteerPending { reading, len, crc };
-                    return self.send(id, pending, tx);
-                }
-                let seq = Some(reply.seq);
-                self.answer(id, ReplyBody::Steer(reply), seq, max_len, tx);
-            }
-            _ => self.fault(id, Fault::NotSteering, tx),
+        let mut m = *m;
+        if let Err(fault) = self.drive_reading(id, &mut m) {
+            return self.fault(id, fault, tx);
         }
+        let reply = match &mut self.steering {
+            Steered::On { plan, steering } if *plan == id => steering.update(&m),
+            _ => return self.fault(id, Fault::NotSteering, tx),
+        };
+        self.stats.steer_readings = self.stats.steer_readings.wrapping_add(1);
+        if let Err(fault) = self.drive_answer(id, m.seq, &reply) {
+            return self.fault(id, fault, tx);
+        }
+        let stored = usize::from(self.steer_answer_len);
+        if reply.reading == Reading::Repeated && stored > usize::from(max_len) {
+            // The host may be fetching the first answer's parts: announce the same bytes again
+            // rather than a re-encoding that says "repeated".
+            let crc = crc32(&self.steer_answer[..stored]);
+            let len = self.steer_answer_len;
+            let reading = Some(m.seq);
+            let pending = ReplyBody::SteerPending { reading, len, crc };
+            return self.send(id, pending, tx);
+        }
+        let seq = Some(reply.seq);
+        self.answer(id, ReplyBody::Steer(reply), seq, max_len, tx);
     }
 
     /// The counters and stop of the insertion steered under plan `id`.

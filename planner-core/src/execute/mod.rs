@@ -7,6 +7,7 @@ pub mod apriori;
 pub mod nominal;
 mod obstacle_risk;
 pub mod perturbation;
+pub mod pieces;
 pub mod plan_with_schedule;
 pub mod risk;
 mod risk_kept;

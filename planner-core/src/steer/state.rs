@@ -128,6 +128,11 @@ impl Steering {
         &self.steps
     }
 
+    /// The scenario steered in (its driver's speeds and needle are a board's soft limits).
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
     /// The counters so far.
     pub fn stats(&self) -> SteerStats {
         self.stats

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 10;
+pub const PROTOCOL_VERSION: u8 = 11;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -118,6 +118,14 @@ pub enum RequestBody {
     /// A motion or safety request: answered by [`ReplyBody::Motion`], or refused with
     /// [`Fault::Motion`] (or [`Fault::NoMotion`] on a device without axes).
     Motion(MotionRequest),
+    /// The board moves the insertion steered under plan `id` itself, on its axes (armed, homed,
+    /// at the entry), one piece at a time: the first piece now, each next one after the reading
+    /// taken once the last has ended (a reading while a piece moves is refused with
+    /// [`Fault::PieceMoving`]). Answered by [`ReplyBody::Motion`] with the first piece queued.
+    SteerDrive {
+        /// Longest piece of insertion between two readings (mm, above 0 and at most 1).
+        piece_mm: f32,
+    },
 }
 
 /// Device to host.
@@ -274,6 +282,12 @@ pub enum Fault {
     Motion(needle_motion::MotionError),
     /// A motion request reached a device that drives no axes.
     NoMotion,
+    /// A driven insertion's reading arrived while its piece was still moving.
+    PieceMoving,
+    /// `SteerDrive` after the steered insertion had taken readings: the board starts at the entry.
+    NotAtEntry,
+    /// `SteerDrive`'s piece length is not above 0 and at most 1 mm.
+    BadPieceLength,
 }
 
 impl core::fmt::Display for Fault {
@@ -307,6 +321,9 @@ impl core::fmt::Display for Fault {
             Fault::Internal => f.write_str("the device hit an internal error and restarts"),
             Fault::Motion(e) => write!(f, "the motion core refused: {e}"),
             Fault::NoMotion => f.write_str("the device drives no axes"),
+            Fault::PieceMoving => f.write_str("a reading arrived while the board's piece moved"),
+            Fault::NotAtEntry => f.write_str("the steered insertion has left the entry"),
+            Fault::BadPieceLength => f.write_str("the piece length is not in (0, 1] mm"),
         }
     }
 }
