@@ -38,7 +38,7 @@ enum Command {
     /// Turn polygon obstacles into covering circles.
     Approx(analysis::ApproxArgs),
     /// Cover a label map's segments (NRRD, Slicer .seg.nrrd, NIfTI) with spheres to avoid.
-    Cover(needle_anatomy::command::CoverArgs),
+    Cover(cover::CoverArgs),
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
