@@ -6,12 +6,15 @@
 //! `needle-device`, `needle-analysis`, `needle-simulate`, `needle-lab`, `needle-anatomy`).
 
 use clap::{Parser, Subcommand};
+use link::LinkArgs;
 use needle_analysis::cli as analysis;
-use needle_device::commands::{self as device, LinkArgs};
+use needle_device::commands as device;
 use std::process::ExitCode;
 
 mod bench;
 mod cover;
+mod link;
+mod motion;
 mod plan;
 
 #[derive(Parser)]
@@ -52,7 +55,7 @@ enum Command {
     Send(plan::SendArgs),
     /// Drive a board's two axes: arm, home, move a scenario's plan, hold, stop, e-stop
     /// (docs/motion.md; `hil-sim --axes` and the QEMU firmware drive simulated ones).
-    Motion(needle_device::motion::MotionArgs),
+    Motion(motion::MotionArgs),
     /// Check that a device answers, and how fast.
     Ping {
         #[command(flatten)]
@@ -114,9 +117,9 @@ fn main() -> ExitCode {
         Command::Steer(a) => needle_lab::run_steer(a),
         Command::Benchmark(a) => needle_simulate::benchmark::run_benchmark(a),
         Command::Send(a) => plan::send(a),
-        Command::Motion(a) => needle_device::motion::motion(a),
-        Command::Ping { link, count } => device::ping(link, *count),
-        Command::Info { link, json } => device::info(link, *json),
+        Command::Motion(a) => motion::motion(a),
+        Command::Ping { link, count } => device::ping(&link.options(), *count),
+        Command::Info { link, json } => device::info(&link.options(), *json),
         Command::Ports => device::ports(),
         Command::Bench(a) => bench::bench(a),
         Command::DeviceBench { args } => Err(moved_to_xtask("device-bench", args)),

@@ -1,9 +1,9 @@
 //! `needle plan` and `needle send`: a scenario planned here or on a device (`needle-report`,
 //! `needle-device`), printed the same way.
 
+use crate::link::LinkArgs;
 use anyhow::{anyhow, Result};
 use needle_device::checked::{plan_checked, Sent};
-use needle_device::commands::LinkArgs;
 use needle_report::local::{plan_locally, LocalPlan};
 use needle_report::schedule_table;
 use needle_scenario::{load_execution, load_scenario, load_scenario_shapes, restrict, Execution};
@@ -147,7 +147,7 @@ pub fn send(args: &SendArgs) -> Result<()> {
     }
     let scenario = load(&args.plan)?;
     let execution = load_execution(&args.plan.file)?;
-    let made = match plan_checked(&scenario, &execution, &args.link)? {
+    let made = match plan_checked(&scenario, &execution, &args.link.options())? {
         Sent::Planned(made) => *made,
         Sent::Refused(e) => return Err(e),
     };

@@ -11,7 +11,7 @@ use super::slicer::Slicer;
 use super::tracker::{TrackerNames, TrackerState};
 use super::wire::{load_registration, read_frames_counting, Arrival, TARGET_DEVICE, TIP_DEVICE};
 use anyhow::{anyhow, Result};
-use needle_device::commands::LinkArgs;
+use needle_device::LinkOptions;
 use needle_sim::in_process;
 use needle_simulate::closed_loop_setup;
 use needle_simulate::device::{device_planning, start_steering, LinkController};
@@ -116,8 +116,8 @@ pub struct SteerArgs {
 
 impl SteerArgs {
     /// The device to steer on (`--tcp` or `--port`), if any.
-    pub fn link(&self) -> Option<LinkArgs> {
-        LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)
+    pub fn link(&self) -> Option<LinkOptions> {
+        LinkOptions::optional(&self.port, self.baud, &self.tcp, self.timeout)
     }
 }
 

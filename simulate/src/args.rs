@@ -1,7 +1,7 @@
 //! The flags of `needle simulate`. Flags that mean nothing alone are refused by clap as usage
 //! errors (exit status 2, as for any other bad flag) rather than silently ignored.
 
-use needle_device::commands::LinkArgs;
+use needle_device::LinkOptions;
 use std::path::PathBuf;
 
 /// Default `--retries` of a closed loop on a device: at one request in five through, 400 tries
@@ -88,8 +88,8 @@ pub struct SimulateArgs {
 
 impl SimulateArgs {
     /// The device to steer on (`--tcp` or `--port`), if any.
-    pub fn link(&self) -> Option<LinkArgs> {
-        let mut link = LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
+    pub fn link(&self) -> Option<LinkOptions> {
+        let mut link = LinkOptions::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
         link.retries = self.retries;
         Some(link)
     }
