@@ -12,10 +12,13 @@ use needle_device::commands as device;
 use std::process::ExitCode;
 
 mod bench;
+mod benchmark;
 mod cover;
 mod link;
 mod motion;
 mod plan;
+mod simulate;
+mod values;
 
 #[derive(Parser)]
 #[command(
@@ -45,12 +48,12 @@ enum Command {
     /// Draw a scenario and its plan (SVG).
     Plot(analysis::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
-    Simulate(needle_simulate::SimulateArgs),
+    Simulate(simulate::SimulateArgs),
     /// Steer an insertion in a lab: OpenIGTLink tracker poses in, robot commands out
     /// (docs/lab.md; `hil-sim --lab` is a simulated lab).
     Steer(needle_lab::SteerArgs),
     /// Plan and simulate (open and closed loop) seeded 3-D scenarios nobody tuned on.
-    Benchmark(needle_simulate::benchmark::BenchmarkArgs),
+    Benchmark(benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(plan::SendArgs),
     /// Drive a board's two axes: arm, home, move a scenario's plan, hold, stop, e-stop
@@ -113,9 +116,9 @@ fn main() -> ExitCode {
         Command::Approx(a) => analysis::run_approx(a),
         Command::Cover(a) => cover::run_cover(a),
         Command::Plot(a) => analysis::run_plot(a),
-        Command::Simulate(a) => needle_simulate::run_simulate(a),
+        Command::Simulate(a) => simulate::simulate(a),
         Command::Steer(a) => needle_lab::run_steer(a),
-        Command::Benchmark(a) => needle_simulate::benchmark::run_benchmark(a),
+        Command::Benchmark(a) => benchmark::benchmark(a),
         Command::Send(a) => plan::send(a),
         Command::Motion(a) => motion::motion(a),
         Command::Ping { link, count } => device::ping(&link.options(), *count),

@@ -15,6 +15,7 @@ use needle_device::LinkOptions;
 use needle_sim::in_process;
 use needle_simulate::closed_loop_setup;
 use needle_simulate::device::{device_planning, start_steering, LinkController};
+use needle_simulate::request::Request;
 use serde_json::json;
 use std::net::{IpAddr, Ipv4Addr, TcpStream, ToSocketAddrs};
 use std::path::PathBuf;
@@ -210,27 +211,25 @@ fn check_name(flag: &str, name: &str) -> Result<()> {
 /// dropouts of up to 10 mm).
 pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
 
-/// The flags of `needle simulate --closed-loop` that plan and set up the insertion as
+/// What `needle simulate --closed-loop` is asked to plan and set up the insertion as
 /// `needle steer` is told: the `--steer` keys (the lab's tracking interlock unless the scenario
 /// or a key sets it), and the device, for the same refusal (a plan bound the device cannot
 /// plan).
-fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
-    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+fn simulate_request(a: &SteerArgs) -> Result<Request> {
+    let mut steer = a.steer.clone();
     let key = "tracking_lost_after_mm";
     let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
     let told_in_file = needle_scenario::ScenarioFile::load(&a.file)?
         .steering
         .is_some_and(|t| t.contains_key(key));
     if !told_here && !told_in_file {
-        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
+        steer.insert(0, format!("{key}={LAB_TRACKING_LOST_AFTER_MM}"));
     }
-    if let Some(t) = &a.tcp {
-        flags.push(format!("--tcp={t}"));
-    }
-    if let Some(p) = &a.port {
-        flags.push(format!("--port={p}"));
-    }
-    Ok(flags)
+    Ok(Request {
+        steer,
+        on_device: a.link().is_some(),
+        ..Request::default()
+    })
 }
 
 /// Runs `needle steer`: an insertion that does not reach the target is an error carrying its
@@ -250,7 +249,7 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
     if let Some(name) = &a.registration_name {
         check_name("--registration-name", name)?;
     }
-    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_flags(a)?)?;
+    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_request(a)?)?;
     let registration = a
         .registration
         .as_deref()
