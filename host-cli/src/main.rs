@@ -18,6 +18,7 @@ mod link;
 mod motion;
 mod plan;
 mod simulate;
+mod steer;
 mod values;
 
 #[derive(Parser)]
@@ -51,7 +52,7 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Steer an insertion in a lab: OpenIGTLink tracker poses in, robot commands out
     /// (docs/lab.md; `hil-sim --lab` is a simulated lab).
-    Steer(needle_lab::SteerArgs),
+    Steer(steer::SteerArgs),
     /// Plan and simulate (open and closed loop) seeded 3-D scenarios nobody tuned on.
     Benchmark(benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
@@ -117,7 +118,7 @@ fn main() -> ExitCode {
         Command::Cover(a) => cover::run_cover(a),
         Command::Plot(a) => analysis::run_plot(a),
         Command::Simulate(a) => simulate::simulate(a),
-        Command::Steer(a) => needle_lab::run_steer(a),
+        Command::Steer(a) => steer::steer(a),
         Command::Benchmark(a) => benchmark::benchmark(a),
         Command::Send(a) => plan::send(a),
         Command::Motion(a) => motion::motion(a),
