@@ -7,18 +7,23 @@
 
 use clap::{Parser, Subcommand};
 use link::LinkArgs;
-use needle_analysis::cli as analysis;
 use needle_device::commands as device;
 use std::process::ExitCode;
 
+mod approx;
 mod bench;
 mod benchmark;
+mod compare;
 mod cover;
 mod link;
 mod motion;
 mod plan;
+mod plot;
+mod rrt;
+mod scenario_args;
 mod simulate;
 mod steer;
+mod sweep;
 mod values;
 
 #[derive(Parser)]
@@ -37,17 +42,17 @@ enum Command {
     /// Plan a scenario on this machine.
     Plan(plan::PlanArgs),
     /// Re-plan for each value of one weight (robustness analysis).
-    Sweep(analysis::SweepArgs),
+    Sweep(sweep::SweepArgs),
     /// Plan with the RRT baseline.
-    Rrt(analysis::RrtCmd),
+    Rrt(rrt::RrtCmd),
     /// The optimiser against the RRT over several seeds.
-    Compare(analysis::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Turn polygon obstacles into covering circles.
-    Approx(analysis::ApproxArgs),
+    Approx(approx::ApproxArgs),
     /// Cover a label map's segments (NRRD, Slicer .seg.nrrd, NIfTI) with spheres to avoid.
     Cover(cover::CoverArgs),
     /// Draw a scenario and its plan (SVG).
-    Plot(analysis::PlotArgs),
+    Plot(plot::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
     Simulate(simulate::SimulateArgs),
     /// Steer an insertion in a lab: OpenIGTLink tracker poses in, robot commands out
@@ -111,12 +116,12 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan::plan(a),
-        Command::Sweep(a) => analysis::run_sweep(a),
-        Command::Rrt(a) => analysis::run_rrt(a),
-        Command::Compare(a) => analysis::run_compare(a),
-        Command::Approx(a) => analysis::run_approx(a),
+        Command::Sweep(a) => sweep::sweep(a),
+        Command::Rrt(a) => rrt::rrt(a),
+        Command::Compare(a) => compare::compare(a),
+        Command::Approx(a) => approx::approx(a),
         Command::Cover(a) => cover::run_cover(a),
-        Command::Plot(a) => analysis::run_plot(a),
+        Command::Plot(a) => plot::plot(a),
         Command::Simulate(a) => simulate::simulate(a),
         Command::Steer(a) => steer::steer(a),
         Command::Benchmark(a) => benchmark::benchmark(a),

@@ -132,7 +132,7 @@ pub fn plan(args: &PlanArgs) -> Result<()> {
     // The scenario as planned: its reserve is the plan's.
     let (scenario, report) = (&made.scenario, made.report());
     if let Some(out) = &args.plot {
-        needle_analysis::cli::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
+        needle_analysis::commands::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
     }
     if let Some(dir) = &args.export {
         wrote(&needle_report::slicer::export(dir, scenario, report)?);

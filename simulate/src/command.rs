@@ -11,7 +11,7 @@ use super::steering::summarise_steering;
 use super::summarise;
 use super::table::{closed_table, to_table, Header};
 use anyhow::{anyhow, Result};
-use needle_analysis::cli::output::{progress, title_of, OutputFile};
+use needle_analysis::commands::output::{progress, title_of, OutputFile};
 use needle_analysis::parallel;
 use needle_scenario::{ObstacleShape, ScenarioFile};
 use std::io::Write;

@@ -19,7 +19,7 @@ pub use figures::{FormTotals, SteeredPlan, Unplanned, WORLD_SEED_STRIDE};
 use crate::setup::{Keep, Setup};
 use crate::PlanBound;
 use anyhow::{Context, Result};
-use needle_analysis::cli::output::progress;
+use needle_analysis::commands::output::progress;
 use needle_analysis::parallel;
 use needle_scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use needle_scenario::planted::planted_scenario;
