@@ -1,7 +1,7 @@
 //! `needle approx`: its flags, polygon obstacles' circles printed by `needle_analysis::commands`.
 
+use crate::values::MethodArg;
 use needle_analysis::commands::ApproxOptions;
-use needle_scenario::approx::Method;
 use std::path::PathBuf;
 
 /// `needle approx`
@@ -11,7 +11,7 @@ pub struct ApproxArgs {
     file: PathBuf,
     /// circumscribed, segmented or bordered (default: each obstacle's own `approx`).
     #[arg(long, ignore_case = true)]
-    method: Option<Method>,
+    method: Option<MethodArg>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
@@ -24,7 +24,7 @@ pub struct ApproxArgs {
 pub fn approx(a: &ApproxArgs) -> anyhow::Result<()> {
     needle_analysis::commands::run_approx(&ApproxOptions {
         file: a.file.clone(),
-        method: a.method,
+        method: a.method.map(Into::into),
         json: a.json,
         plot: a.plot.clone(),
     })

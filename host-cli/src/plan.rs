@@ -2,6 +2,7 @@
 //! `needle-device`), printed the same way.
 
 use crate::link::LinkArgs;
+use crate::values::MethodArg;
 use anyhow::{anyhow, Result};
 use needle_device::checked::{plan_checked, Sent};
 use needle_report::local::{plan_locally, LocalPlan};
@@ -33,7 +34,7 @@ pub struct PlanArgs {
     plot: Option<PathBuf>,
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
     #[arg(long, ignore_case = true)]
-    approx: Option<needle_scenario::approx::Method>,
+    approx: Option<MethodArg>,
     /// Also write files 3D Slicer opens into DIR: the path as a markups curve, the entry and
     /// target as markups points (RAS), the obstacles as a model (docs/anatomy.md).
     #[arg(long, value_name = "DIR")]
@@ -52,7 +53,7 @@ pub struct SendArgs {
 fn load(args: &PlanArgs) -> Result<Scenario> {
     let mut scenario = match args.approx {
         None => load_scenario(&args.file)?,
-        Some(m) => load_scenario_shapes(&args.file, Some(m))?.0,
+        Some(m) => load_scenario_shapes(&args.file, Some(m.into()))?.0,
     };
     restrict(&mut scenario, args.max_degree, args.forms.as_deref())?;
     Ok(scenario)
@@ -132,7 +133,13 @@ pub fn plan(args: &PlanArgs) -> Result<()> {
     // The scenario as planned: its reserve is the plan's.
     let (scenario, report) = (&made.scenario, made.report());
     if let Some(out) = &args.plot {
-        needle_analysis::commands::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
+        needle_analysis::commands::write_plan_plot(
+            &args.file,
+            args.approx.map(Into::into),
+            scenario,
+            report,
+            out,
+        )?;
     }
     if let Some(dir) = &args.export {
         wrote(&needle_report::slicer::export(dir, scenario, report)?);

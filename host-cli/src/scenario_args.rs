@@ -1,8 +1,8 @@
 //! Flags the analysis commands share: the scenario and what to plan in it, and the RRT's
 //! settings (`needle_analysis::commands`' `ScenarioSource`, `ScenarioOptions`, `RrtSettings`).
 
+use crate::values::MethodArg;
 use needle_analysis::commands::{RrtSettings, ScenarioOptions, ScenarioSource};
-use needle_scenario::approx::Method;
 use std::path::PathBuf;
 
 /// The scenario file alone: what a command that plans no path forms (the RRT) takes.
@@ -12,7 +12,7 @@ pub struct ScenarioFileArgs {
     file: PathBuf,
     /// Turn every polygon obstacle into circles this way: circumscribed, segmented or bordered.
     #[arg(long, ignore_case = true)]
-    approx: Option<Method>,
+    approx: Option<MethodArg>,
 }
 
 impl ScenarioFileArgs {
@@ -20,7 +20,7 @@ impl ScenarioFileArgs {
     pub fn source(&self) -> ScenarioSource {
         ScenarioSource {
             file: self.file.clone(),
-            approx: self.approx,
+            approx: self.approx.map(Into::into),
         }
     }
 }
