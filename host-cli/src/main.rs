@@ -1,9 +1,11 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
 //!
-//! Each command's flags and how it prints are here, one module per command where `main.rs` does
-//! not say it in a line; the work is the library crates' (`needle-scenario`, `needle-report`,
-//! `needle-device`, `needle-analysis`, `needle-simulate`, `needle-lab`, `needle-anatomy`).
+//! Each command's flags are here and only here, one module per command where `main.rs` does not
+//! say them in a line, turned into the plain options of a library crate (`needle-scenario`,
+//! `needle-report`, `needle-device`, `needle-analysis`, `needle-simulate`, `needle-lab`,
+//! `needle-anatomy`), whose functions do the work and print; none of those depends on clap, so
+//! the Python package calls them with the same options.
 
 use clap::{Parser, Subcommand};
 use link::LinkArgs;
