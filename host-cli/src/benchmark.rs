@@ -2,7 +2,6 @@
 //! `needle_simulate::benchmark`.
 
 use crate::values::{at_least_one, run_count, scenario_count};
-use needle_scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use needle_simulate::benchmark::{BenchmarkOptions, Generator};
 use std::path::PathBuf;
 
@@ -10,14 +9,14 @@ use std::path::PathBuf;
 #[derive(clap::Args, Clone, Debug)]
 pub struct BenchmarkArgs {
     /// Generated scenarios, 1 to 100 000 (seeds S, S+1, ...).
-    #[arg(long, default_value_t = 20, value_parser = scenario_count)]
+    #[arg(long, default_value_t = BenchmarkOptions::default().scenarios, value_parser = scenario_count)]
     scenarios: usize,
     /// Seed of the first scenario.
-    #[arg(long, default_value_t = 101)]
+    #[arg(long, default_value_t = BenchmarkOptions::default().seed)]
     seed: u64,
     /// Simulated insertions per scenario, 1 to 1 000 000: each open loop, and the same worlds
     /// closed loop.
-    #[arg(long, default_value_t = 40, value_parser = run_count)]
+    #[arg(long, default_value_t = BenchmarkOptions::default().runs, value_parser = run_count)]
     runs: usize,
     /// Threads, at least 1 (default: every core).
     #[arg(long, value_parser = at_least_one)]
@@ -60,7 +59,7 @@ pub struct BenchmarkArgs {
     open_loop_only: bool,
     /// The curvature reserve of the plans steered closed loop (`planner.curvature_reserve`:
     /// halved where no path keeps it, down to none; the row says what was kept).
-    #[arg(long, value_name = "R", default_value_t = CLOSED_LOOP_CURVATURE_RESERVE, value_parser = reserve)]
+    #[arg(long, value_name = "R", default_value_t = BenchmarkOptions::default().curvature_reserve, value_parser = reserve)]
     curvature_reserve: f32,
     /// Which generator draws the scenarios: `unseen` (the spheres drawn with no regard for
     /// whether a path is left) or `planted` (a needle path drawn first, every sphere kept 2 mm

@@ -18,10 +18,10 @@ pub struct SimulateArgs {
     file: PathBuf,
     /// Simulated insertions, 1 to 1 000 000 (checked with the scenario, so that the Python
     /// package's `simulate` gives the same message).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = SimulateOptions::default().runs)]
     runs: usize,
     /// Seed of the first run (run i uses seed + i).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = SimulateOptions::default().seed)]
     seed: u64,
     /// Plan and simulate only this form (e.g. RL) instead of the best.
     #[arg(long)]
@@ -73,7 +73,7 @@ pub struct SimulateArgs {
     #[arg(long, requires = "closed_loop")]
     port: Option<String>,
     /// Baud rate of --port.
-    #[arg(long, default_value_t = 115_200)]
+    #[arg(long, default_value_t = LinkOptions::default().baud)]
     baud: u32,
     /// Seconds of silence allowed per exchange with the device.
     #[arg(long, default_value_t = 5.0)]

@@ -3,7 +3,7 @@
 use needle_device::LinkOptions;
 use needle_lab::wire::{TARGET_DEVICE, TIP_DEVICE};
 use needle_lab::SteerOptions;
-use std::net::{IpAddr, Ipv4Addr};
+use std::net::IpAddr;
 use std::path::PathBuf;
 
 /// `needle steer`
@@ -30,7 +30,7 @@ pub struct SteerArgs {
     #[arg(long, value_name = "NAME")]
     registration_name: Option<String>,
     /// With --registration-name: how long to wait for it before giving up ("no_registration").
-    #[arg(long, requires = "registration_name", default_value_t = 5000)]
+    #[arg(long, requires = "registration_name", default_value_t = SteerOptions::default().registration_timeout_ms)]
     registration_timeout_ms: u64,
     /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
     #[arg(long)]
@@ -47,14 +47,14 @@ pub struct SteerArgs {
     /// With --serve-slicer: the address to serve on (default 127.0.0.1, this machine only;
     /// 0.0.0.0 every interface, so any host that reaches this one can watch).
     #[arg(long, value_name = "ADDR", requires = "serve_slicer",
-          default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
+          default_value_t = SteerOptions::default().serve_slicer_bind)]
     serve_slicer_bind: IpAddr,
     /// With --serve-slicer: wait up to this many seconds for the first viewer before steering.
     #[arg(
         long,
         value_name = "SECONDS",
         requires = "serve_slicer",
-        default_value_t = 0.0
+        default_value_t = SteerOptions::default().wait_for_slicer
     )]
     wait_for_slicer: f64,
     /// Write the insertion log here (JSON lines: the plan, each reading, each command, the stop).
@@ -67,18 +67,18 @@ pub struct SteerArgs {
     /// Degrees of freedom of the tip sensor: 6 (the tip TRANSFORM's roll is the bevel's) or 5
     /// (a 5-DOF coil, as the ones that fit a needle: the TRANSFORM's roll means nothing and is
     /// left out; the controller infers the roll from how the path bends).
-    #[arg(long, value_name = "N", default_value_t = 6,
+    #[arg(long, value_name = "N", default_value_t = SteerOptions::default().tracker_dof,
           value_parser = clap::value_parser!(u8).range(5..=6))]
     tracker_dof: u8,
     /// Tell the controller one thing, KEY=VALUE (as `needle simulate --steer`).
     #[arg(long = "steer", value_name = "KEY=VALUE")]
     steer: Vec<String>,
     /// No tip pose for this long: the robot is told hold, then stop ("tracking_lost").
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = SteerOptions::default().tracking_timeout_ms)]
     tracking_timeout_ms: u64,
     /// No robot report this long after a command: the robot is told stop
     /// ("robot_not_answering").
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = SteerOptions::default().robot_timeout_ms)]
     robot_timeout_ms: u64,
     /// Print one JSON object.
     #[arg(long)]
@@ -90,7 +90,7 @@ pub struct SteerArgs {
     #[arg(long)]
     port: Option<String>,
     /// Baud rate of --port.
-    #[arg(long, default_value_t = 115_200)]
+    #[arg(long, default_value_t = LinkOptions::default().baud)]
     baud: u32,
     /// Seconds of silence allowed per exchange with the device.
     #[arg(long, default_value_t = 5.0)]
