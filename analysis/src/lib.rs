@@ -2,8 +2,8 @@
 //! SVG plots of these and of polygon obstacles' circles (the polygons themselves are part of the
 //! scenario model, [`needle_scenario`]). Simulated insertions (`needle simulate`) are not an
 //! analysis of a plan but its execution: the `needle-simulate` crate. [`bench`] times planning
-//! (`needle bench`) and [`scale`] draws its hundreds of spheres; [`cli`] is the analysis
-//! commands' flags and output.
+//! (`needle bench`) and [`scale`] draws its hundreds of spheres; [`commands`] is what the
+//! analysis commands are asked and print (their flags are the `needle` binary's).
 //!
 //! A weight sweep, the analysis most callers start from:
 //!
@@ -20,7 +20,7 @@
 //! ```
 
 pub mod bench;
-pub mod cli;
+pub mod commands;
 pub mod compare;
 pub mod parallel;
 pub mod pieces;

@@ -9,26 +9,42 @@ use planner_core::{Form, PlanError, PlanReport, Scenario};
 use std::fmt;
 
 /// Which weight of F = a1 L + a2 D + a3 H + a4 N is swept (by its name or by a1..a4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Weight {
     /// a1
-    #[value(alias = "a1")]
     Length,
     /// a2
-    #[value(alias = "a2")]
     Risk,
     /// a3
-    #[value(alias = "a3")]
     Penalty,
     /// a4
-    #[value(alias = "a4")]
     Control,
 }
 
 impl Weight {
+    /// Every weight, in the order of F's terms.
+    pub const ALL: [Weight; 4] = [
+        Weight::Length,
+        Weight::Risk,
+        Weight::Penalty,
+        Weight::Control,
+    ];
+
     /// The weight `name` names (`length` or `a1`, ..., any case), as `--weight` reads it.
     pub fn parse(name: &str) -> Option<Weight> {
-        <Weight as clap::ValueEnum>::from_str(name, true).ok()
+        Weight::ALL
+            .into_iter()
+            .find(|w| w.name().eq_ignore_ascii_case(name) || w.alias().eq_ignore_ascii_case(name))
+    }
+
+    /// The coefficient's name in F: a1 to a4.
+    pub fn alias(self) -> &'static str {
+        match self {
+            Weight::Length => "a1",
+            Weight::Risk => "a2",
+            Weight::Penalty => "a3",
+            Weight::Control => "a4",
+        }
     }
 
     /// Name as in the scenario file's `[weights]`.
@@ -269,7 +285,6 @@ pub fn to_table(weight: Weight, points: &[Point]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::ValueEnum;
 
     #[test]
     fn ranges_include_both_ends() {
@@ -335,13 +350,8 @@ mod tests {
     #[test]
     fn weight_names_round_trip_and_apply_only_their_slot() {
         let s = Scenario::paper();
-        for w in [
-            Weight::Length,
-            Weight::Risk,
-            Weight::Penalty,
-            Weight::Control,
-        ] {
-            assert_eq!(Weight::from_str(w.name(), true), Ok(w));
+        for w in Weight::ALL {
+            assert_eq!(Weight::parse(w.name()), Some(w));
             let t = w.apply(&s, 7.5);
             let changed = [
                 t.weights.length != s.weights.length,
@@ -351,7 +361,8 @@ mod tests {
             ];
             assert_eq!(changed.iter().filter(|c| **c).count(), 1, "{w}");
         }
-        assert_eq!(Weight::from_str("A3", true), Ok(Weight::Penalty));
-        assert!(Weight::from_str("alpha", true).is_err());
+        assert_eq!(Weight::parse("A3"), Some(Weight::Penalty));
+        assert_eq!(Weight::parse("RISK"), Some(Weight::Risk));
+        assert_eq!(Weight::parse("alpha"), None);
     }
 }

@@ -9,51 +9,47 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// `needle cover`
-#[derive(clap::Args, Clone, Debug)]
-pub struct CoverArgs {
+/// What `needle cover` is asked: the image, which of its segments, the cover's options, and
+/// whether the report is JSON (the `needle` binary reads these from its flags; `--out` and
+/// `--scenario` are its own, since they write files rather than cover).
+#[derive(Clone, Debug)]
+pub struct CoverRequest {
     /// A label map: `.nrrd` (3D Slicer's `.seg.nrrd` too) or NIfTI `.nii` / `.nii.gz`; or a
     /// closed surface mesh (`.stl`, `.obj`), covered as the solid it bounds.
     pub image: PathBuf,
     /// The voxel edge a mesh is voxelised at (mm, above 0 and at most 10).
-    #[arg(long, default_value_t = DEFAULT_VOXEL_MM, allow_negative_numbers = true)]
     pub voxel: f64,
-    /// The unit a mesh's coordinates are in: mm (the default), cm, m or um. A mesh whose extent
-    /// is implausible for millimetres (under 1 mm or over 2 m) is refused unless this is given.
-    #[arg(long, value_name = "UNIT")]
+    /// The unit a mesh's coordinates are in: mm (`None`), cm, m or um.
     pub unit: Option<String>,
-    /// Cover these label values only (comma-separated; default: every label but 0).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        conflicts_with = "segments",
-        allow_negative_numbers = true
-    )]
+    /// Cover these label values only (`None`: every label but 0).
     pub labels: Option<Vec<i64>>,
     /// Cover these segments only, by the names the file gives them (a `.seg.nrrd`).
-    #[arg(long, value_delimiter = ',')]
     pub segments: Option<Vec<String>>,
-    /// Grow every sphere by this much (mm, 0 to 100): the segment dilated by it is covered.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Grow every sphere by this much (mm, 0 to 100).
     pub margin: f64,
     /// The most spheres one segment's cover may take (at least 1).
-    #[arg(long, default_value_t = MAX_OBSTACLES)]
     pub max_spheres: usize,
-    /// The cover's volume at most this many times the segment's (dilated by the margin): the
-    /// fewest spheres that tight are taken. Where spheres holding whole voxels cannot be that
-    /// tight (a segment a voxel or two thin), the tightest cover tried, and the command says so.
-    #[arg(long, default_value_t = DEFAULT_TIGHTNESS)]
+    /// The cover's volume at most this many times the segment's (dilated by the margin).
     pub tightness: f64,
-    /// Print one JSON object instead of the table.
-    #[arg(long)]
+    /// The report is JSON: no progress line, whatever stderr is.
     pub json: bool,
-    /// Write the spheres as `[[obstacles]]` to this file: appended to `--scenario`'s text when
-    /// given (a scenario that plans), else alone (to paste into one).
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-    /// The scenario the spheres join in `--out`.
-    #[arg(long, value_name = "SCENARIO", requires = "out")]
-    pub scenario: Option<PathBuf>,
+}
+
+impl Default for CoverRequest {
+    /// The command's defaults, for no image yet.
+    fn default() -> Self {
+        CoverRequest {
+            image: PathBuf::new(),
+            voxel: DEFAULT_VOXEL_MM,
+            unit: None,
+            labels: None,
+            segments: None,
+            margin: 0.0,
+            max_spheres: MAX_OBSTACLES,
+            tightness: DEFAULT_TIGHTNESS,
+            json: false,
+        }
+    }
 }
 
 /// What `needle cover --json` prints.
@@ -157,7 +153,7 @@ fn by_name(map: &LabelMap, present: &[Segment], n: &str) -> Result<Segment> {
 }
 
 /// The covers `a` asks for.
-pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
+pub fn covers(a: &CoverRequest) -> Result<Vec<SegmentCover>> {
     let options = CoverOptions {
         margin_mm: a.margin,
         max_spheres: a.max_spheres,
@@ -182,7 +178,7 @@ pub fn covers(a: &CoverArgs) -> Result<Vec<SegmentCover>> {
 }
 
 /// What `needle cover --json` prints for `covers`.
-pub fn report_json(a: &CoverArgs, covers: &[SegmentCover]) -> Result<serde_json::Value> {
+pub fn report_json(a: &CoverRequest, covers: &[SegmentCover]) -> Result<serde_json::Value> {
     let report = CoverReport {
         file: a.image.display().to_string(),
         frame: "RAS",
@@ -195,12 +191,12 @@ pub fn report_json(a: &CoverArgs, covers: &[SegmentCover]) -> Result<serde_json:
 
 /// The JSON report of `needle cover` for `a` (the Python package's `cover`), without writing
 /// `--out`.
-pub fn cover_json(a: &CoverArgs) -> Result<serde_json::Value> {
+pub fn cover_json(a: &CoverRequest) -> Result<serde_json::Value> {
     report_json(a, &covers(a)?)
 }
 
 /// The table `needle cover` prints for `covers` (`total` spheres).
-pub fn table(a: &CoverArgs, covers: &[SegmentCover], total: usize) -> String {
+pub fn table(a: &CoverRequest, covers: &[SegmentCover], total: usize) -> String {
     let mut out = format!(
         "sphere cover of {} (RAS, mm; margin {} mm)\n{:<24}{:>7}{:>9}{:>13}{:>9}{:>10}{:>11}\n",
         a.image.display(),
@@ -245,7 +241,7 @@ pub fn table(a: &CoverArgs, covers: &[SegmentCover], total: usize) -> String {
 }
 
 /// The spheres as `[[obstacles]]` tables, to append to a scenario file.
-pub fn obstacles_toml(a: &CoverArgs, covers: &[SegmentCover]) -> String {
+pub fn obstacles_toml(a: &CoverRequest, covers: &[SegmentCover]) -> String {
     let mut out = format!(
         "\n# Sphere cover of {} (needle cover, margin {} mm, RAS mm)\n",
         a.image.display(),

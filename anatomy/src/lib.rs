@@ -6,8 +6,8 @@
 //! [`nrrd`] reads NRRD (and 3D Slicer's `.seg.nrrd`, whose segment names it keeps),
 //! [`nifti_file`] NIfTI-1 through the `nifti` crate, [`mesh`] a closed STL or OBJ surface as the
 //! solid it bounds; [`cover`] builds the conservative sphere cover and measures it; [`markups`]
-//! reads and writes Slicer's markups; [`command`] is what `needle cover` asks for and prints;
-//! [`progress`] the progress line of the long covers.
+//! reads and writes Slicer's markups; [`command`] is what `needle cover` is asked and prints
+//! (its flags are the `needle` binary's); [`progress`] the progress line of the long covers.
 //!
 //! Covering a segment, the item most callers start from:
 //!

@@ -2,7 +2,7 @@
 //! and the host's own, bit for bit) and, under a collision bound, its predicted figures. What
 //! `needle send` prints and the Python `Device.plan` returns.
 
-use super::commands::LinkArgs;
+use super::commands::LinkOptions;
 use super::send::plan_on_device;
 use super::verify::{verified_chance, verified_schedule};
 use anyhow::{anyhow, Result};
@@ -25,7 +25,11 @@ pub enum Sent {
 /// keeping as much of the curvature reserve as a path allows (`needle_scenario::reserve`: the
 /// scenario is sent again with less where the device's plan falls short), and checks each
 /// answer. `Err` when the link fails or an answer fails a check.
-pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
+pub fn plan_checked(
+    scenario: &Scenario,
+    execution: &Execution,
+    link: &LinkOptions,
+) -> Result<Sent> {
     let start = std::time::Instant::now();
     let (_, sent) = keeping_reserve(
         scenario,
@@ -47,7 +51,11 @@ pub fn plan_checked(scenario: &Scenario, execution: &Execution, link: &LinkArgs)
 }
 
 /// One plan of `scenario` as it is on the device, checked.
-fn plan_checked_once(scenario: &Scenario, execution: &Execution, link: &LinkArgs) -> Result<Sent> {
+fn plan_checked_once(
+    scenario: &Scenario,
+    execution: &Execution,
+    link: &LinkOptions,
+) -> Result<Sent> {
     let (result, device) = plan_on_device(scenario, execution.chance_request(), link)?;
     let answer = match result {
         Ok(a) => a,

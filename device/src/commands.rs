@@ -1,5 +1,5 @@
 //! The device commands of `needle`: how to reach the device, `ping`, `info`, `ports` (`send`
-//! is in [`super::send`]).
+//! is in [`super::send`]); their flags are the `needle` binary's.
 
 use anyhow::{bail, Context, Result};
 use needle_link::{open, Client, ClientConfig, LinkTarget, Transport};
@@ -7,32 +7,44 @@ use planner_core::wire::DeviceInfo;
 use std::io::Write;
 use std::time::Duration;
 
-/// How to reach the device, shared by `send`, `ping` and `info`.
-#[derive(clap::Args, Clone, Debug)]
-pub struct LinkArgs {
-    /// Serial port of the device (see `needle ports`; hil-sim prints a /dev/pts path).
-    #[arg(long, required_unless_present = "tcp", conflicts_with = "tcp")]
+/// The baud rate of a serial port when none is given.
+pub const DEFAULT_BAUD: u32 = 115_200;
+
+/// How to reach the device, shared by `send`, `ping`, `info` and `motion` (the `needle` binary
+/// reads it from its flags, the Python package's `Device` from its arguments).
+#[derive(Clone, Debug)]
+pub struct LinkOptions {
+    /// Serial port of the device (used when `tcp` is not given).
     pub port: Option<String>,
     /// Baud rate of the serial port.
-    #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
     /// TCP address of the device instead of a serial port (QEMU, `hil-sim --tcp`).
-    #[arg(long)]
     pub tcp: Option<String>,
-    /// Seconds of silence allowed per exchange (no frame at all, intact or damaged, from the
-    /// device), and the longest silence while it plans.
-    #[arg(long, default_value_t = ClientConfig::DEFAULT.timeout.as_secs_f64())]
+    /// Seconds of silence allowed per exchange, and the longest silence while it plans.
     pub timeout: f64,
-    /// Times one request is repeated (after a damaged frame, at once; after silence, at an
-    /// interval adapted to the round trip) before giving up.
-    #[arg(long, default_value_t = ClientConfig::DEFAULT.retries)]
+    /// Times one request is repeated before giving up.
     pub retries: u32,
     /// Seconds the whole command (greeting, upload, planning, fetch) may take.
-    #[arg(long, default_value_t = ClientConfig::DEFAULT.deadline.map_or(120.0, |d| d.as_secs_f64()))]
     pub deadline: f64,
 }
 
-impl LinkArgs {
+impl Default for LinkOptions {
+    /// The client's defaults, for no device yet.
+    fn default() -> Self {
+        LinkOptions {
+            port: None,
+            baud: DEFAULT_BAUD,
+            tcp: None,
+            timeout: ClientConfig::DEFAULT.timeout.as_secs_f64(),
+            retries: ClientConfig::DEFAULT.retries,
+            deadline: ClientConfig::DEFAULT
+                .deadline
+                .map_or(120.0, |d| d.as_secs_f64()),
+        }
+    }
+}
+
+impl LinkOptions {
     /// The link of a command whose device is optional (`--tcp` or `--port`, else in-process):
     /// the client's default retries and a 120 s deadline.
     pub fn optional(
@@ -40,8 +52,8 @@ impl LinkArgs {
         baud: u32,
         tcp: &Option<String>,
         timeout: f64,
-    ) -> Option<LinkArgs> {
-        (tcp.is_some() || port.is_some()).then(|| LinkArgs {
+    ) -> Option<LinkOptions> {
+        (tcp.is_some() || port.is_some()).then(|| LinkOptions {
             port: port.clone(),
             baud,
             tcp: tcp.clone(),
@@ -59,7 +71,8 @@ impl LinkArgs {
                 path: path.clone(),
                 baud: self.baud,
             },
-            // clap requires one of the two.
+            // Neither: an empty address, which fails to open and says so (the `needle` binary
+            // requires one of the two).
             (None, None) => LinkTarget::Tcp(String::new()),
         }
     }
@@ -103,7 +116,7 @@ impl LinkArgs {
 }
 
 /// `needle ping`: round-trip times.
-pub fn ping(link: &LinkArgs, count: u32) -> Result<()> {
+pub fn ping(link: &LinkOptions, count: u32) -> Result<()> {
     let (mut client, info) = link.connect()?;
     for i in 0..count.max(1) {
         let rtt = client.ping()?;
@@ -144,7 +157,7 @@ pub fn info_json(info: &DeviceInfo) -> serde_json::Value {
 }
 
 /// `needle info`: who the device is and what it holds.
-pub fn info(link: &LinkArgs, json: bool) -> Result<()> {
+pub fn info(link: &LinkOptions, json: bool) -> Result<()> {
     let (_, info) = link.connect()?;
     if json {
         writeln!(std::io::stdout(), "{}", info_json(&info))?;

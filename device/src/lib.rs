@@ -1,8 +1,8 @@
 //! Talking to a planner device (hardware, QEMU or `hil-sim`) over a serial port or TCP.
 //!
 //! The protocol client and the transports are the `needle-link` crate (shared with
-//! `cargo xtask device-bench`); [`commands`] reaches the device and backs `needle ping`, `info` and
-//! `ports`, [`send`] runs a whole plan within `--deadline` (starting over when the device
+//! `cargo xtask device-bench`); [`commands`] reaches the device ([`LinkOptions`]) and backs
+//! `needle ping`, `info` and `ports`, [`send`] runs a whole plan within `--deadline` (starting over when the device
 //! restarts), [`verify`] re-checks the motor schedule a device sends with its plan and its
 //! figures under a collision bound, and [`checked`] puts the two together. [`motion`] moves the
 //! board's axes (`needle motion`).
@@ -11,16 +11,10 @@
 //! 127.0.0.1:7878`, started first):
 //!
 //! ```no_run
-//! use clap::Parser;
 //! use needle_device::checked::{plan_checked, Sent};
-//! use needle_device::commands::LinkArgs;
+//! use needle_device::LinkOptions;
 //!
-//! #[derive(Parser)]
-//! struct Flags {
-//!     #[command(flatten)]
-//!     link: LinkArgs,
-//! }
-//! let link = Flags::parse_from(["send", "--tcp", "127.0.0.1:7878"]).link;
+//! let link = LinkOptions { tcp: Some("127.0.0.1:7878".into()), ..LinkOptions::default() };
 //! let file = std::path::Path::new("examples/paper.toml");
 //! let scenario = needle_scenario::load_scenario(file)?;
 //! let execution = needle_scenario::load_execution(file)?;
@@ -37,3 +31,5 @@ pub mod motion;
 pub mod posture;
 pub mod send;
 pub mod verify;
+
+pub use commands::LinkOptions;

@@ -5,7 +5,7 @@
 //! move (killed, a lost link) leaves the board without its heartbeat: it holds after 200 ms and
 //! stops with `LinkLost` after 1 s, by its own safety rules.
 
-use crate::commands::LinkArgs;
+use crate::commands::LinkOptions;
 use crate::posture::{board_steps, tilt_deg, turn_to_roll};
 use anyhow::{anyhow, bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -26,7 +26,7 @@ use std::time::Duration;
 static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
 
 /// What to ask the board.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
     /// The axes' status (also a heartbeat).
     Status,
@@ -36,7 +36,7 @@ pub enum Action {
     Disarm,
     /// Seek the insertion stage's home switch, and wait until homed.
     Home,
-    /// Plan SCENARIO here and execute its motor schedule, and wait until it is done.
+    /// Plan the scenario here and execute its motor schedule, and wait until it is done.
     Move,
     /// Decelerate to rest, keeping the rest of the moves.
     Hold,
@@ -52,24 +52,54 @@ pub enum Action {
     Reset,
 }
 
-/// `needle motion ACTION [SCENARIO]`.
-#[derive(clap::Args, Debug)]
-pub struct MotionArgs {
+impl Action {
+    /// Every action, in the order `needle motion --help` lists them.
+    pub const ALL: [Action; 11] = [
+        Action::Status,
+        Action::Arm,
+        Action::Disarm,
+        Action::Home,
+        Action::Move,
+        Action::Hold,
+        Action::Resume,
+        Action::Stop,
+        Action::Estop,
+        Action::ClearFault,
+        Action::Reset,
+    ];
+
+    /// The action's name, as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Action::Status => "status",
+            Action::Arm => "arm",
+            Action::Disarm => "disarm",
+            Action::Home => "home",
+            Action::Move => "move",
+            Action::Hold => "hold",
+            Action::Resume => "resume",
+            Action::Stop => "stop",
+            Action::Estop => "estop",
+            Action::ClearFault => "clear-fault",
+            Action::Reset => "reset",
+        }
+    }
+}
+
+/// What `needle motion ACTION [SCENARIO]` asks (the `needle` binary reads it from its flags).
+#[derive(Clone, Debug)]
+pub struct MotionOptions {
     /// What to ask the board.
-    #[arg(value_enum)]
     pub action: Action,
     /// The scenario whose plan `move` executes (planned here as `needle plan` plans it).
-    #[arg(required_if_eq("action", "move"))]
     pub scenario: Option<PathBuf>,
-    /// With `move`: the needle guide is set at the plan's tilt (this board only turns and
-    /// inserts; a tilted plan is refused without it).
-    #[arg(long)]
+    /// With `move`: the needle guide is set at the plan's tilt (a tilted plan is refused
+    /// without it).
     pub tilt_set: bool,
     /// Print the final status as one JSON object.
-    #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub link: LinkArgs,
+    /// How to reach the board.
+    pub link: LinkOptions,
 }
 
 /// How often the axes are asked for their status while they move (the heartbeat: the board
@@ -77,7 +107,7 @@ pub struct MotionArgs {
 const POLL: Duration = Duration::from_millis(50);
 
 /// `needle motion`.
-pub fn motion(args: &MotionArgs) -> Result<()> {
+pub fn motion(args: &MotionOptions) -> Result<()> {
     if args.scenario.is_some() && args.action != Action::Move {
         bail!("only `needle motion move` takes a scenario");
     }
@@ -103,7 +133,7 @@ pub fn motion(args: &MotionArgs) -> Result<()> {
     if INTERRUPTS.load(Ordering::SeqCst) > 0 {
         bail!(
             "interrupted (Ctrl-C) before `{}` was sent",
-            action_name(args.action)
+            args.action.name()
         );
     }
     let request = match planned {
@@ -135,7 +165,7 @@ pub fn motion(args: &MotionArgs) -> Result<()> {
 }
 
 /// The request for `args`, with the plan made here for `move`.
-fn request(args: &MotionArgs) -> Result<MotionRequest> {
+fn request(args: &MotionOptions) -> Result<MotionRequest> {
     Ok(match args.action {
         Action::Status => MotionRequest::Status,
         Action::Arm => MotionRequest::Arm,
@@ -158,7 +188,7 @@ struct PlannedMove {
     schedule: Schedule,
 }
 
-fn plan_move(args: &MotionArgs) -> Result<PlannedMove> {
+fn plan_move(args: &MotionOptions) -> Result<PlannedMove> {
     let file = args.scenario.as_ref().context("`move` needs a scenario")?;
     let scenario = load_scenario(file)?;
     let execution = load_execution(file)?;
@@ -208,7 +238,7 @@ fn ask(
 ) -> Result<MotionStatus> {
     client.motion(request).map_err(|e| match e {
         LinkError::Device(Fault::Motion(why)) => {
-            anyhow!("the board refused `{}`: {why}", action_name(action))
+            anyhow!("the board refused `{}`: {why}", action.name())
         }
         LinkError::Device(Fault::NoMotion) => anyhow!(
             "the device drives no axes (hil-sim drives simulated ones with --axes; the QEMU \
@@ -216,13 +246,6 @@ fn ask(
         ),
         other => anyhow!(other),
     })
-}
-
-fn action_name(action: Action) -> String {
-    use clap::ValueEnum;
-    action
-        .to_possible_value()
-        .map_or_else(|| format!("{action:?}"), |v| v.get_name().to_string())
 }
 
 /// Asks for the status every `POLL` (the heartbeat) until the axes neither home nor move; a
@@ -242,7 +265,7 @@ fn wait_at_rest(
                 1 => (MotionRequest::Stop, Action::Stop),
                 _ => (MotionRequest::EStop, Action::Estop),
             };
-            bar.suspend(|| eprintln!("Ctrl-C: {}", action_name(action)));
+            bar.suspend(|| eprintln!("Ctrl-C: {}", action.name()));
             status = ask(client, request, action)?;
             continue;
         }

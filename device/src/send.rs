@@ -2,7 +2,7 @@
 //! connection when the device restarts mid-plan (its connection closed, or it no longer knows
 //! the request).
 
-use super::commands::LinkArgs;
+use super::commands::LinkOptions;
 use anyhow::{anyhow, bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use needle_link::{Client, LinkError, LinkStats, Progress, Transport};
@@ -40,7 +40,7 @@ fn restarted(e: &LinkError) -> bool {
 pub fn plan_on_device(
     scenario: &Scenario,
     chance: Option<ChanceRequest>,
-    link: &LinkArgs,
+    link: &LinkOptions,
 ) -> Result<(PlanResult, DevicePlanStats)> {
     let config = link.config()?;
     let limit = config.deadline.unwrap_or(Duration::MAX);
@@ -77,7 +77,7 @@ pub fn plan_on_device(
 /// A fresh connection after the device went away: attempts every [`RECONNECT_PAUSE`] for up
 /// to `patience` (the silence allowed), within the deadline.
 fn reconnect(
-    link: &LinkArgs,
+    link: &LinkOptions,
     start: Instant,
     limit: Duration,
     patience: Duration,

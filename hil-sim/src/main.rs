@@ -12,6 +12,7 @@ use clap::Parser;
 use hil_sim::lab::{Lab, LabConfig, TrackerClients, TrackerConfig};
 use hil_sim::serve::{serve_with_axes, ServeConfig};
 use hil_sim::{DeviceService, LineConfig, SimulatedAxes, IDENTITY};
+use needle_simulate::request::Request;
 use std::io::Write;
 use std::net::TcpListener;
 
@@ -177,12 +178,14 @@ struct LabArgs {
 }
 
 impl LabArgs {
-    /// The flags of `needle simulate` that make the lab's world.
-    fn world_flags(&self) -> Vec<String> {
-        let world = self.world.iter().map(|w| format!("--world={w}"));
-        let perturb = self.perturb.iter().map(|kv| format!("--perturb={kv}"));
-        let fault = self.fault.iter().map(|kv| format!("--fault={kv}"));
-        world.chain(perturb).chain(fault).collect()
+    /// What `needle simulate` is asked that makes the lab's world.
+    fn world(&self) -> Request {
+        Request {
+            world: self.world.clone(),
+            perturb: self.perturb.clone(),
+            faults: self.fault.clone(),
+            ..Request::default()
+        }
     }
 }
 
@@ -211,7 +214,7 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
             "--stream-rate must be within 1 and 100000 Hz"
         );
     }
-    let setup = needle_simulate::closed_loop_setup(file, a.seed, &l.world_flags())?;
+    let setup = needle_simulate::closed_loop_setup(file, a.seed, &l.world())?;
     hil_sim::lab::check_faults(&setup.faults)?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;

@@ -5,9 +5,13 @@
 //! --seed 1 FLAGS...` makes (the same plan, seeds and controller).
 //!
 //! `cargo run --release -p needle-cli --example end_error -- FILE RUNS [FLAGS...]` (the flags of
-//! `needle simulate`, e.g. `--world clinical`). Means in mm. Every figure is simulated.
+//! `needle simulate` that make the world and tell the controller: `--world`, `--perturb`,
+//! `--fault`, `--steer`, `--form`; e.g. `--world clinical`). Means in mm. Every figure is
+//! simulated.
 
+use clap::Parser;
 use needle_sim::{closed_loop_observed, in_process};
+use needle_simulate::request::Request;
 use needle_simulate::{closed_loop_setup, run_seed};
 use planner_core::model::kinematics::V3;
 
@@ -54,13 +58,35 @@ impl Tally {
     }
 }
 
+/// The scenario, the run count, and the flags of `needle simulate` the runs are made with.
+#[derive(Parser)]
+struct Args {
+    file: std::path::PathBuf,
+    runs: usize,
+    #[arg(long)]
+    form: Option<String>,
+    #[arg(long)]
+    perturb: Vec<String>,
+    #[arg(long)]
+    world: Option<String>,
+    #[arg(long)]
+    fault: Vec<String>,
+    #[arg(long)]
+    steer: Vec<String>,
+}
+
 fn main() -> Result<(), Failure> {
-    let args: Vec<String> = std::env::args().collect();
-    let (Some(file), Some(runs)) = (args.get(1), args.get(2)) else {
-        return Err("usage: end_error FILE RUNS [FLAGS...]".into());
+    let args = Args::parse();
+    let asked = Request {
+        form: args.form,
+        perturb: args.perturb,
+        world: args.world,
+        faults: args.fault,
+        steer: args.steer,
+        ..Request::default()
     };
-    let runs: usize = runs.parse()?;
-    let setup = closed_loop_setup(std::path::Path::new(file), 1, &args[3..])?;
+    let runs = args.runs;
+    let setup = closed_loop_setup(&args.file, 1, &asked)?;
     let world = setup.conditions();
     let mut tally = Tally::default();
     for i in 0..runs {

@@ -9,6 +9,7 @@
 //! default 25 runs each). Every figure is simulated.
 
 use needle_sim::{roll_trace, RollSample, RollSummary};
+use needle_simulate::request::Request;
 use needle_simulate::{closed_loop_setup, run_seed, Spread};
 
 type Failure = Box<dyn std::error::Error>;
@@ -26,8 +27,11 @@ struct Tally {
 impl Tally {
     /// Runs `file` `runs` times from seed 1 with a sensor of `dof` degrees of freedom.
     fn add(&mut self, file: &std::path::Path, dof: u8, runs: usize) -> Result<(), Failure> {
-        let flags = ["--perturb".to_string(), format!("tracker_dof={dof}")];
-        let setup = closed_loop_setup(file, 1, &flags)?;
+        let asked = Request {
+            perturb: vec![format!("tracker_dof={dof}")],
+            ..Request::default()
+        };
+        let setup = closed_loop_setup(file, 1, &asked)?;
         let world = setup.conditions();
         let (s, planned, sched) = (&setup.scenario, &setup.planned, &setup.prepared.schedule);
         for i in 0..runs {

@@ -1,18 +1,32 @@
 //! `needle`: plan bevel-tip needle paths locally or on a device, and analyse them.
 
 //!
-//! Each command's flags and how it prints are here, one module per command where `main.rs` does
-//! not say it in a line; the work is the library crates' (`needle-scenario`, `needle-report`,
-//! `needle-device`, `needle-analysis`, `needle-simulate`, `needle-lab`, `needle-anatomy`).
+//! Each command's flags are here and only here, one module per command where `main.rs` does not
+//! say them in a line, turned into the plain options of a library crate (`needle-scenario`,
+//! `needle-report`, `needle-device`, `needle-analysis`, `needle-simulate`, `needle-lab`,
+//! `needle-anatomy`), whose functions do the work and print; none of those depends on clap, so
+//! the Python package calls them with the same options.
 
 use clap::{Parser, Subcommand};
-use needle_analysis::cli as analysis;
-use needle_device::commands::{self as device, LinkArgs};
+use link::LinkArgs;
+use needle_device::commands as device;
 use std::process::ExitCode;
 
+mod approx;
 mod bench;
+mod benchmark;
+mod compare;
 mod cover;
+mod link;
+mod motion;
 mod plan;
+mod plot;
+mod rrt;
+mod scenario_args;
+mod simulate;
+mod steer;
+mod sweep;
+mod values;
 
 #[derive(Parser)]
 #[command(
@@ -30,29 +44,29 @@ enum Command {
     /// Plan a scenario on this machine.
     Plan(plan::PlanArgs),
     /// Re-plan for each value of one weight (robustness analysis).
-    Sweep(analysis::SweepArgs),
+    Sweep(sweep::SweepArgs),
     /// Plan with the RRT baseline.
-    Rrt(analysis::RrtCmd),
+    Rrt(rrt::RrtCmd),
     /// The optimiser against the RRT over several seeds.
-    Compare(analysis::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Turn polygon obstacles into covering circles.
-    Approx(analysis::ApproxArgs),
+    Approx(approx::ApproxArgs),
     /// Cover a label map's segments (NRRD, Slicer .seg.nrrd, NIfTI) with spheres to avoid.
-    Cover(needle_anatomy::command::CoverArgs),
+    Cover(cover::CoverArgs),
     /// Draw a scenario and its plan (SVG).
-    Plot(analysis::PlotArgs),
+    Plot(plot::PlotArgs),
     /// Execute the plan in simulated perturbed insertions, open loop or steered (closed loop).
-    Simulate(needle_simulate::SimulateArgs),
+    Simulate(simulate::SimulateArgs),
     /// Steer an insertion in a lab: OpenIGTLink tracker poses in, robot commands out
     /// (docs/lab.md; `hil-sim --lab` is a simulated lab).
-    Steer(needle_lab::SteerArgs),
+    Steer(steer::SteerArgs),
     /// Plan and simulate (open and closed loop) seeded 3-D scenarios nobody tuned on.
-    Benchmark(needle_simulate::benchmark::BenchmarkArgs),
+    Benchmark(benchmark::BenchmarkArgs),
     /// Plan a scenario on a device (serial port or TCP); prints what `plan` prints.
     Send(plan::SendArgs),
     /// Drive a board's two axes: arm, home, move a scenario's plan, hold, stop, e-stop
     /// (docs/motion.md; `hil-sim --axes` and the QEMU firmware drive simulated ones).
-    Motion(needle_device::motion::MotionArgs),
+    Motion(motion::MotionArgs),
     /// Check that a device answers, and how fast.
     Ping {
         #[command(flatten)]
@@ -104,19 +118,19 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Plan(a) => plan::plan(a),
-        Command::Sweep(a) => analysis::run_sweep(a),
-        Command::Rrt(a) => analysis::run_rrt(a),
-        Command::Compare(a) => analysis::run_compare(a),
-        Command::Approx(a) => analysis::run_approx(a),
+        Command::Sweep(a) => sweep::sweep(a),
+        Command::Rrt(a) => rrt::rrt(a),
+        Command::Compare(a) => compare::compare(a),
+        Command::Approx(a) => approx::approx(a),
         Command::Cover(a) => cover::run_cover(a),
-        Command::Plot(a) => analysis::run_plot(a),
-        Command::Simulate(a) => needle_simulate::run_simulate(a),
-        Command::Steer(a) => needle_lab::run_steer(a),
-        Command::Benchmark(a) => needle_simulate::benchmark::run_benchmark(a),
+        Command::Plot(a) => plot::plot(a),
+        Command::Simulate(a) => simulate::simulate(a),
+        Command::Steer(a) => steer::steer(a),
+        Command::Benchmark(a) => benchmark::benchmark(a),
         Command::Send(a) => plan::send(a),
-        Command::Motion(a) => needle_device::motion::motion(a),
-        Command::Ping { link, count } => device::ping(link, *count),
-        Command::Info { link, json } => device::info(link, *json),
+        Command::Motion(a) => motion::motion(a),
+        Command::Ping { link, count } => device::ping(&link.options(), *count),
+        Command::Info { link, json } => device::info(&link.options(), *json),
         Command::Ports => device::ports(),
         Command::Bench(a) => bench::bench(a),
         Command::DeviceBench { args } => Err(moved_to_xtask("device-bench", args)),

@@ -1,9 +1,10 @@
 //! `needle plan` and `needle send`: a scenario planned here or on a device (`needle-report`,
 //! `needle-device`), printed the same way.
 
+use crate::link::LinkArgs;
+use crate::values::MethodArg;
 use anyhow::{anyhow, Result};
 use needle_device::checked::{plan_checked, Sent};
-use needle_device::commands::LinkArgs;
 use needle_report::local::{plan_locally, LocalPlan};
 use needle_report::schedule_table;
 use needle_scenario::{load_execution, load_scenario, load_scenario_shapes, restrict, Execution};
@@ -33,7 +34,7 @@ pub struct PlanArgs {
     plot: Option<PathBuf>,
     /// Turn polygon obstacles into circles this way: circumscribed, segmented or bordered.
     #[arg(long, ignore_case = true)]
-    approx: Option<needle_scenario::approx::Method>,
+    approx: Option<MethodArg>,
     /// Also write files 3D Slicer opens into DIR: the path as a markups curve, the entry and
     /// target as markups points (RAS), the obstacles as a model (docs/anatomy.md).
     #[arg(long, value_name = "DIR")]
@@ -52,7 +53,7 @@ pub struct SendArgs {
 fn load(args: &PlanArgs) -> Result<Scenario> {
     let mut scenario = match args.approx {
         None => load_scenario(&args.file)?,
-        Some(m) => load_scenario_shapes(&args.file, Some(m))?.0,
+        Some(m) => load_scenario_shapes(&args.file, Some(m.into()))?.0,
     };
     restrict(&mut scenario, args.max_degree, args.forms.as_deref())?;
     Ok(scenario)
@@ -132,7 +133,13 @@ pub fn plan(args: &PlanArgs) -> Result<()> {
     // The scenario as planned: its reserve is the plan's.
     let (scenario, report) = (&made.scenario, made.report());
     if let Some(out) = &args.plot {
-        needle_analysis::cli::write_plan_plot(&args.file, args.approx, scenario, report, out)?;
+        needle_analysis::commands::write_plan_plot(
+            &args.file,
+            args.approx.map(Into::into),
+            scenario,
+            report,
+            out,
+        )?;
     }
     if let Some(dir) = &args.export {
         wrote(&needle_report::slicer::export(dir, scenario, report)?);
@@ -147,7 +154,7 @@ pub fn send(args: &SendArgs) -> Result<()> {
     }
     let scenario = load(&args.plan)?;
     let execution = load_execution(&args.plan.file)?;
-    let made = match plan_checked(&scenario, &execution, &args.link)? {
+    let made = match plan_checked(&scenario, &execution, &args.link.options())? {
         Sent::Planned(made) => *made,
         Sent::Refused(e) => return Err(e),
     };

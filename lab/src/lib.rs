@@ -42,4 +42,4 @@ pub mod viewers;
 pub mod wire;
 
 pub use outcome::exit_code;
-pub use steer::{run_steer, SteerArgs};
+pub use steer::{run_steer, SteerOptions};

@@ -11,10 +11,11 @@ use super::slicer::Slicer;
 use super::tracker::{TrackerNames, TrackerState};
 use super::wire::{load_registration, read_frames_counting, Arrival, TARGET_DEVICE, TIP_DEVICE};
 use anyhow::{anyhow, Result};
-use needle_device::commands::LinkArgs;
+use needle_device::LinkOptions;
 use needle_sim::in_process;
 use needle_simulate::closed_loop_setup;
 use needle_simulate::device::{device_planning, start_steering, LinkController};
+use needle_simulate::request::Request;
 use serde_json::json;
 use std::net::{IpAddr, Ipv4Addr, TcpStream, ToSocketAddrs};
 use std::path::PathBuf;
@@ -23,101 +24,82 @@ use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// `needle steer`
-#[derive(clap::Args, Clone, Debug)]
-pub struct SteerArgs {
+/// What `needle steer` is asked (the `needle` binary reads it from its flags).
+#[derive(Clone, Debug)]
+pub struct SteerOptions {
     /// Scenario file (TOML): planned as `needle simulate --closed-loop` plans it.
     pub file: PathBuf,
     /// The tracker's OpenIGTLink server (PLUS, or `hil-sim --lab`), HOST:PORT.
-    #[arg(long)]
     pub tracker: String,
     /// Device name of the tip's TRANSFORM.
-    #[arg(long, default_value = TIP_DEVICE)]
     pub tip_name: String,
     /// Device name of the target's TRANSFORM.
-    #[arg(long, default_value = TARGET_DEVICE)]
     pub target_name: String,
-    /// The registration: a JSON file with `rotation` (row-major) and `translation_mm`, taking a
-    /// point of the tracker's reference frame to the scenario's (default: the same frame).
-    #[arg(long, conflicts_with = "registration_name")]
+    /// The registration from a JSON file with `rotation` (row-major) and `translation_mm`,
+    /// taking a point of the tracker's reference frame to the scenario's (`None`: the same
+    /// frame, or `registration_name`'s).
     pub registration: Option<PathBuf>,
-    /// The registration from the tracker stream: the device name of a TRANSFORM taking a point
-    /// of the tracker's reference frame to the scenario's (as the file's), e.g.
-    /// ReferenceToScenario. Steering waits for the first one; a later different one is refused.
-    #[arg(long, value_name = "NAME")]
+    /// The registration from the tracker stream: the device name of its TRANSFORM. Steering
+    /// waits for the first one; a later different one is refused.
     pub registration_name: Option<String>,
-    /// With --registration-name: how long to wait for it before giving up ("no_registration").
-    #[arg(long, requires = "registration_name", default_value_t = 5000)]
+    /// With `registration_name`: how long to wait for it before giving up.
     pub registration_timeout_ms: u64,
     /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
-    #[arg(long)]
     pub robot: String,
-    /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
-    #[arg(long, conflicts_with = "serve_slicer")]
+    /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection).
     pub slicer: Option<String>,
-    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of 127.0.0.1 (or of
-    /// --serve-slicer-bind): Slicer's OpenIGTLinkIF connector of type Client connects to it, as
-    /// to PLUS; 0 picks a free port, printed on stderr. Viewers may join and leave during the
-    /// insertion. Anyone who can connect sees the plan and the insertion (no authentication).
-    #[arg(long, value_name = "PORT")]
+    /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of
+    /// `serve_slicer_bind` (0: a free port, printed on stderr).
     pub serve_slicer: Option<u16>,
-    /// With --serve-slicer: the address to serve on (default 127.0.0.1, this machine only;
-    /// 0.0.0.0 every interface, so any host that reaches this one can watch).
-    #[arg(long, value_name = "ADDR", requires = "serve_slicer",
-          default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
+    /// With `serve_slicer`: the address to serve on.
     pub serve_slicer_bind: IpAddr,
-    /// With --serve-slicer: wait up to this many seconds for the first viewer before steering.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        requires = "serve_slicer",
-        default_value_t = 0.0
-    )]
+    /// With `serve_slicer`: wait up to this many seconds for the first viewer before steering.
     pub wait_for_slicer: f64,
     /// Write the insertion log here (JSON lines: the plan, each reading, each command, the stop).
-    #[arg(long)]
     pub log: Option<PathBuf>,
-    /// Seed of the insertion's world, for the record (the world is the lab's, not this
-    /// program's).
-    #[arg(long)]
+    /// Seed of the insertion's world, for the record (`None`: 1, and none recorded).
     pub seed: Option<u64>,
     /// Degrees of freedom of the tip sensor: 6 (the tip TRANSFORM's roll is the bevel's) or 5
-    /// (a 5-DOF coil, as the ones that fit a needle: the TRANSFORM's roll means nothing and is
-    /// left out; the controller infers the roll from how the path bends).
-    #[arg(long, value_name = "N", default_value_t = 6,
-          value_parser = clap::value_parser!(u8).range(5..=6))]
+    /// (the roll means nothing; the controller infers it from how the path bends).
     pub tracker_dof: u8,
-    /// Tell the controller one thing, KEY=VALUE (as `needle simulate --steer`).
-    #[arg(long = "steer", value_name = "KEY=VALUE")]
+    /// What the controller is told, `KEY=VALUE` (as `needle simulate --steer`).
     pub steer: Vec<String>,
     /// No tip pose for this long: the robot is told hold, then stop ("tracking_lost").
-    #[arg(long, default_value_t = 500)]
     pub tracking_timeout_ms: u64,
     /// No robot report this long after a command: the robot is told stop
     /// ("robot_not_answering").
-    #[arg(long, default_value_t = 2000)]
     pub robot_timeout_ms: u64,
     /// Print one JSON object.
-    #[arg(long)]
     pub json: bool,
-    /// Steer on the device at this TCP address (hil-sim --tcp, QEMU) instead of in-process.
-    #[arg(long, conflicts_with = "port")]
-    pub tcp: Option<String>,
-    /// Steer on the device at this serial port instead of in-process.
-    #[arg(long)]
-    pub port: Option<String>,
-    /// Baud rate of --port.
-    #[arg(long, default_value_t = 115_200)]
-    pub baud: u32,
-    /// Seconds of silence allowed per exchange with the device.
-    #[arg(long, default_value_t = 5.0)]
-    pub timeout: f64,
+    /// Steer on this device instead of in-process.
+    pub link: Option<LinkOptions>,
 }
 
-impl SteerArgs {
-    /// The device to steer on (`--tcp` or `--port`), if any.
-    pub fn link(&self) -> Option<LinkArgs> {
-        LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)
+impl Default for SteerOptions {
+    /// The command's defaults, for no scenario, tracker or robot yet.
+    fn default() -> Self {
+        SteerOptions {
+            file: PathBuf::new(),
+            tracker: String::new(),
+            tip_name: TIP_DEVICE.into(),
+            target_name: TARGET_DEVICE.into(),
+            registration: None,
+            registration_name: None,
+            registration_timeout_ms: 5000,
+            robot: String::new(),
+            slicer: None,
+            serve_slicer: None,
+            serve_slicer_bind: IpAddr::V4(Ipv4Addr::LOCALHOST),
+            wait_for_slicer: 0.0,
+            log: None,
+            seed: None,
+            tracker_dof: 6,
+            steer: Vec::new(),
+            tracking_timeout_ms: 500,
+            robot_timeout_ms: 2000,
+            json: false,
+            link: None,
+        }
     }
 }
 
@@ -210,32 +192,30 @@ fn check_name(flag: &str, name: &str) -> Result<()> {
 /// dropouts of up to 10 mm).
 pub const LAB_TRACKING_LOST_AFTER_MM: f32 = 2.0;
 
-/// The flags of `needle simulate --closed-loop` that plan and set up the insertion as
+/// What `needle simulate --closed-loop` is asked to plan and set up the insertion as
 /// `needle steer` is told: the `--steer` keys (the lab's tracking interlock unless the scenario
 /// or a key sets it), and the device, for the same refusal (a plan bound the device cannot
 /// plan).
-fn simulate_flags(a: &SteerArgs) -> Result<Vec<String>> {
-    let mut flags: Vec<String> = a.steer.iter().map(|kv| format!("--steer={kv}")).collect();
+fn simulate_request(a: &SteerOptions) -> Result<Request> {
+    let mut steer = a.steer.clone();
     let key = "tracking_lost_after_mm";
     let told_here = a.steer.iter().any(|kv| kv.trim_start().starts_with(key));
     let told_in_file = needle_scenario::ScenarioFile::load(&a.file)?
         .steering
         .is_some_and(|t| t.contains_key(key));
     if !told_here && !told_in_file {
-        flags.insert(0, format!("--steer={key}={LAB_TRACKING_LOST_AFTER_MM}"));
+        steer.insert(0, format!("{key}={LAB_TRACKING_LOST_AFTER_MM}"));
     }
-    if let Some(t) = &a.tcp {
-        flags.push(format!("--tcp={t}"));
-    }
-    if let Some(p) = &a.port {
-        flags.push(format!("--port={p}"));
-    }
-    Ok(flags)
+    Ok(Request {
+        steer,
+        on_device: a.link.is_some(),
+        ..Request::default()
+    })
 }
 
 /// Runs `needle steer`: an insertion that does not reach the target is an error carrying its
 /// exit status ([`super::outcome::exit_code`]); with `--json` every ending prints one object.
-pub fn run_steer(a: &SteerArgs) -> Result<()> {
+pub fn run_steer(a: &SteerOptions) -> Result<()> {
     let mut form = None;
     match steer(a, &mut form) {
         Ok(outcome) => report::print(printing(a), form.unwrap_or_default(), outcome),
@@ -244,13 +224,13 @@ pub fn run_steer(a: &SteerArgs) -> Result<()> {
 }
 
 /// Plans, connects and steers; `form` is the form steered once it is known.
-fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutcome> {
+fn steer(a: &SteerOptions, form_steered: &mut Option<String>) -> Result<SessionOutcome> {
     check_name("--tip-name", &a.tip_name)?;
     check_name("--target-name", &a.target_name)?;
     if let Some(name) = &a.registration_name {
         check_name("--registration-name", name)?;
     }
-    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_flags(a)?)?;
+    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_request(a)?)?;
     let registration = a
         .registration
         .as_deref()
@@ -260,14 +240,14 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
     let mut in_process_controller;
     let mut device;
     let mut on_device;
-    let controller: &mut dyn LabController = match a.link() {
+    let controller: &mut dyn LabController = match &a.link {
         None => {
             in_process_controller = in_process(&setup.scenario, schedule, &setup.config)
                 .map_err(|e| anyhow!("steering cannot start: {e}"))?;
             &mut in_process_controller
         }
         Some(link) => {
-            device = device_planning(&setup, &link)?;
+            device = device_planning(&setup, link)?;
             start_steering(&mut device, &setup)?;
             on_device = LinkController(&mut device);
             &mut on_device
@@ -335,7 +315,7 @@ fn steer(a: &SteerArgs, form_steered: &mut Option<String>) -> Result<SessionOutc
 }
 
 /// What the end's printing needs of the flags.
-fn printing(a: &SteerArgs) -> Printing<'_> {
+fn printing(a: &SteerOptions) -> Printing<'_> {
     Printing {
         json: a.json,
         seed: a.seed,

@@ -3,7 +3,7 @@
 
 use crate::convert::python_value;
 use crate::errors::{guarded, scenario_error, ScenarioError};
-use needle_anatomy::command::{cover_json, CoverArgs};
+use needle_anatomy::command::{cover_json, CoverRequest};
 use needle_anatomy::cover::DEFAULT_TIGHTNESS;
 use needle_anatomy::mesh::DEFAULT_VOXEL_MM;
 use planner_core::MAX_OBSTACLES;
@@ -36,7 +36,7 @@ pub fn cover<'py>(
             ))
         })?,
     };
-    let args = CoverArgs {
+    let args = CoverRequest {
         image,
         voxel: voxel.unwrap_or(DEFAULT_VOXEL_MM),
         unit,
@@ -46,8 +46,6 @@ pub fn cover<'py>(
         max_spheres,
         tightness: tightness.unwrap_or(DEFAULT_TIGHTNESS),
         json: true,
-        out: None,
-        scenario: None,
     };
     let value = py
         .detach(|| guarded(|| cover_json(&args)))

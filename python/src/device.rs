@@ -7,7 +7,8 @@ use crate::errors::{guarded, message, Failed, PlanError};
 use crate::plan::{degree, form_words, planned, Planned};
 use crate::scenario::Scenario;
 use needle_device::checked::{plan_checked, Sent};
-use needle_device::commands::{info_json, LinkArgs};
+use needle_device::commands::info_json;
+use needle_device::LinkOptions;
 use needle_scenario::restrict;
 use pyo3::prelude::*;
 
@@ -20,7 +21,7 @@ enum Wrong {
 /// A planner device.
 #[pyclass(frozen, module = "needle_planner")]
 pub struct Device {
-    link: LinkArgs,
+    link: LinkOptions,
 }
 
 fn device_error(f: Failed) -> PyErr {
@@ -47,7 +48,7 @@ impl Device {
             ));
         }
         let defaults = needle_link::ClientConfig::DEFAULT;
-        let link = LinkArgs {
+        let link = LinkOptions {
             port,
             baud,
             tcp,

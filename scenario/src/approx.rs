@@ -24,16 +24,14 @@ use std::str::FromStr;
 pub const MAX_SEGMENTS: usize = 8;
 
 /// How a polygon becomes circles; `circle` and `edged` are accepted as older names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
     /// One smallest enclosing circle: regular, compact obstacles.
-    #[value(alias = "circle")]
     Circumscribed,
     /// A few circles over slabs of the polygon: irregular obstacles without deep notches.
     #[default]
     Segmented,
     /// Small circles along the outline: very irregular or thin obstacles.
-    #[value(alias = "edged")]
     Bordered,
 }
 
@@ -49,6 +47,15 @@ impl Method {
             Method::Bordered => "bordered",
         }
     }
+
+    /// The older name still accepted for it, if it had one.
+    pub fn older_name(self) -> Option<&'static str> {
+        match self {
+            Method::Circumscribed => Some("circle"),
+            Method::Segmented => None,
+            Method::Bordered => Some("edged"),
+        }
+    }
 }
 
 impl fmt::Display for Method {
@@ -62,12 +69,16 @@ impl FromStr for Method {
     type Err = anyhow::Error;
     fn from_str(s: &str) -> Result<Method> {
         let name = s.trim();
-        <Method as clap::ValueEnum>::from_str(name, true).map_err(|_| {
-            anyhow!(
-                "approximation {:?}: use circumscribed, segmented or bordered",
-                name.to_ascii_lowercase()
-            )
-        })
+        let named = |n: &str| n.eq_ignore_ascii_case(name);
+        Method::ALL
+            .into_iter()
+            .find(|m| named(m.name()) || m.older_name().is_some_and(named))
+            .ok_or_else(|| {
+                anyhow!(
+                    "approximation {:?}: use circumscribed, segmented or bordered",
+                    name.to_ascii_lowercase()
+                )
+            })
     }
 }
 

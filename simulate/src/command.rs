@@ -1,9 +1,9 @@
-//! `needle simulate`: from the flags to one [`Setup`], the runs of the mode asked for (open
+//! `needle simulate`: from what it is asked to one [`Setup`], the runs of the mode asked for (open
 //! loop, closed loop in-process or on a device, or both), then the table or the JSON, and the
 //! plot (its file opened before the runs).
 
-use super::args::SimulateArgs;
 use super::device::on_device;
+use super::options::SimulateOptions;
 use super::plot::{simulate_slices_svg, simulate_svg, Executed, MAX_DRAWN};
 use super::request::{self, results_json, Request, Results};
 use super::setup::{Keep, Setup};
@@ -11,13 +11,13 @@ use super::steering::summarise_steering;
 use super::summarise;
 use super::table::{closed_table, to_table, Header};
 use anyhow::{anyhow, Result};
-use needle_analysis::cli::output::{progress, title_of, OutputFile};
+use needle_analysis::commands::output::{progress, title_of, OutputFile};
 use needle_analysis::parallel;
 use needle_scenario::{ObstacleShape, ScenarioFile};
 use std::io::Write;
 
 /// Runs `needle simulate`.
-pub fn run_simulate(a: &SimulateArgs) -> Result<()> {
+pub fn run_simulate(a: &SimulateOptions) -> Result<()> {
     if !a.json {
         // Covering a scenario's anatomy can take seconds before the runs' bar starts.
         needle_anatomy::progress::enable();
@@ -83,26 +83,22 @@ fn export_runs(dir: &std::path::Path, setup: &Setup, results: &Results) -> Resul
 }
 
 /// The setup of one closed-loop run of `file` as `needle simulate FILE --closed-loop --runs 1
-/// --seed SEED` makes it, with `flags` added (e.g. `--steer KEY=VALUE`): the simulated lab and
-/// `needle steer` plan and steer the very insertion the simulation does.
-pub fn closed_loop_setup(file: &std::path::Path, seed: u64, flags: &[String]) -> Result<Setup> {
-    #[derive(clap::Parser)]
-    struct Simulate {
-        #[command(flatten)]
-        args: SimulateArgs,
-    }
-    let seed = seed.to_string();
-    let mut argv = vec!["simulate".as_ref(), file.as_os_str()];
-    for a in ["--closed-loop", "--runs", "1", "--seed", &seed] {
-        argv.push(a.as_ref());
-    }
-    argv.extend(flags.iter().map(std::ffi::OsStr::new));
-    let parsed = <Simulate as clap::Parser>::try_parse_from(argv)?;
-    Ok(set_up(&parsed.args)?.0)
+/// --seed SEED` makes it, with `asked`'s world, faults, steering and form (its runs, seed and
+/// `closed_loop` are those): the simulated lab and `needle steer` plan and steer the very
+/// insertion the simulation does.
+pub fn closed_loop_setup(file: &std::path::Path, seed: u64, asked: &Request) -> Result<Setup> {
+    let request = Request {
+        runs: 1,
+        seed,
+        closed_loop: true,
+        ..asked.clone()
+    };
+    let loaded = ScenarioFile::load(file)?;
+    Ok(request::set_up(&loaded, Some(file), &request)?.0)
 }
 
 /// The perturbation, the tracker's faults, the scenario (restricted to `--form`) and its plan.
-fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
+fn set_up(a: &SimulateOptions) -> Result<(Setup, Vec<ObstacleShape>)> {
     let file = ScenarioFile::load(&a.file)?;
     let request = Request {
         runs: a.runs,
@@ -110,16 +106,16 @@ fn set_up(a: &SimulateArgs) -> Result<(Setup, Vec<ObstacleShape>)> {
         form: a.form.clone(),
         perturb: a.perturb.clone(),
         world: a.world.clone(),
-        faults: a.fault.clone(),
+        faults: a.faults.clone(),
         steer: a.steer.clone(),
         closed_loop: a.closed_loop,
-        on_device: a.link().is_some(),
+        on_device: a.link.is_some(),
     };
     request::set_up(&file, Some(&a.file), &request)
 }
 
 /// The runs of the mode asked for, with a progress bar on a terminal (not with `--json`).
-fn execute(a: &SimulateArgs, setup: &Setup, keep: &Keep) -> Result<Results> {
+fn execute(a: &SimulateOptions, setup: &Setup, keep: &Keep) -> Result<Results> {
     let form = setup.prepared.outcome.form;
     let bar = if a.json {
         indicatif::ProgressBar::hidden()
@@ -135,8 +131,8 @@ fn execute(a: &SimulateArgs, setup: &Setup, keep: &Keep) -> Result<Results> {
     let closed = if a.closed_loop {
         bar.reset();
         bar.set_message(format!("closed loop {form}"));
-        Some(match a.link() {
-            Some(link) => on_device(setup, keep, &link, || bar.inc(1))?,
+        Some(match &a.link {
+            Some(link) => on_device(setup, keep, link, || bar.inc(1))?,
             None => setup.closed_loop(keep, threads, || bar.inc(1))?,
         })
     } else {
@@ -147,7 +143,7 @@ fn execute(a: &SimulateArgs, setup: &Setup, keep: &Keep) -> Result<Results> {
 }
 
 /// The table, or the JSON object, on stdout.
-fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
+fn print(a: &SimulateOptions, setup: &Setup, r: &Results) -> Result<()> {
     let file = title_of(&a.file);
     let form = setup.prepared.outcome.form.to_string();
     let header = Header {
@@ -187,7 +183,7 @@ fn print(a: &SimulateArgs, setup: &Setup, r: &Results) -> Result<()> {
 }
 
 /// "paper.toml: RL, 100 simulated closed-loop insertions", and what else the plot shows.
-fn plot_title(a: &SimulateArgs, setup: &Setup, executed: &Executed<'_>) -> String {
+fn plot_title(a: &SimulateOptions, setup: &Setup, executed: &Executed<'_>) -> String {
     let kind = match (executed.closed, executed.open) {
         (Some(_), Some(_)) => "closed-loop insertions (and the same worlds open loop)",
         (Some(_), None) => "closed-loop insertions",

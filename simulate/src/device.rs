@@ -3,7 +3,7 @@
 
 use super::setup::{Keep, Setup};
 use anyhow::{anyhow, bail, Context, Result};
-use needle_device::commands::LinkArgs;
+use needle_device::LinkOptions;
 use needle_link::{Client, LinkError, Transport};
 use needle_sim::{ClosedRun, Controller};
 use planner_core::steer::{SteerReply, SteerStats, TipMeasurement};
@@ -26,7 +26,7 @@ impl<T: Transport> Controller for LinkController<'_, T> {
 /// Connects to the device at `link` and has it plan `setup`'s scenario (under its collision
 /// bound, if any): its plan must be the host's, bit for bit, for it to steer the insertion the
 /// host plans.
-pub fn device_planning(setup: &Setup, link: &LinkArgs) -> Result<Client<Box<dyn Transport>>> {
+pub fn device_planning(setup: &Setup, link: &LinkOptions) -> Result<Client<Box<dyn Transport>>> {
     let (mut client, _info) = link.connect_within(link.config()?, Duration::MAX)?;
     let chance = setup.bound.as_ref().map(|b| b.request());
     let planned_there = client
@@ -55,7 +55,7 @@ pub fn start_steering<T: Transport>(client: &mut Client<T>, setup: &Setup) -> Re
 pub fn on_device(
     setup: &Setup,
     keep: &Keep,
-    link: &LinkArgs,
+    link: &LinkOptions,
     done: impl Fn(),
 ) -> Result<Vec<ClosedRun>> {
     let mut client = device_planning(setup, link)?;

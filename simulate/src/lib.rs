@@ -20,19 +20,19 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
-mod args;
 pub mod benchmark;
 mod command;
 pub mod device;
 pub mod json;
+mod options;
 pub mod plot;
 pub mod request;
 pub mod setup;
 pub mod steering;
 pub mod table;
 
-pub use args::{at_least_one, run_count, scenario_count, SimulateArgs, MAX_RUNS};
 pub use command::{closed_loop_setup, run_simulate};
+pub use options::{SimulateOptions, MAX_RUNS, MAX_SCENARIOS};
 
 use anyhow::{anyhow, Context, Result};
 use needle_scenario::reserve::{is_unreachable, keeping_reserve, Shortfall};

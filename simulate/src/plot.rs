@@ -4,7 +4,7 @@
 //! before it dashed in orange and the same worlds open loop (`--compare-open-loop`) in blue, each
 //! with its legend entry. With `[[anatomy]]`, the same over slices of the label maps.
 
-use needle_analysis::cli::{anatomy_slices_svg, Slicing};
+use needle_analysis::commands::{anatomy_slices_svg, Slicing};
 use needle_analysis::plot::{colour_of, scene_svg, PlotPath, Scene, Strands};
 use needle_analysis::slice_maps::SliceAt;
 use needle_report::path_points;

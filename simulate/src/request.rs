@@ -101,10 +101,10 @@ pub fn asked(file: &ScenarioFile, path: Option<&Path>, r: &Request) -> Result<As
     }
     anyhow::ensure!(r.runs >= 1, "--runs must be at least 1");
     anyhow::ensure!(
-        r.runs <= super::args::MAX_RUNS,
+        r.runs <= super::options::MAX_RUNS,
         "--runs is {}: at most {} runs are simulated at once",
         r.runs,
-        super::args::MAX_RUNS
+        super::options::MAX_RUNS
     );
     let shapes = in_scenario(file.obstacle_shapes(None), path)?;
     let mut scenario = in_scenario(file.to_scenario_with(&shapes), path)?;

@@ -18,9 +18,8 @@ pub use figures::{FormTotals, SteeredPlan, Unplanned, WORLD_SEED_STRIDE};
 
 use crate::setup::{Keep, Setup};
 use crate::PlanBound;
-use crate::{at_least_one, run_count, scenario_count};
 use anyhow::{Context, Result};
-use needle_analysis::cli::output::progress;
+use needle_analysis::commands::output::progress;
 use needle_analysis::parallel;
 use needle_scenario::execution::CLOSED_LOOP_CURVATURE_RESERVE;
 use needle_scenario::planted::planted_scenario;
@@ -33,71 +32,71 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// `needle benchmark`
-#[derive(clap::Args, Clone, Debug)]
-pub struct BenchmarkArgs {
-    /// Generated scenarios, 1 to 100 000 (seeds S, S+1, ...).
-    #[arg(long, default_value_t = 20, value_parser = scenario_count)]
+/// What `needle benchmark` is asked (the `needle` binary reads it from its flags).
+#[derive(Clone, Debug)]
+pub struct BenchmarkOptions {
+    /// Generated scenarios, 1 to [`crate::MAX_SCENARIOS`] (seeds `seed`, `seed` + 1, ...).
     pub scenarios: usize,
     /// Seed of the first scenario.
-    #[arg(long, default_value_t = 101)]
     pub seed: u64,
-    /// Simulated insertions per scenario, 1 to 1 000 000: each open loop, and the same worlds
-    /// closed loop.
-    #[arg(long, default_value_t = 40, value_parser = run_count)]
+    /// Simulated insertions per scenario: each open loop, and the same worlds closed loop.
     pub runs: usize,
-    /// Threads, at least 1 (default: every core).
-    #[arg(long, value_parser = at_least_one)]
+    /// Threads, at least 1 (`None`: every core).
     pub threads: Option<usize>,
     /// Print one JSON object instead of the table.
-    #[arg(long)]
     pub json: bool,
-    /// Change one perturbation or world effect, KEY=VALUE (repeatable; over `--world`; see
-    /// docs/execution.md).
-    #[arg(long = "perturb", value_name = "KEY=VALUE")]
+    /// Changes to the world's perturbation or effects, `KEY=VALUE`, over `world`.
     pub perturb: Vec<String>,
-    /// The world every run is made in: `default` (today's) or `clinical` (docs/execution.md,
-    /// "The clinical world"), as `needle simulate --world`.
-    #[arg(long, value_name = "NAME")]
+    /// The named world every run is made in (`default`, `clinical`).
     pub world: Option<String>,
-    /// A tracker fault of the closed loop, KEY=VALUE (repeatable; over `--world`'s), as
-    /// `needle simulate --fault`.
-    #[arg(long = "fault", value_name = "KEY=VALUE")]
+    /// Tracker faults of the closed loop, `KEY=VALUE`, over `world`'s.
     pub faults: Vec<String>,
-    /// Tell the closed-loop controller one `[steering]` key, KEY=VALUE (repeatable): it steers
-    /// with it, and a steered bound predicts its spread with it.
-    #[arg(long = "steer", value_name = "KEY=VALUE")]
+    /// What the closed-loop controller is told, `KEY=VALUE` of `[steering]`: it steers with it,
+    /// and a steered bound predicts its spread with it.
     pub steer: Vec<String>,
-    /// Also write each generated scenario to DIR/unseen-SEED.toml (a file `needle plan` reads).
-    #[arg(long, value_name = "DIR")]
+    /// Also write each generated scenario into this folder.
     pub write_scenarios: Option<PathBuf>,
-    /// Plan every scenario under this bound on the predicted collision probability (default
-    /// model: the simulator's defaults, not `--perturb`); a scenario no plan meets it for is
-    /// counted with that reason.
-    #[arg(long, value_name = "P", value_parser = probability)]
+    /// Plan every scenario under this bound on the predicted collision probability (the
+    /// simulator's default model); a scenario no plan meets it for is counted with that reason.
     pub max_collision_probability: Option<f32>,
-    /// Plan the scenarios steered closed loop under this bound on the collision probability
-    /// the closed loop's spread predicts (`execution.mode = "closed_loop"` with
-    /// `planner.max_collision_probability`); a scenario no steered plan meets it for is counted
-    /// with that reason (its open-loop runs stay).
-    #[arg(long, value_name = "P", value_parser = probability)]
+    /// Plan the scenarios steered closed loop under this bound on the collision probability the
+    /// closed loop's spread predicts; a scenario no steered plan meets it for is counted with
+    /// that reason (its open-loop runs stay).
     pub closed_loop_max_collision_probability: Option<f32>,
     /// Execute open loop only (no closed-loop runs; their figures are null).
-    #[arg(long)]
     pub open_loop_only: bool,
-    /// The curvature reserve of the plans steered closed loop (`planner.curvature_reserve`:
-    /// halved where no path keeps it, down to none; the row says what was kept).
-    #[arg(long, value_name = "R", default_value_t = CLOSED_LOOP_CURVATURE_RESERVE, value_parser = reserve)]
+    /// The curvature reserve of the plans steered closed loop (halved where no path keeps it,
+    /// down to none).
     pub curvature_reserve: f32,
-    /// Which generator draws the scenarios: `unseen` (the spheres drawn with no regard for
-    /// whether a path is left) or `planted` (a needle path drawn first, every sphere kept 2 mm
-    /// from it: every scenario has a path).
-    #[arg(long, value_enum, default_value_t = Generator::Unseen)]
+    /// Which generator draws the scenarios.
     pub generator: Generator,
 }
 
+impl Default for BenchmarkOptions {
+    /// The command's defaults.
+    fn default() -> Self {
+        BenchmarkOptions {
+            scenarios: 20,
+            seed: 101,
+            runs: 40,
+            threads: None,
+            json: false,
+            perturb: Vec::new(),
+            world: None,
+            faults: Vec::new(),
+            steer: Vec::new(),
+            write_scenarios: None,
+            max_collision_probability: None,
+            closed_loop_max_collision_probability: None,
+            open_loop_only: false,
+            curvature_reserve: CLOSED_LOOP_CURVATURE_RESERVE,
+            generator: Generator::Unseen,
+        }
+    }
+}
+
 /// The seeded families `needle benchmark` draws from (docs/execution.md, "Unseen scenarios").
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Generator {
     /// [`unseen_scenario`].
@@ -107,6 +106,9 @@ pub enum Generator {
 }
 
 impl Generator {
+    /// Every family, in the order `needle benchmark --help` lists them.
+    pub const ALL: [Generator; 2] = [Generator::Unseen, Generator::Planted];
+
     /// The scenario of `seed`.
     pub fn scenario(self, seed: u64) -> Scenario {
         match self {
@@ -124,22 +126,14 @@ impl Generator {
     }
 }
 
-/// A probability strictly between 0 and 1.
-fn probability(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(p) if p > 0.0 && p < 1.0 => Ok(p),
-        _ => Err("must be a number more than 0 and less than 1".into()),
-    }
-}
-
-/// A curvature reserve the scenario accepts.
-fn reserve(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(r) if (0.0..=planner_core::MAX_CURVATURE_RESERVE).contains(&r) => Ok(r),
-        _ => Err(format!(
-            "must be a number from 0 to {}",
-            planner_core::MAX_CURVATURE_RESERVE
-        )),
+/// A family by its name (any case).
+impl std::str::FromStr for Generator {
+    type Err = anyhow::Error;
+    fn from_str(s: &str) -> Result<Generator> {
+        Generator::ALL
+            .into_iter()
+            .find(|g| g.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| anyhow::anyhow!("generator {s:?}: use unseen or planted"))
     }
 }
 
@@ -151,7 +145,7 @@ pub fn world_seed(scenario_seed: u64) -> u64 {
 }
 
 /// Runs `needle benchmark`.
-pub fn run_benchmark(a: &BenchmarkArgs) -> Result<()> {
+pub fn run_benchmark(a: &BenchmarkOptions) -> Result<()> {
     let world = BenchWorld::of(a.world.as_deref(), &a.perturb, &a.faults, &a.steer)?;
     if let Some(dir) = &a.write_scenarios {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -220,7 +214,7 @@ fn write_scenario(dir: &Path, generator: Generator, seed: u64, scenario: &Scenar
 fn measure(
     scenario: Scenario,
     world: &BenchWorld,
-    a: &BenchmarkArgs,
+    a: &BenchmarkOptions,
     seed: u64,
     threads: usize,
 ) -> Result<ScenarioRow> {
@@ -307,23 +301,12 @@ mod tests {
     /// A scenario with no feasible plan is reported with its reason, not a panic; the table
     /// lists it and the totals count it.
     /// The command's defaults for `scenarios` scenarios from `seed`, `runs` worlds each.
-    fn args(scenarios: usize, seed: u64, runs: usize) -> BenchmarkArgs {
-        BenchmarkArgs {
+    fn args(scenarios: usize, seed: u64, runs: usize) -> BenchmarkOptions {
+        BenchmarkOptions {
             scenarios,
             seed,
             runs,
-            threads: None,
-            json: false,
-            perturb: Vec::new(),
-            world: None,
-            faults: Vec::new(),
-            steer: Vec::new(),
-            write_scenarios: None,
-            max_collision_probability: None,
-            closed_loop_max_collision_probability: None,
-            open_loop_only: false,
-            curvature_reserve: CLOSED_LOOP_CURVATURE_RESERVE,
-            generator: Generator::Unseen,
+            ..BenchmarkOptions::default()
         }
     }
 
@@ -334,7 +317,7 @@ mod tests {
     #[test]
     fn the_curvature_reserve_gives_the_closed_loop_its_reach() {
         let p = BenchWorld::of(None, &[], &[], &[]).unwrap();
-        let args = |curvature_reserve| BenchmarkArgs {
+        let args = |curvature_reserve| BenchmarkOptions {
             curvature_reserve,
             ..args(1, 111, 20)
         };
@@ -365,7 +348,7 @@ mod tests {
     fn a_steered_bound_keeps_the_closed_loop_off_the_spheres() {
         let p = BenchWorld::of(None, &[], &[], &[]).unwrap();
         let free = measure(unseen_scenario(201), &p, &args(1, 201, 10), 201, 2).unwrap();
-        let bounded_args = BenchmarkArgs {
+        let bounded_args = BenchmarkOptions {
             closed_loop_max_collision_probability: Some(0.01),
             ..args(1, 201, 10)
         };
@@ -391,7 +374,7 @@ mod tests {
     /// the report says the world, the faults and the told controller.
     #[test]
     fn the_world_and_the_told_controller_reach_every_run() {
-        let bounded = BenchmarkArgs {
+        let bounded = BenchmarkOptions {
             closed_loop_max_collision_probability: Some(0.01),
             ..args(1, 204, 4)
         };

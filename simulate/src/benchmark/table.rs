@@ -1,6 +1,6 @@
 //! The table `needle benchmark` prints: one row per scenario, the totals, the scenarios left out.
 
-use super::{BenchmarkArgs, BenchmarkReport, ClosedFigures, OpenFigures};
+use super::{BenchmarkOptions, BenchmarkReport, ClosedFigures, OpenFigures};
 use std::fmt::Write;
 
 /// A millimetre figure, or a dash when there is none.
@@ -103,7 +103,7 @@ fn length_costs(out: &mut String, bound: f32, r: &BenchmarkReport) {
 }
 
 /// The table's first lines: the family, the world and what the controller was told.
-fn heading(out: &mut String, a: &BenchmarkArgs, r: &BenchmarkReport) {
+fn heading(out: &mut String, a: &BenchmarkOptions, r: &BenchmarkReport) {
     let last = a.seed.wrapping_add((a.scenarios as u64).saturating_sub(1));
     let _ = writeln!(
         out,
@@ -130,7 +130,7 @@ fn heading(out: &mut String, a: &BenchmarkArgs, r: &BenchmarkReport) {
 }
 
 /// The benchmark's table.
-pub fn to_table(a: &BenchmarkArgs, r: &BenchmarkReport) -> String {
+pub fn to_table(a: &BenchmarkOptions, r: &BenchmarkReport) -> String {
     let mut out = String::new();
     heading(&mut out, a, r);
     let groups = format!("{:<50} |{:^31} |{:^39}", "", "open loop", "closed loop");

@@ -1,6 +1,6 @@
 //! `needle sweep`.
 
-use super::args::ScenarioArgs;
+use super::options::ScenarioOptions;
 use super::output::{progress, title_of, write};
 use crate::sweep_plot::sweep_svg;
 use crate::{parallel, sweep};
@@ -8,43 +8,33 @@ use anyhow::Result;
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `needle sweep`
-#[derive(clap::Args, Clone, Debug)]
-pub struct SweepArgs {
+/// What `needle sweep` is asked.
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
     /// The scenario and what to plan in it.
-    #[command(flatten)]
-    pub scenario: ScenarioArgs,
-    /// Weight to vary: length, risk, penalty or control.
-    #[arg(long, ignore_case = true)]
+    pub scenario: ScenarioOptions,
+    /// The weight to vary.
     pub weight: sweep::Weight,
     /// First value.
-    #[arg(long)]
     pub from: f64,
     /// Last value.
-    #[arg(long)]
     pub to: f64,
     /// Number of values, both ends included.
-    #[arg(long, default_value_t = 10)]
     pub steps: usize,
     /// Space the values evenly in log10.
-    #[arg(long)]
     pub log: bool,
     /// Print one JSON object instead of the table.
-    #[arg(long)]
     pub json: bool,
     /// Also write the table as CSV.
-    #[arg(long)]
     pub csv: Option<PathBuf>,
     /// Also draw F and L against the weight (SVG).
-    #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Threads (default: every core).
-    #[arg(long)]
+    /// Threads (`None`: every core).
     pub threads: Option<usize>,
 }
 
 /// Runs `needle sweep`.
-pub fn run_sweep(a: &SweepArgs) -> Result<()> {
+pub fn run_sweep(a: &SweepOptions) -> Result<()> {
     let (scenario, _) = a.scenario.load()?;
     let range = sweep::Range {
         from: a.from,

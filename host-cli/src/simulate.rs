@@ -1,130 +1,126 @@
-//! The flags of `needle simulate`. Flags that mean nothing alone are refused by clap as usage
-//! errors (exit status 2, as for any other bad flag) rather than silently ignored.
+//! `needle simulate`: its flags, the runs made by `needle_simulate`. Flags that mean nothing
+//! alone are refused by clap as usage errors (exit status 2, as for any other bad flag) rather
+//! than silently ignored.
 
-use needle_device::commands::LinkArgs;
+use crate::values::at_least_one;
+use needle_device::LinkOptions;
+use needle_simulate::SimulateOptions;
 use std::path::PathBuf;
 
 /// Default `--retries` of a closed loop on a device: at one request in five through, 400 tries
 /// leave about one failed reading in 10^38.
-pub const STEER_RETRIES: u32 = 400;
+const STEER_RETRIES: u32 = 400;
 
 /// `needle simulate`
 #[derive(clap::Args, Clone, Debug)]
 pub struct SimulateArgs {
     /// Scenario file (TOML, see examples/paper.toml).
-    pub file: PathBuf,
+    file: PathBuf,
     /// Simulated insertions, 1 to 1 000 000 (checked with the scenario, so that the Python
     /// package's `simulate` gives the same message).
-    #[arg(long, default_value_t = 100)]
-    pub runs: usize,
+    #[arg(long, default_value_t = SimulateOptions::default().runs)]
+    runs: usize,
     /// Seed of the first run (run i uses seed + i).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    #[arg(long, default_value_t = SimulateOptions::default().seed)]
+    seed: u64,
     /// Plan and simulate only this form (e.g. RL) instead of the best.
     #[arg(long)]
-    pub form: Option<String>,
+    form: Option<String>,
     /// Change one perturbation or world effect, KEY=VALUE (repeatable; over `--world`; see
     /// docs/execution.md).
     #[arg(long = "perturb", value_name = "KEY=VALUE")]
-    pub perturb: Vec<String>,
+    perturb: Vec<String>,
     /// The world the runs are made in: `default` (the perturbation alone) or `clinical` (a
     /// 5-DOF sensor, field bias, registration error, punctured layers, a pushed target, late
     /// imaging and tracker, dropouts; docs/execution.md, "The clinical world").
     #[arg(long, value_name = "NAME")]
-    pub world: Option<String>,
+    world: Option<String>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
-    pub json: bool,
+    json: bool,
     /// With --json: every run's draws, figures, points and steps (as executed: a step broken off
     /// with the length, time and turns it took).
     #[arg(long, requires = "json")]
-    pub detail: bool,
+    detail: bool,
     /// Also draw the plan and the executed paths (SVG; the file is opened before simulating).
     #[arg(long)]
-    pub plot: Option<PathBuf>,
+    plot: Option<PathBuf>,
     /// Also write files 3D Slicer opens into DIR: the plan as `needle plan --export` writes it,
     /// and every simulated path as a model (`paths-open-loop.vtk`, `paths-closed-loop.vtk`).
     #[arg(long, value_name = "DIR")]
-    pub export: Option<PathBuf>,
+    export: Option<PathBuf>,
     /// Threads, at least 1 (default: every core).
     #[arg(long, value_parser = at_least_one)]
-    pub threads: Option<usize>,
+    threads: Option<usize>,
     /// Steer every run with the closed-loop controller (replanning from each tracker reading)
     /// instead of executing the schedule open loop.
     #[arg(long)]
-    pub closed_loop: bool,
+    closed_loop: bool,
     /// With --closed-loop: a tracker fault, KEY=VALUE (repeatable): dropout_rate, dropout_mm,
     /// outlier_rate, outlier_mm, repeat_rate, stale_rate (dropouts per mm, the rest per reading).
     #[arg(long = "fault", value_name = "KEY=VALUE", requires = "closed_loop")]
-    pub fault: Vec<String>,
+    fault: Vec<String>,
     /// With --closed-loop: tell the controller one thing of the tracker or the insertion,
     /// KEY=VALUE (repeatable; a key of the scenario's `[steering]`, docs/scenario.md, over
     /// what the file says). The world stays as `--perturb` makes it.
     #[arg(long = "steer", value_name = "KEY=VALUE", requires = "closed_loop")]
-    pub steer: Vec<String>,
+    steer: Vec<String>,
     /// With --closed-loop: steer on the device at this TCP address (hil-sim --tcp, QEMU)
     /// instead of in-process; the host runs the simulated robot, tissue and tracker.
     #[arg(long, requires = "closed_loop", conflicts_with = "port")]
-    pub tcp: Option<String>,
+    tcp: Option<String>,
     /// With --closed-loop: steer on the device at this serial port instead of in-process.
     #[arg(long, requires = "closed_loop")]
-    pub port: Option<String>,
+    port: Option<String>,
     /// Baud rate of --port.
-    #[arg(long, default_value_t = 115_200)]
-    pub baud: u32,
+    #[arg(long, default_value_t = LinkOptions::default().baud)]
+    baud: u32,
     /// Seconds of silence allowed per exchange with the device.
     #[arg(long, default_value_t = 5.0)]
-    pub timeout: f64,
+    timeout: f64,
     /// Times one request to the device is sent again before giving up. More than a plan's
     /// default: a steering request (about 80 bytes) cannot be cut into parts, and a line that
     /// damages 2 % of its bytes lets one in five through; a silent device still ends the
     /// exchange after --timeout.
     #[arg(long, default_value_t = STEER_RETRIES)]
-    pub retries: u32,
+    retries: u32,
     /// With --closed-loop: also run the same worlds open loop and print both side by side.
     #[arg(long, requires = "closed_loop")]
-    pub compare_open_loop: bool,
+    compare_open_loop: bool,
 }
 
 impl SimulateArgs {
     /// The device to steer on (`--tcp` or `--port`), if any.
-    pub fn link(&self) -> Option<LinkArgs> {
-        let mut link = LinkArgs::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
+    fn link(&self) -> Option<LinkOptions> {
+        let mut link = LinkOptions::optional(&self.port, self.baud, &self.tcp, self.timeout)?;
         link.retries = self.retries;
         Some(link)
     }
-}
 
-/// The most runs one simulation makes: each keeps a few numbers for the table, so a larger count
-/// is a typing slip that would otherwise end in an allocation abort, not in an answer.
-pub const MAX_RUNS: usize = 1_000_000;
-
-/// The most scenarios one benchmark generates.
-pub const MAX_SCENARIOS: usize = 100_000;
-
-/// A count of runs, 1 to [`MAX_RUNS`].
-pub fn run_count(s: &str) -> Result<usize, String> {
-    within(s, MAX_RUNS)
-}
-
-/// A count of scenarios, 1 to [`MAX_SCENARIOS`].
-pub fn scenario_count(s: &str) -> Result<usize, String> {
-    within(s, MAX_SCENARIOS)
-}
-
-/// A count from 1 to `max`.
-fn within(s: &str, max: usize) -> Result<usize, String> {
-    match at_least_one(s)? {
-        n if n > max => Err(format!("must be at most {max}")),
-        n => Ok(n),
+    /// What the flags ask.
+    fn options(&self) -> SimulateOptions {
+        SimulateOptions {
+            file: self.file.clone(),
+            runs: self.runs,
+            seed: self.seed,
+            form: self.form.clone(),
+            perturb: self.perturb.clone(),
+            world: self.world.clone(),
+            json: self.json,
+            detail: self.detail,
+            plot: self.plot.clone(),
+            export: self.export.clone(),
+            threads: self.threads,
+            closed_loop: self.closed_loop,
+            faults: self.fault.clone(),
+            steer: self.steer.clone(),
+            link: self.link(),
+            compare_open_loop: self.compare_open_loop,
+        }
     }
 }
 
-/// A count of at least one (`--threads 0` would run nothing, or silently one thread).
-pub fn at_least_one(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(0) => Err("must be at least 1".into()),
-        Ok(n) => Ok(n),
-        Err(e) => Err(e.to_string()),
-    }
+/// Runs `needle simulate`.
+pub fn simulate(a: &SimulateArgs) -> anyhow::Result<()> {
+    needle_simulate::run_simulate(&a.options())
 }

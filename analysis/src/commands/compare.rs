@@ -1,6 +1,6 @@
 //! `needle compare`.
 
-use super::args::{RrtArgs, ScenarioArgs};
+use super::options::{RrtSettings, ScenarioOptions};
 use super::output::{progress, title_of, write};
 use super::rrt::rrt_scene_paths;
 use crate::plot::{scene_svg, PlotPath, Scene};
@@ -10,34 +10,27 @@ use needle_report::path_points;
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `needle compare`
-#[derive(clap::Args, Clone, Debug)]
-pub struct CompareArgs {
+/// What `needle compare` is asked.
+#[derive(Clone, Debug)]
+pub struct CompareOptions {
     /// The scenario and what to plan in it.
-    #[command(flatten)]
-    pub scenario: ScenarioArgs,
+    pub scenario: ScenarioOptions,
     /// The RRT's settings.
-    #[command(flatten)]
-    pub rrt: RrtArgs,
-    /// Number of RRT runs (seeds first, first + 1, ...).
-    #[arg(long, default_value_t = 11)]
+    pub rrt: RrtSettings,
+    /// Number of RRT runs (seeds first, first + 1, ...), at least 1.
     pub runs: usize,
     /// First RRT seed.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Threads for the RRT runs (default: every core).
-    #[arg(long)]
+    /// Threads for the RRT runs (`None`: every core).
     pub threads: Option<usize>,
     /// Print one JSON object instead of the table.
-    #[arg(long)]
     pub json: bool,
     /// Draw the optimiser's best path and the median RRT run's path (SVG).
-    #[arg(long)]
     pub plot: Option<PathBuf>,
 }
 
 /// Runs `needle compare`.
-pub fn run_compare(a: &CompareArgs) -> Result<()> {
+pub fn run_compare(a: &CompareOptions) -> Result<()> {
     if a.runs == 0 {
         bail!("--runs must be at least 1");
     }

@@ -1,6 +1,6 @@
 //! `needle plot` and `needle plan --plot`.
 
-use super::args::ScenarioArgs;
+use super::options::ScenarioOptions;
 use super::output::{title_of, write};
 use crate::plan_file;
 use crate::plot::{colour_of, scene_svg, PlotPath, Scene, Strands};
@@ -108,31 +108,25 @@ pub fn anatomy_slices_svg(scenario: &Scenario, s: &Slicing<'_>, title: &str) -> 
     Ok(slices_svg(scenario, &scene))
 }
 
-/// `needle plot`
-#[derive(clap::Args, Clone, Debug)]
-pub struct PlotArgs {
+/// What `needle plot` is asked.
+#[derive(Clone, Debug)]
+pub struct PlotOptions {
     /// The scenario and what to plan in it.
-    #[command(flatten)]
-    pub scenario: ScenarioArgs,
+    pub scenario: ScenarioOptions,
     /// A `needle plan --json` output to draw instead of planning again.
-    #[arg(long)]
     pub plan: Option<PathBuf>,
     /// Output SVG file.
-    #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
-    /// With `[[anatomy]]`: where the axial, coronal and sagittal slices of the label maps cross:
-    /// `closest` (the best path's point nearest an obstacle), `target`, `entry`, or `X,Y,Z`
-    /// (RAS, mm); it must lie inside a label map.
-    #[arg(long, value_name = "WHERE")]
+    /// With `[[anatomy]]`: where the axial, coronal and sagittal slices of the label maps cross
+    /// (`None`: the best path's point nearest an obstacle); it must lie inside a label map.
     pub slice_at: Option<SliceAt>,
     /// With `[[anatomy]]`: draw the two projections of a scenario without anatomy instead of
     /// the slices.
-    #[arg(long, conflicts_with = "slice_at")]
     pub projections: bool,
 }
 
 /// Runs `needle plot`.
-pub fn run_plot(a: &PlotArgs) -> Result<()> {
+pub fn run_plot(a: &PlotOptions) -> Result<()> {
     let (mut scenario, shapes) = a.scenario.load()?;
     let (paths, notes) = match &a.plan {
         None => {

@@ -12,19 +12,16 @@ use std::fmt;
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `needle approx`
-#[derive(clap::Args, Clone, Debug)]
-pub struct ApproxArgs {
+/// What `needle approx` is asked.
+#[derive(Clone, Debug)]
+pub struct ApproxOptions {
     /// Scenario file with polygon obstacles.
     pub file: PathBuf,
-    /// circumscribed, segmented or bordered (default: each obstacle's own `approx`).
-    #[arg(long, ignore_case = true)]
+    /// The method for every polygon (`None`: each obstacle's own `approx`).
     pub method: Option<Method>,
     /// Print one JSON object instead of the table.
-    #[arg(long)]
     pub json: bool,
     /// Draw the polygons and their circles (SVG).
-    #[arg(long)]
     pub plot: Option<PathBuf>,
 }
 
@@ -77,7 +74,7 @@ impl fmt::Display for ApproxJson {
 }
 
 /// Runs `needle approx`.
-pub fn run_approx(a: &ApproxArgs) -> Result<()> {
+pub fn run_approx(a: &ApproxOptions) -> Result<()> {
     let file = ScenarioFile::load(&a.file)?;
     let shapes = file
         .obstacle_shapes(a.method)

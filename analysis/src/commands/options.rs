@@ -1,4 +1,4 @@
-//! Arguments shared by the analysis commands: the scenario and what to plan in it, and the RRT's
+//! What the analysis commands share: the scenario and what to plan in it, and the RRT's
 //! settings.
 
 use crate::rrt;
@@ -9,16 +9,15 @@ use planner_core::Scenario;
 use std::path::PathBuf;
 
 /// The scenario file alone: what a command that plans no path forms (the RRT) takes.
-#[derive(clap::Args, Clone, Debug)]
-pub struct ScenarioFileArgs {
+#[derive(Clone, Debug, Default)]
+pub struct ScenarioSource {
     /// Scenario file (TOML, see examples/paper.toml).
     pub file: PathBuf,
-    /// Turn every polygon obstacle into circles this way: circumscribed, segmented or bordered.
-    #[arg(long, ignore_case = true)]
+    /// Turn every polygon obstacle into circles this way (`None`: each obstacle's own).
     pub approx: Option<Method>,
 }
 
-impl ScenarioFileArgs {
+impl ScenarioSource {
     /// Loads the file.
     pub fn load(&self) -> Result<(Scenario, Vec<ObstacleShape>)> {
         load_scenario_shapes(&self.file, self.approx)
@@ -26,20 +25,17 @@ impl ScenarioFileArgs {
 }
 
 /// The scenario and what to plan in it.
-#[derive(clap::Args, Clone, Debug)]
-pub struct ScenarioArgs {
+#[derive(Clone, Debug, Default)]
+pub struct ScenarioOptions {
     /// The file.
-    #[command(flatten)]
-    pub source: ScenarioFileArgs,
+    pub source: ScenarioSource,
     /// Largest control degree N to try (overrides the file).
-    #[arg(long)]
     pub max_degree: Option<u8>,
-    /// Comma-separated forms to try, e.g. RL,LRL (overrides the file).
-    #[arg(long, value_delimiter = ',')]
+    /// The forms to try, e.g. RL and LRL (overrides the file).
     pub forms: Option<Vec<String>>,
 }
 
-impl ScenarioArgs {
+impl ScenarioOptions {
     /// Loads the file and applies the overrides.
     pub fn load(&self) -> Result<(Scenario, Vec<ObstacleShape>)> {
         let (mut scenario, shapes) = self.source.load()?;
@@ -49,23 +45,31 @@ impl ScenarioArgs {
 }
 
 /// RRT settings shared by `rrt` and `compare`.
-#[derive(clap::Args, Clone, Debug)]
-pub struct RrtArgs {
+#[derive(Clone, Copy, Debug)]
+pub struct RrtSettings {
     /// Edge length (mm).
-    #[arg(long, default_value_t = 10.0)]
     pub step: f32,
     /// Stop once the tip is this close to the target (mm).
-    #[arg(long, default_value_t = 1.0)]
     pub tolerance: f32,
     /// Most samples before giving up.
-    #[arg(long, default_value_t = 20_000)]
     pub iterations: usize,
     /// Share of samples aimed at the target.
-    #[arg(long, default_value_t = 0.2)]
     pub goal_bias: f64,
 }
 
-impl RrtArgs {
+impl Default for RrtSettings {
+    /// The commands' defaults.
+    fn default() -> Self {
+        RrtSettings {
+            step: 10.0,
+            tolerance: 1.0,
+            iterations: 20_000,
+            goal_bias: 0.2,
+        }
+    }
+}
+
+impl RrtSettings {
     /// The RRT's options for one seed.
     pub fn options(&self, seed: u64) -> rrt::Options {
         rrt::Options {

@@ -1,6 +1,6 @@
 //! `needle rrt`, and the RRT's picture that `needle compare` shares.
 
-use super::args::{RrtArgs, ScenarioFileArgs};
+use super::options::{RrtSettings, ScenarioSource};
 use super::output::{title_of, write};
 use crate::pieces::{path_points, Segment};
 use crate::plot::{scene_svg, PlotPath, Scene};
@@ -13,23 +13,18 @@ use std::fmt;
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `needle rrt`
-#[derive(clap::Args, Clone, Debug)]
-pub struct RrtCmd {
-    /// The scenario (the RRT plans no path forms, so it takes no --forms or --max-degree).
-    #[command(flatten)]
-    pub scenario: ScenarioFileArgs,
+/// What `needle rrt` is asked.
+#[derive(Clone, Debug)]
+pub struct RrtOptions {
+    /// The scenario (the RRT plans no path forms, so it takes no forms or degree).
+    pub scenario: ScenarioSource,
     /// The RRT's settings.
-    #[command(flatten)]
-    pub rrt: RrtArgs,
+    pub rrt: RrtSettings,
     /// Seed of the random samples.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Print one JSON object instead of the summary.
-    #[arg(long)]
     pub json: bool,
     /// Draw the tree and the path (SVG).
-    #[arg(long)]
     pub plot: Option<PathBuf>,
 }
 
@@ -123,7 +118,7 @@ impl fmt::Display for RrtJson {
 }
 
 /// Runs `needle rrt`.
-pub fn run_rrt(a: &RrtCmd) -> Result<()> {
+pub fn run_rrt(a: &RrtOptions) -> Result<()> {
     let (scenario, shapes) = a.scenario.load()?;
     let o = rrt::run(&scenario, &a.rrt.options(a.seed))?;
     if a.json {
