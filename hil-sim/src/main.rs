@@ -4,8 +4,9 @@
 //! stdout, then serves until killed.
 //!
 //! `hil-sim --lab SCENARIO --tracker-port P --robot-port Q` is the simulated lab instead
-//! (`hil_sim::lab`): its first line is `tracker ADDRESS robot ADDRESS`, then one JSON line of
-//! true figures per insertion.
+//! (`hil_sim::lab`): its first line is `tracker ADDRESS robot ADDRESS` (`board ADDRESS` with
+//! `--board-port`: a driver board instead of a robot), then one JSON line of true figures per
+//! insertion.
 
 use anyhow::{Context, Result};
 use clap::Parser;
@@ -62,6 +63,12 @@ struct LabArgs {
     /// With --lab: the robot's TCP port on 127.0.0.1 (0 picks a free one).
     #[arg(long, requires = "lab", default_value_t = 18945)]
     robot_port: u16,
+    /// With --lab --real-time: play a driver board instead of a robot: the simulated device with
+    /// the bench's simulated stages serves `needle`'s protocol on this TCP port of 127.0.0.1 (0
+    /// picks a free one), and the world takes each piece the board moves itself (`needle motion
+    /// arm`, `home`, then `needle steer --tcp` with no --robot; docs/motion.md).
+    #[arg(long, requires = "real_time", value_name = "PORT")]
+    board_port: Option<u16>,
     /// With --lab: pieces per second at most (0: lock-step, as fast as the host answers).
     #[arg(long, requires = "lab", default_value_t = 0.0)]
     rate: f64,
@@ -218,14 +225,18 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
     hil_sim::lab::check_faults(&setup.faults)?;
     let tracker = TcpListener::bind(("127.0.0.1", l.tracker_port))
         .with_context(|| format!("cannot listen on tracker port {}", l.tracker_port))?;
-    let robot = TcpListener::bind(("127.0.0.1", l.robot_port))
-        .with_context(|| format!("cannot listen on robot port {}", l.robot_port))?;
+    let (peer, port) = match l.board_port {
+        Some(port) => ("board", port),
+        None => ("robot", l.robot_port),
+    };
+    let listener = TcpListener::bind(("127.0.0.1", port))
+        .with_context(|| format!("cannot listen on {peer} port {port}"))?;
     let mut out = std::io::stdout();
     writeln!(
         out,
-        "tracker {} robot {}",
+        "tracker {} {peer} {}",
         tracker.local_addr()?,
-        robot.local_addr()?
+        listener.local_addr()?
     )?;
     out.flush()?;
     let lab = Lab {
@@ -265,12 +276,17 @@ fn serve_lab(file: &std::path::Path, a: &Args) -> Result<()> {
         let lag = std::time::Duration::from_millis(l.tracker_lag_ms);
         lab.tracker.sample(l.tracker_rate, lag);
     }
-    lab.serve(robot, |run| {
+    let print = |run: &hil_sim::lab::LabRun| {
         if let Ok(line) = serde_json::to_string(run) {
             let _ = writeln!(out, "{line}");
             let _ = out.flush();
         }
-    })
+    };
+    if l.board_port.is_some() {
+        lab.serve_board(listener, print)
+    } else {
+        lab.serve(listener, print)
+    }
 }
 
 fn main() -> Result<()> {

@@ -32,9 +32,15 @@ pub struct SteerArgs {
     /// With --registration-name: how long to wait for it before giving up ("no_registration").
     #[arg(long, requires = "registration_name", default_value_t = SteerOptions::default().registration_timeout_ms)]
     registration_timeout_ms: u64,
-    /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
-    #[arg(long)]
-    robot: String,
+    /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT. Without
+    /// it, the driver board at --tcp or --port plans, steers and moves the needle itself
+    /// (armed and homed first: `needle motion arm`, `home`; docs/motion.md).
+    #[arg(long, required_unless_present_any = ["tcp", "port"])]
+    robot: Option<String>,
+    /// With a driver board and no --robot: the needle guide is set to the plan's tilt (the
+    /// board only turns and inserts); a plan that tilts the needle is refused without it.
+    #[arg(long, conflicts_with = "robot")]
+    tilt_set: bool,
     /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection), HOST:PORT.
     #[arg(long, conflicts_with = "serve_slicer")]
     slicer: Option<String>,
@@ -109,6 +115,7 @@ impl SteerArgs {
             registration_name: self.registration_name.clone(),
             registration_timeout_ms: self.registration_timeout_ms,
             robot: self.robot.clone(),
+            tilt_set: self.tilt_set,
             slicer: self.slicer.clone(),
             serve_slicer: self.serve_slicer,
             serve_slicer_bind: self.serve_slicer_bind,

@@ -27,6 +27,7 @@
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 
+mod board;
 pub mod fresh;
 pub mod log;
 pub mod outcome;

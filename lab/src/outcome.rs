@@ -41,6 +41,9 @@ pub enum Ending {
     PostureRefused,
     /// The robot sensed the needle in an obstacle and stopped.
     RobotCollided,
+    /// The driver board that moves the needle faulted (its e-stop, a limit switch, its
+    /// watchdog) or refused to move on.
+    BoardFaulted,
 }
 
 /// How an insertion ended, in the four ways a run ends plus the link breaking; each has its own
@@ -129,6 +132,7 @@ impl Ending {
             Ending::RobotNotOpenIgtlink => Some("robot_not_openigtlink"),
             Ending::PostureRefused => Some("posture_refused"),
             Ending::RobotCollided => Some("robot_sensed_collision"),
+            Ending::BoardFaulted => Some("board_faulted"),
         }
     }
 
@@ -144,7 +148,8 @@ impl Ending {
             | Ending::RobotStopped
             | Ending::RobotDisagrees
             | Ending::NoRegistration
-            | Ending::PostureRefused => Class::Stopped,
+            | Ending::PostureRefused
+            | Ending::BoardFaulted => Class::Stopped,
             Ending::RobotNotAnswering
             | Ending::RobotDisconnected
             | Ending::TrackerDisconnected

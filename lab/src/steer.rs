@@ -44,8 +44,12 @@ pub struct SteerOptions {
     pub registration_name: Option<String>,
     /// With `registration_name`: how long to wait for it before giving up.
     pub registration_timeout_ms: u64,
-    /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT.
-    pub robot: String,
+    /// The robot's OpenIGTLink server (the robot mapping of docs/lab.md), HOST:PORT; `None`:
+    /// the driver board at `link` moves the needle itself.
+    pub robot: Option<String>,
+    /// With a board and no robot: the needle guide is set to the plan's tilt (a board only
+    /// turns and inserts).
+    pub tilt_set: bool,
     /// Show the insertion in 3D Slicer: its OpenIGTLinkIF server (a client connection).
     pub slicer: Option<String>,
     /// Show the insertion in 3D Slicer by serving OpenIGTLink on this port of
@@ -86,7 +90,8 @@ impl Default for SteerOptions {
             registration: None,
             registration_name: None,
             registration_timeout_ms: 5000,
-            robot: String::new(),
+            robot: None,
+            tilt_set: false,
             slicer: None,
             serve_slicer: None,
             serve_slicer_bind: IpAddr::V4(Ipv4Addr::LOCALHOST),
@@ -104,7 +109,7 @@ impl Default for SteerOptions {
 }
 
 /// Connects to the tracker or the robot; failing, the link is broken before anything moved.
-fn connect(what: &'static str, address: &str) -> Result<TcpStream> {
+pub(crate) fn connect(what: &'static str, address: &str) -> Result<TcpStream> {
     let unreachable = |message: String| Unreachable {
         reason: if what == "tracker" {
             "tracker_unreachable"
@@ -126,7 +131,7 @@ fn connect(what: &'static str, address: &str) -> Result<TcpStream> {
 
 /// Events waiting for the session at most: the robot's reader waits when they are this many
 /// (the robot is lock-step: a few frames a piece), the tracker's sends at most one notice.
-const EVENTS_WAITING: usize = 64;
+pub(crate) const EVENTS_WAITING: usize = 64;
 
 /// Reads the robot's frames into `tx`.
 fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<Arc<AtomicU64>> {
@@ -145,7 +150,7 @@ fn forward_robot(stream: &TcpStream, tx: &SyncSender<Event>) -> Result<Arc<Atomi
 
 /// Reads the tracker's frames into a shared [`TrackerState`] (bounded whatever the rate), and
 /// tells the session with a notice when none is waiting already.
-fn forward_tracker(
+pub(crate) fn forward_tracker(
     stream: &TcpStream,
     tx: &SyncSender<Event>,
     names: TrackerNames,
@@ -230,12 +235,16 @@ fn steer(a: &SteerOptions, form_steered: &mut Option<String>) -> Result<SessionO
     if let Some(name) = &a.registration_name {
         check_name("--registration-name", name)?;
     }
-    let setup = closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_request(a)?)?;
-    let registration = a
-        .registration
-        .as_deref()
-        .map(load_registration)
-        .transpose()?;
+    let robot_address = match (&a.robot, &a.link) {
+        (Some(robot), _) => robot,
+        (None, Some(_)) => return super::board::steer_on_board(a, form_steered),
+        (None, None) => anyhow::bail!(
+            "needle steer needs a robot that moves the needle (--robot HOST:PORT) or a driver \
+             board that moves it itself (--tcp ADDRESS or --port PORT, no --robot)"
+        ),
+    };
+    let setup = set_up(a)?;
+    let config = session_config(a, &setup)?;
     let schedule = &setup.prepared.schedule;
     let mut in_process_controller;
     let mut device;
@@ -253,6 +262,41 @@ fn steer(a: &SteerOptions, form_steered: &mut Option<String>) -> Result<SessionO
             &mut on_device
         }
     };
+    let (mut log, mut slicer) = viewers(a, &setup, form_steered)?;
+    let tracker = connect("tracker", &a.tracker)?;
+    let robot = connect("robot", robot_address)?;
+    let (tx, rx) = sync_channel(EVENTS_WAITING);
+    let (tracker_state, tracker_bytes) = forward_tracker(&tracker, &tx, tracker_names(a))?;
+    let robot_bytes = forward_robot(&robot, &tx)?;
+    drop(tx);
+    // A second handler cannot be set (a test calling twice): the first one still flags.
+    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    let inputs = Inputs {
+        events: rx,
+        tracker: tracker_state,
+        tracker_bytes,
+        robot_bytes,
+    };
+    let outcome =
+        Session::new(config, controller, robot, &mut log, &mut slicer, inputs).run(&schedule.steps);
+    let _ = tracker.shutdown(std::net::Shutdown::Both);
+    report_viewers(&slicer, &log);
+    Ok(outcome)
+}
+
+/// The set-up of a steered insertion: planned as `needle simulate --closed-loop` plans it.
+pub(crate) fn set_up(a: &SteerOptions) -> Result<needle_simulate::setup::Setup> {
+    closed_loop_setup(&a.file, a.seed.unwrap_or(1), &simulate_request(a)?)
+}
+
+/// The insertion log (its first line the plan) and 3D Slicer (shown the plan); `form` is the
+/// form steered.
+pub(crate) fn viewers(
+    a: &SteerOptions,
+    setup: &needle_simulate::setup::Setup,
+    form_steered: &mut Option<String>,
+) -> Result<(InsertionLog, Slicer)> {
+    let schedule = &setup.prepared.schedule;
     let mut log = InsertionLog::create(a.log.as_deref())?;
     let form = setup.prepared.outcome.form.to_string();
     *form_steered = Some(form.clone());
@@ -273,20 +317,29 @@ fn steer(a: &SteerOptions, form_steered: &mut Option<String>) -> Result<SessionO
         None => Slicer::connect(a.slicer.as_deref())?,
     };
     slicer.plan(&setup.scenario, schedule);
-    let tracker = connect("tracker", &a.tracker)?;
-    let robot = connect("robot", &a.robot)?;
-    let (tx, rx) = sync_channel(EVENTS_WAITING);
-    let names = TrackerNames {
+    Ok((log, slicer))
+}
+
+/// The names the tracker's frames are read by.
+pub(crate) fn tracker_names(a: &SteerOptions) -> TrackerNames {
+    TrackerNames {
         tip: a.tip_name.clone(),
         target: a.target_name.clone(),
         registration: a.registration_name.clone(),
-    };
-    let (tracker_state, tracker_bytes) = forward_tracker(&tracker, &tx, names)?;
-    let robot_bytes = forward_robot(&robot, &tx)?;
-    drop(tx);
-    // A second handler cannot be set (a test calling twice): the first one still flags.
-    let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
-    let config = SessionConfig {
+    }
+}
+
+/// The session's limits and names.
+pub(crate) fn session_config(
+    a: &SteerOptions,
+    setup: &needle_simulate::setup::Setup,
+) -> Result<SessionConfig> {
+    let registration = a
+        .registration
+        .as_deref()
+        .map(load_registration)
+        .transpose()?;
+    Ok(SessionConfig {
         tracking_timeout: Duration::from_millis(a.tracking_timeout_ms),
         robot_timeout: Duration::from_millis(a.robot_timeout_ms),
         arc_radius_mm: setup.scenario.needle.curvature_radius,
@@ -294,24 +347,18 @@ fn steer(a: &SteerOptions, form_steered: &mut Option<String>) -> Result<SessionO
         registration_name: a.registration_name.clone(),
         registration_timeout: Duration::from_millis(a.registration_timeout_ms),
         roll_measured: a.tracker_dof == 6,
-        posture: schedule.posture,
-    };
-    let inputs = Inputs {
-        events: rx,
-        tracker: tracker_state,
-        tracker_bytes,
-        robot_bytes,
-    };
-    let outcome =
-        Session::new(config, controller, robot, &mut log, &mut slicer, inputs).run(&schedule.steps);
-    let _ = tracker.shutdown(std::net::Shutdown::Both);
+        posture: setup.prepared.schedule.posture,
+    })
+}
+
+/// Says on stderr what Slicer or the log missed.
+pub(crate) fn report_viewers(slicer: &Slicer, log: &InsertionLog) {
     if let Some(e) = &slicer.failure {
         eprintln!("needle steer: Slicer was not shown everything: {e}");
     }
     if let Some(e) = &log.failure {
         eprintln!("needle steer: the insertion log is incomplete: {e}");
     }
-    Ok(outcome)
 }
 
 /// What the end's printing needs of the flags.

@@ -132,6 +132,19 @@ impl Controller {
         needle_mm: f32,
         max_twist_deg: f32,
     ) -> Result<(), MotionError> {
+        self.set_job_about(rates, needle_mm, max_twist_deg, 0.0)
+    }
+
+    /// [`Controller::set_job`] with the twist counted from the shaft at `zero_twist_deg` (the
+    /// roll it was turned to before the insertion): the rotation within `zero_twist_deg` ±
+    /// `max_twist_deg`, spins starting towards it.
+    pub fn set_job_about(
+        &mut self,
+        rates: Rates,
+        needle_mm: f32,
+        max_twist_deg: f32,
+        zero_twist_deg: f32,
+    ) -> Result<(), MotionError> {
         self.refuse_if_faulted()?;
         if !matches!(self.state, State::Disarmed | State::Armed) {
             return Err(MotionError::NotAllowed(self.state));
@@ -139,7 +152,10 @@ impl Controller {
         let mut cfg = self.cfg;
         cfg.rates = rates;
         (cfg.axes[0].min, cfg.axes[0].max) = (0.0, needle_mm);
-        (cfg.axes[1].min, cfg.axes[1].max) = (-max_twist_deg, max_twist_deg);
+        (cfg.axes[1].min, cfg.axes[1].max) = (
+            zero_twist_deg - max_twist_deg,
+            zero_twist_deg + max_twist_deg,
+        );
         cfg.validate()?;
         self.cfg = cfg;
         self.prepared = None;

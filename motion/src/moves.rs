@@ -7,7 +7,7 @@
 //! - `Insert`: the stage alone, at the insertion speed;
 //! - `InsertSpin`: one segment per turn, the shaft turning a whole turn while the stage inserts
 //!   its share, the turns alternating in direction and starting towards zero twist (as the
-//!   schedule counts the twist); both axes follow the same profile shape, so the spin stays tied
+//!   schedule counts the twist; zero twist is the middle of the rotation's soft limits); both axes follow the same profile shape, so the spin stays tied
 //!   to the insertion;
 //! - `InsertDuty`: cycles of a held push (the share `duty`) and a spun push with one turn, the
 //!   turns alternating; as many cycles as the spun share takes turns at the driver's spin rate,
@@ -102,7 +102,14 @@ impl Planned {
             within(cfg, axis, cfg.to_steps(axis, end[i]))?;
         }
         let rot_now = cfg.to_steps(Axis::Rotation, self.at[1]);
-        let first_dir: i8 = if rot_now > 0 { -1 } else { 1 };
+        // Zero twist is the middle of the rotation's soft limits (the shaft's 0 unless a job
+        // was set about another roll).
+        let rot = &cfg.axes[Axis::Rotation as usize];
+        let zero = cfg.to_steps(
+            Axis::Rotation,
+            (f64::from(rot.min) + f64::from(rot.max)) / 2.0,
+        );
+        let first_dir: i8 = if rot_now > zero { -1 } else { 1 };
         let parts = match mv {
             Move::Rotate { .. } | Move::Insert { .. } => 1,
             Move::InsertSpin { turns, .. } => turns.max(1),

@@ -125,6 +125,11 @@ fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         ));
     }
     steer.extend(current(7, RequestBody::SteerStatus));
+    // The board asked to drive the insertion: a device without axes refuses, bad pieces too.
+    let mut drive = steer.clone();
+    for piece_mm in [1.0, 0.0, f32::NAN] {
+        drive.extend(current(7, RequestBody::SteerDrive { piece_mm }));
+    }
     let mut status = current(3, RequestBody::Status);
     status.extend(fetch(3));
     status.extend(current(3, RequestBody::Cancel));
@@ -141,6 +146,7 @@ fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         ("upload_nan", upload_nan),
         ("upload_plan_r", upload_r),
         ("steer_rl", steer),
+        ("steer_drive", drive),
         (
             "steer_without_plan",
             current(

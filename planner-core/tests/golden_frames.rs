@@ -298,6 +298,14 @@ fn exchange() -> String {
                 ReplyBody::Fault(Fault::Motion(MotionError::SoftLimit(Axis::Rotation))),
             )),
         ),
+        (
+            "steer_drive",
+            frame(&req(7, RequestBody::SteerDrive { piece_mm: 1.0 })),
+        ),
+        (
+            "piece_moving",
+            frame(&rep(7, ReplyBody::Fault(Fault::PieceMoving))),
+        ),
     ];
     lines.iter().fold(String::new(), |mut s, (name, hex)| {
         writeln!(s, "{name} {hex}").unwrap();

@@ -22,6 +22,7 @@
 //! a tip flagged invalid, an outlier at its offset position. The effects' time (latency,
 //! imaging) is the world's clock, not the wall's, so lock-step reproduces them too.
 
+mod board;
 mod robot;
 pub mod tracker;
 

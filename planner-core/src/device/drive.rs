@@ -31,6 +31,19 @@ pub(super) enum Driven {
     },
 }
 
+impl super::DeviceService {
+    /// The insertion the board drives: how many pieces it has queued and the last of them, as
+    /// cut from the continuation (the axes aim it at the exact position the pieces have
+    /// reached). `None` when the board drives none. A simulated world takes each piece from
+    /// here once the axes have finished it.
+    pub fn driven_piece(&self) -> Option<(u32, crate::execute::schedule::Step)> {
+        match &self.core.driven {
+            Driven::On { pieces, .. } => pieces.last().map(|p| (pieces.count(), p)),
+            Driven::Off => None,
+        }
+    }
+}
+
 impl Core {
     /// Starts driving the insertion steered under plan `id`: the plan's speeds and soft limits
     /// taken, the first piece queued. Answered by the motion status.
@@ -67,8 +80,9 @@ impl Core {
         let (needle_mm, twist) = (s.needle.length, s.driver.max_twist_deg);
         let started = with_core(&mut self.motion, &mut |c| {
             c.heartbeat();
-            c.set_job(rates, needle_mm, twist)?;
+            // The twist counts from where the shaft stands: the posture's roll.
             let origin = c.status().position;
+            c.set_job_about(rates, needle_mm, twist, origin[1])?;
             queue_next(c, &mut pieces, origin)?;
             Ok((origin, MotionStatus::from(c.status())))
         });

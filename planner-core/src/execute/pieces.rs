@@ -54,8 +54,9 @@ pub struct Pieces {
     of: u32,
     depth_mm: f32,
     base_deg: f32,
-    /// Pieces handed out since the start.
+    /// Pieces handed out since the start, and the last of them.
     count: u32,
+    last: Option<Step>,
 }
 
 impl Pieces {
@@ -73,6 +74,7 @@ impl Pieces {
             depth_mm: 0.0,
             base_deg: 0.0,
             count: 0,
+            last: None,
         };
         p.replace(steps)?;
         Ok(p)
@@ -121,10 +123,17 @@ impl Pieces {
         if let Op::Rotate { angle_deg } = op {
             self.base_deg += angle_deg;
         }
-        Some(Step {
+        let piece = Step {
             op,
             duration_s: share(step.duration_s),
-        })
+        };
+        self.last = Some(piece);
+        Some(piece)
+    }
+
+    /// The last piece handed out.
+    pub fn last(&self) -> Option<Step> {
+        self.last
     }
 
     /// Whether no piece is left.

@@ -1,0 +1,198 @@
+//! `needle steer` with a driver board instead of a robot (simulated): `hil-sim --lab
+//! --board-port` serves the simulated device with the bench's stages in real time and a
+//! free-running tracker over the world, which takes each piece the board finished. After
+//! `needle motion arm` and `home`, `needle steer --tcp BOARD` (no `--robot`) has the board plan,
+//! steer and move the paper's insertion; the host relays poses sampled after each piece ended.
+//! The insertion ends as the host's simulation of the same board ends (`needle_sim::driven_loop`
+//! with the in-process controller), bit for bit; the e-stop over the link ends it stopped.
+
+mod lab_support;
+
+use lab_support::{ending, log_lines, temp_path, wire_support};
+use needle_e2e::{example, needle};
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, ChildStdout, Command, Stdio};
+
+/// A running `hil-sim --lab --board-port`, killed when dropped.
+struct BoardLab {
+    child: Child,
+    tracker: String,
+    board: String,
+    runs: BufReader<ChildStdout>,
+}
+
+impl BoardLab {
+    fn start(file: &str, seed: u64) -> BoardLab {
+        let mut child = Command::new(wire_support::hil_sim_bin())
+            .args(["--lab", file, "--tracker-port", "0", "--board-port", "0"])
+            .args(["--real-time", "--tracker-rate", "200"])
+            .args(["--seed", &seed.to_string()])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start hil-sim --lab --board-port");
+        let mut runs = BufReader::new(child.stdout.take().expect("stdout"));
+        let mut line = String::new();
+        runs.read_line(&mut line).expect("hil-sim prints its ports");
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(words.len(), 4, "`tracker ADDRESS board ADDRESS`: {line}");
+        assert_eq!((words[0], words[2]), ("tracker", "board"), "{line}");
+        BoardLab {
+            tracker: words[1].to_string(),
+            board: words[3].to_string(),
+            child,
+            runs,
+        }
+    }
+
+    fn motion(&self, what: &str) -> Value {
+        let out = needle()
+            .args(["motion", what, "--tcp", &self.board, "--json"])
+            .output()
+            .expect("needle motion");
+        assert!(
+            out.status.success(),
+            "needle motion {what}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("a status")
+    }
+
+    fn steer(&self, file: &str, extra: &[&str]) -> (i32, Value) {
+        let mut c = needle();
+        c.args([
+            "steer",
+            file,
+            "--tracker",
+            &self.tracker,
+            "--tcp",
+            &self.board,
+        ])
+        .args(["--tilt-set", "--json"])
+        .args(extra);
+        ending(&mut c)
+    }
+
+    fn next_run(&mut self) -> Value {
+        let mut line = String::new();
+        self.runs.read_line(&mut line).expect("read a run");
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
+    }
+}
+
+impl Drop for BoardLab {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The host's simulation of the same board: the paper planned as `needle steer` plans it, the
+/// world of `seed` on the board's pieces, the in-process controller.
+fn host_simulation(seed: u64) -> needle_sim::ClosedRun {
+    let file = example("paper");
+    let request = needle_simulate::request::Request {
+        steer: vec!["tracking_lost_after_mm=2".into()],
+        ..Default::default()
+    };
+    let setup = needle_simulate::closed_loop_setup(&file, seed, &request).expect("set up");
+    let mut here =
+        needle_sim::in_process(&setup.scenario, &setup.prepared.schedule, &setup.config).unwrap();
+    let world = needle_sim::Conditions {
+        perturbation: &setup.perturbation,
+        effects: &setup.effects,
+        faults: &setup.faults,
+    };
+    let schedule = &setup.prepared.schedule;
+    needle_sim::driven_loop(
+        &setup.scenario,
+        &setup.planned,
+        schedule,
+        &world,
+        &mut here,
+        seed,
+        1.0,
+    )
+    .unwrap()
+}
+
+#[test]
+fn the_board_steers_the_papers_insertion_from_relayed_poses() {
+    let file = example("paper").to_str().unwrap().to_string();
+    let mut lab = BoardLab::start(&file, 3);
+    // Nothing moves before an explicit arm and homing.
+    let (code, refused) = lab.steer(&file, &[]);
+    assert_eq!(code, 5, "{refused}");
+    assert_eq!(refused["stop_reason"], "board_faulted", "{refused}");
+    lab.motion("arm");
+    let homed = lab.motion("home");
+    assert_eq!(homed["homed"], true, "{homed}");
+    let log = temp_path("board-steer.jsonl");
+    let (code, v) = lab.steer(&file, &["--log", log.to_str().unwrap()]);
+    assert_eq!((code, &v["outcome"]), (0, &Value::from("reached")), "{v}");
+    let truth = lab.next_run();
+    let expected = host_simulation(3);
+    assert_eq!(
+        truth["target_error"].as_f64().map(|e| e as f32),
+        Some(expected.run.target_error),
+        "{truth}"
+    );
+    assert_eq!(truth["pieces"], expected.run.steps.len(), "{truth}");
+    let steering: needle_sim::ClosedRun = expected;
+    assert_eq!(v["steering"]["readings"], steering.stats.readings, "{v}");
+    assert_eq!(v["steering"]["replans"], steering.stats.replans, "{v}");
+    let lines = log_lines(&log);
+    assert!(
+        lines.iter().any(|l| l["event"] == "board_drive"),
+        "{lines:?}"
+    );
+    let _ = std::fs::remove_file(log);
+}
+
+/// Ctrl-C during a board-driven insertion: the board is told to stop, the insertion ends
+/// `stopped` (`interrupted`, exit 5), and the stage stands where it stopped, short of the plan.
+#[test]
+fn ctrl_c_stops_the_board_mid_insertion() {
+    let file = example("paper").to_str().unwrap().to_string();
+    let lab = BoardLab::start(&file, 4);
+    lab.motion("arm");
+    lab.motion("home");
+    let child = needle()
+        .args([
+            "steer",
+            &file,
+            "--tracker",
+            &lab.tracker,
+            "--tcp",
+            &lab.board,
+        ])
+        .args(["--tilt-set", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(out.status.code(), Some(5), "{v}");
+    assert_eq!(
+        (&v["outcome"], &v["stop_reason"]),
+        (&Value::from("stopped"), &Value::from("interrupted")),
+        "{v}"
+    );
+    assert_eq!(v["robot_stopped"], true, "{v}");
+    let s = lab.motion("status");
+    assert_eq!(
+        (&s["state"], &s["moves_left"]),
+        (&Value::from("armed"), &Value::from(0)),
+        "{s}"
+    );
+    let depth = s["insertion_mm"].as_f64().unwrap();
+    assert!(depth > 1.0 && depth < 80.0, "stopped mid-insertion: {s}");
+}
