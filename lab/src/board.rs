@@ -14,7 +14,7 @@ use super::log::InsertionLog;
 use super::outcome::{Class, Ending, SessionOutcome};
 use super::session::{Event, SessionConfig, INTERRUPTED};
 use super::slicer::Slicer;
-use super::steer::{
+use super::steer_setup::{
     connect, forward_tracker, report_viewers, session_config, set_up, tracker_names, viewers,
     SteerOptions, EVENTS_WAITING,
 };
@@ -345,6 +345,10 @@ impl<T: Transport> BoardSession<'_, T> {
     fn refused(&mut self, e: &LinkError) -> Ending {
         self.log
             .write("board_refused", json!({ "error": e.to_string() }));
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            // Ctrl-C broke off the exchange it came in.
+            return Ending::Interrupted;
+        }
         match e {
             LinkError::Device(Fault::Motion(_) | Fault::NoMotion) => Ending::BoardFaulted,
             _ => Ending::ControllerNotAnswering,

@@ -38,9 +38,11 @@ pub mod session;
 pub mod slicer;
 pub mod sphere;
 pub mod steer;
+pub mod steer_setup;
 pub mod tracker;
 pub mod viewers;
 pub mod wire;
 
 pub use outcome::exit_code;
-pub use steer::{run_steer, SteerOptions};
+pub use steer::run_steer;
+pub use steer_setup::SteerOptions;

@@ -2,9 +2,10 @@
 //! --board-port` serves the simulated device with the bench's stages in real time and a
 //! free-running tracker over the world, which takes each piece the board finished. After
 //! `needle motion arm` and `home`, `needle steer --tcp BOARD` (no `--robot`) has the board plan,
-//! steer and move the paper's insertion; the host relays poses sampled after each piece ended.
+//! steer and move the paper's insertion (at the bench's 10 mm/s, so it takes seconds); the host
+//! relays poses sampled after each piece ended.
 //! The insertion ends as the host's simulation of the same board ends (`needle_sim::driven_loop`
-//! with the in-process controller), bit for bit; the e-stop over the link ends it stopped.
+//! with the in-process controller), bit for bit; Ctrl-C stops the board where it is.
 
 mod lab_support;
 
@@ -88,10 +89,19 @@ impl Drop for BoardLab {
     }
 }
 
-/// The host's simulation of the same board: the paper planned as `needle steer` plans it, the
+/// The paper's scenario with the bench's fastest insertion (10 mm/s), so that a real-time
+/// insertion takes seconds: a file of its own.
+fn fast_paper(name: &str) -> String {
+    let text = std::fs::read_to_string(example("paper")).unwrap();
+    let path = temp_path(name);
+    std::fs::write(&path, format!("{text}\n[driver]\ninsert_speed = 10.0\n")).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+/// The host's simulation of the same board: `file` planned as `needle steer` plans it, the
 /// world of `seed` on the board's pieces, the in-process controller.
-fn host_simulation(seed: u64) -> needle_sim::ClosedRun {
-    let file = example("paper");
+fn host_simulation(file: &str, seed: u64) -> needle_sim::ClosedRun {
+    let file = std::path::PathBuf::from(file);
     let request = needle_simulate::request::Request {
         steer: vec!["tracking_lost_after_mm=2".into()],
         ..Default::default()
@@ -119,7 +129,7 @@ fn host_simulation(seed: u64) -> needle_sim::ClosedRun {
 
 #[test]
 fn the_board_steers_the_papers_insertion_from_relayed_poses() {
-    let file = example("paper").to_str().unwrap().to_string();
+    let file = fast_paper("board-paper.toml");
     let mut lab = BoardLab::start(&file, 3);
     // Nothing moves before an explicit arm and homing.
     let (code, refused) = lab.steer(&file, &[]);
@@ -132,7 +142,7 @@ fn the_board_steers_the_papers_insertion_from_relayed_poses() {
     let (code, v) = lab.steer(&file, &["--log", log.to_str().unwrap()]);
     assert_eq!((code, &v["outcome"]), (0, &Value::from("reached")), "{v}");
     let truth = lab.next_run();
-    let expected = host_simulation(3);
+    let expected = host_simulation(&file, 3);
     assert_eq!(
         truth["target_error"].as_f64().map(|e| e as f32),
         Some(expected.run.target_error),
@@ -154,7 +164,7 @@ fn the_board_steers_the_papers_insertion_from_relayed_poses() {
 /// `stopped` (`interrupted`, exit 5), and the stage stands where it stopped, short of the plan.
 #[test]
 fn ctrl_c_stops_the_board_mid_insertion() {
-    let file = example("paper").to_str().unwrap().to_string();
+    let file = fast_paper("board-ctrl-c.toml");
     let lab = BoardLab::start(&file, 4);
     lab.motion("arm");
     lab.motion("home");
@@ -172,7 +182,7 @@ fn ctrl_c_stops_the_board_mid_insertion() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_secs(4));
+    std::thread::sleep(std::time::Duration::from_secs(3));
     let killed = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
@@ -180,7 +190,8 @@ fn ctrl_c_stops_the_board_mid_insertion() {
     assert!(killed.success());
     let out = child.wait_with_output().unwrap();
     let v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
-    assert_eq!(out.status.code(), Some(5), "{v}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{v} {err}");
     assert_eq!(
         (&v["outcome"], &v["stop_reason"]),
         (&Value::from("stopped"), &Value::from("interrupted")),
@@ -195,4 +206,13 @@ fn ctrl_c_stops_the_board_mid_insertion() {
     );
     let depth = s["insertion_mm"].as_f64().unwrap();
     assert!(depth > 1.0 && depth < 80.0, "stopped mid-insertion: {s}");
+}
+
+/// Readings in the insertion log so far.
+fn log_lines_now(path: &std::path::Path) -> usize {
+    std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .filter(|l| l.contains("\"reading\""))
+        .count()
 }

@@ -45,6 +45,12 @@ impl super::DeviceService {
 }
 
 impl Core {
+    /// Forgets the driven insertion (steering starts again: the host moves the needle until a
+    /// new `SteerDrive`).
+    pub(super) fn stop_driving(&mut self) {
+        self.driven = Driven::Off;
+    }
+
     /// Starts driving the insertion steered under plan `id`: the plan's speeds and soft limits
     /// taken, the first piece queued. Answered by the motion status.
     pub(super) fn drive_start(&mut self, id: u16, piece_mm: f32, tx: &mut dyn FnMut(&[u8])) {

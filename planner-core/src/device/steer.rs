@@ -37,7 +37,7 @@ impl Core {
             Ok(steering) => {
                 let steps = steering.steps().iter().copied().collect();
                 self.steering = Steered::On { plan: id, steering };
-                self.driven = super::drive::Driven::Off;
+                self.stop_driving();
                 self.answer(id, ReplyBody::SteerStarted { steps }, None, max_len, tx);
             }
             Err(fault) => self.fault(id, fault, tx),
