@@ -315,15 +315,40 @@ pub fn closed_loop_observed<C: Controller>(
         }
     }
     let stats = controller.stats().map_err(ClosedLoopError::Controller)?;
-    Ok(ClosedRun {
-        run: finish(&world, planned, seed),
-        stop_reason: match stop {
-            Some(StopReason::TargetReached) => None,
-            Some(reason) => Some(reason),
-            None => Some(StopReason::Missed),
-        },
+    let ended = Ended {
+        stop,
         predicted_miss_mm,
         stats,
         replan_evaluations,
-    })
+    };
+    Ok(ended.run(&world, planned, seed))
+}
+
+/// How a closed loop ended, as its controller said.
+pub(crate) struct Ended {
+    /// The controller's stop; `None`: the steps ran out first.
+    pub stop: Option<StopReason>,
+    /// Its predicted miss at the stop.
+    pub predicted_miss_mm: Option<f32>,
+    /// Its counters.
+    pub stats: SteerStats,
+    /// Path evaluations of each reading that replanned.
+    pub replan_evaluations: Vec<u32>,
+}
+
+impl Ended {
+    /// The run in `world` that ended so.
+    pub(crate) fn run(self, world: &World, planned: &Planned, seed: u64) -> ClosedRun {
+        ClosedRun {
+            run: finish(world, planned, seed),
+            stop_reason: match self.stop {
+                Some(StopReason::TargetReached) => None,
+                Some(reason) => Some(reason),
+                None => Some(StopReason::Missed),
+            },
+            predicted_miss_mm: self.predicted_miss_mm,
+            stats: self.stats,
+            replan_evaluations: self.replan_evaluations,
+        }
+    }
 }

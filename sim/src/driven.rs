@@ -8,8 +8,8 @@
 //! board (no axes), the run is what a board's should be, bit for bit: the host's simulation of
 //! the board's insertion.
 
-use crate::closed::{ClosedLoopError, ClosedRun, Conditions, Tracker};
-use crate::run::{finish, Planned};
+use crate::closed::{ClosedLoopError, ClosedRun, Conditions, Ended, Tracker};
+use crate::run::Planned;
 use crate::world::{World, WorldError};
 use planner_core::execute::pieces::Pieces;
 use planner_core::execute::schedule::Schedule;
@@ -111,15 +111,11 @@ pub fn driven_loop<B: Board>(
         }
     }
     let stats = board.stats().map_err(ClosedLoopError::Controller)?;
-    Ok(ClosedRun {
-        run: finish(&world, planned, seed),
-        stop_reason: match stop {
-            Some(StopReason::TargetReached) => None,
-            Some(reason) => Some(reason),
-            None => Some(StopReason::Missed),
-        },
+    let ended = Ended {
+        stop,
         predicted_miss_mm,
         stats,
         replan_evaluations,
-    })
+    };
+    Ok(ended.run(&world, planned, seed))
 }

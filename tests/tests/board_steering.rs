@@ -112,6 +112,17 @@ fn board(s: &Scenario, config: &SteerConfig) -> (SimBoard, Schedule) {
     (b, sched)
 }
 
+/// A reading without a pose (the board fills in its depth and roll).
+fn blind(seq: u32) -> TipMeasurement {
+    TipMeasurement {
+        seq,
+        depth_mm: 0.0,
+        base_deg: 0.0,
+        pose: None,
+        target: None,
+    }
+}
+
 fn conditions<'a>(p: &'a Perturbation, faults: &'a TrackerFaults) -> Conditions<'a> {
     static NO_EFFECTS: std::sync::OnceLock<WorldEffects> = std::sync::OnceLock::new();
     Conditions {
@@ -216,13 +227,7 @@ fn the_e_stop_input_ends_a_board_driven_insertion_where_it_is() {
     // Not a step more, and the insertion cannot go on: a reading is refused.
     b.advance(500);
     assert_eq!(b.status().unwrap().position, fault.position);
-    let m = TipMeasurement {
-        seq: 1000,
-        depth_mm: 0.0,
-        base_deg: 0.0,
-        pose: None,
-        target: None,
-    };
+    let m = blind(1000);
     assert!(matches!(
         b.client.steer(&m),
         Err(LinkError::Device(Fault::Motion(MotionError::Faulted(
@@ -241,13 +246,7 @@ fn a_reading_while_the_piece_moves_is_refused_and_a_repeat_is_answered_again() {
     // The answer was lost and the host asks again: the piece is not queued twice.
     let again = b.client.steer_drive(1.0).expect("answered again");
     assert_eq!(again.moves_left, 1);
-    let m = TipMeasurement {
-        seq: 1,
-        depth_mm: 0.0,
-        base_deg: 0.0,
-        pose: None,
-        target: None,
-    };
+    let m = blind(1);
     assert!(matches!(
         b.client.steer(&m),
         Err(LinkError::Device(Fault::PieceMoving))

@@ -9,7 +9,7 @@
 
 mod lab_support;
 
-use lab_support::{ending, log_lines, temp_path, wire_support};
+use lab_support::{ending, log_lines, spawn, temp_path};
 use needle_e2e::{example, needle};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
@@ -25,23 +25,11 @@ struct BoardLab {
 
 impl BoardLab {
     fn start(file: &str, seed: u64) -> BoardLab {
-        let mut child = Command::new(wire_support::hil_sim_bin())
-            .args(["--lab", file, "--tracker-port", "0", "--board-port", "0"])
-            .args(["--real-time", "--tracker-rate", "200"])
-            .args(["--seed", &seed.to_string()])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start hil-sim --lab --board-port");
-        let mut runs = BufReader::new(child.stdout.take().expect("stdout"));
-        let mut line = String::new();
-        runs.read_line(&mut line).expect("hil-sim prints its ports");
-        let words: Vec<&str> = line.split_whitespace().collect();
-        assert_eq!(words.len(), 4, "`tracker ADDRESS board ADDRESS`: {line}");
-        assert_eq!((words[0], words[2]), ("tracker", "board"), "{line}");
+        let extra = ["--real-time", "--tracker-rate", "200"];
+        let (child, runs, tracker, board) = spawn(file, seed, "board", &extra);
         BoardLab {
-            tracker: words[1].to_string(),
-            board: words[3].to_string(),
+            tracker,
+            board,
             child,
             runs,
         }
@@ -168,6 +156,8 @@ fn ctrl_c_stops_the_board_mid_insertion() {
     let lab = BoardLab::start(&file, 4);
     lab.motion("arm");
     lab.motion("home");
+    let log = temp_path("board-ctrl-c.jsonl");
+    let _ = std::fs::remove_file(&log);
     let child = needle()
         .args([
             "steer",
@@ -177,12 +167,17 @@ fn ctrl_c_stops_the_board_mid_insertion() {
             "--tcp",
             &lab.board,
         ])
-        .args(["--tilt-set", "--json"])
+        .args(["--tilt-set", "--json", "--log", log.to_str().unwrap()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_secs(3));
+    // Under way: a few readings answered (planning may take seconds on a loaded machine).
+    let start = std::time::Instant::now();
+    while log_lines_now(&log) < 5 {
+        assert!(start.elapsed().as_secs() < 120, "no readings");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
     let killed = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()

@@ -23,24 +23,10 @@ pub struct Lab {
 impl Lab {
     /// Starts the lab of `file` on free ports, first insertion in the world of `seed`.
     pub fn start(file: &str, seed: u64, extra: &[&str]) -> Lab {
-        let seed = seed.to_string();
-        let mut child = Command::new(wire_support::hil_sim_bin())
-            .args(["--lab", file, "--tracker-port", "0", "--robot-port", "0"])
-            .args(["--seed", &seed])
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start hil-sim --lab");
-        let mut runs = BufReader::new(child.stdout.take().expect("stdout"));
-        let mut line = String::new();
-        runs.read_line(&mut line).expect("hil-sim prints its ports");
-        let words: Vec<&str> = line.split_whitespace().collect();
-        assert_eq!(words.len(), 4, "`tracker ADDRESS robot ADDRESS`: {line}");
-        assert_eq!((words[0], words[2]), ("tracker", "robot"), "{line}");
+        let (child, runs, tracker, robot) = spawn(file, seed, "robot", extra);
         Lab {
-            tracker: words[1].to_string(),
-            robot: words[3].to_string(),
+            tracker,
+            robot,
             child,
             runs,
         }
@@ -114,6 +100,35 @@ impl Lab {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// Starts `hil-sim --lab FILE` on free ports with a `peer` (`robot`, or `board`: a driver board,
+/// `--board-port`), first insertion in the world of `seed`: the process, its stdout (one JSON line
+/// per insertion), the tracker's address and the peer's.
+pub fn spawn(
+    file: &str,
+    seed: u64,
+    peer: &str,
+    extra: &[&str],
+) -> (Child, BufReader<ChildStdout>, String, String) {
+    let seed = seed.to_string();
+    let peer_port = format!("--{peer}-port");
+    let mut child = Command::new(wire_support::hil_sim_bin())
+        .args(["--lab", file, "--tracker-port", "0", &peer_port, "0"])
+        .args(["--seed", &seed])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start hil-sim --lab");
+    let mut runs = BufReader::new(child.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    runs.read_line(&mut line).expect("hil-sim prints its ports");
+    let words: Vec<&str> = line.split_whitespace().collect();
+    assert_eq!(words.len(), 4, "`tracker ADDRESS {peer} ADDRESS`: {line}");
+    assert_eq!((words[0], words[2]), ("tracker", peer), "{line}");
+    let (tracker, address) = (words[1].to_string(), words[3].to_string());
+    (child, runs, tracker, address)
 }
 
 /// Runs a `needle steer ... --json` command: its exit status and the exactly one JSON object it
