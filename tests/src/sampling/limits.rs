@@ -6,6 +6,7 @@ use crate::reference::frame::{entry_basis, heading_angles, insertion, Frame, V3}
 use needle_sim::random::Draw;
 use planner_core::model::scenario::Workspace;
 use planner_core::{Scenario, SegmentKind};
+use std::sync::Arc;
 
 /// Added to the scenario's smallest clearance, so that a sampled path is not one the planner's
 /// f32 check would refuse by rounding (mm).
@@ -13,6 +14,22 @@ pub const CLEARANCE_MARGIN: f64 = 0.05;
 
 /// Taken off the tilt bound, the arc and the line limits for the same reason (relative).
 const BOUND_MARGIN: f64 = 1e-6;
+
+/// Obstacles the sampler keeps clear of besides the spheres: a label map's distance field (mm
+/// from a point to the nearest obstacle), looked at along each segment.
+#[derive(Clone)]
+pub struct DistanceField {
+    /// The distance (mm) at a point.
+    pub at: Arc<dyn Fn(V3) -> f64 + Send + Sync>,
+    /// Spacing of the points looked at along a segment (mm).
+    pub step: f64,
+}
+
+impl std::fmt::Debug for DistanceField {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DistanceField {{ step: {} }}", self.step)
+    }
+}
 
 /// The sampler's view of a scenario.
 #[derive(Clone, Debug)]
@@ -41,6 +58,8 @@ pub struct Limits {
     pub max_segments: usize,
     /// The longest path the needle can be pushed along: its insertable length (mm).
     pub max_length: f64,
+    /// Obstacles given as a distance field, if any (kept `clearance` from too).
+    pub field: Option<DistanceField>,
 }
 
 impl Limits {
@@ -65,6 +84,7 @@ impl Limits {
             plane: s.options.workspace == Workspace::PlaneYz,
             max_segments: usize::from(s.options.max_control_degree),
             max_length: f64::from(s.needle.length) * shrink,
+            field: None,
         }
     }
 
@@ -79,7 +99,8 @@ impl Limits {
     /// Smallest clearance to any obstacle surface along a segment leaving `f` (infinite without
     /// obstacles).
     pub fn clearance_of(&self, f: &Frame, kind: SegmentKind, len: f64) -> f64 {
-        self.obstacles
+        let spheres = self
+            .obstacles
             .iter()
             .map(|&(c, r)| {
                 let d = match kind {
@@ -88,7 +109,21 @@ impl Limits {
                 };
                 d - r
             })
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, f64::min);
+        let Some(field) = &self.field else {
+            return spheres;
+        };
+        let n = (len.abs() / field.step).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|i| {
+                let s = len * i as f64 / n as f64;
+                let at = match kind {
+                    SegmentKind::Arc => f.arc(s, self.rho),
+                    SegmentKind::Line => f.line(s),
+                };
+                (field.at)(at.p)
+            })
+            .fold(spheres, f64::min)
     }
 
     /// The insertion frame for the angles `(theta1, theta2)` (radians), as the reference and the

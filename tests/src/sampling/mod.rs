@@ -20,7 +20,7 @@ pub mod route;
 pub mod shorten;
 pub mod tree;
 
-pub use limits::{Limits, CLEARANCE_MARGIN};
+pub use limits::{DistanceField, Limits, CLEARANCE_MARGIN};
 use planner_core::{Scenario, SegmentKind};
 use shorten::{shorten, Route};
 
@@ -106,16 +106,20 @@ impl Budget {
 
 /// The shortest path the sampler finds for `scenario` with `budget` from `seed`, or `None`.
 pub fn sample(scenario: &Scenario, budget: Budget, seed: u64) -> Option<SampledPath> {
-    let l = Limits::new(scenario);
+    sample_within(&Limits::new(scenario), budget, seed)
+}
+
+/// [`sample`] within `l` (a scenario's limits, perhaps with a distance field).
+pub fn sample_within(l: &Limits, budget: Budget, seed: u64) -> Option<SampledPath> {
     let mut best: Option<SampledPath> = None;
     let mut nodes = 0;
     for k in 0..budget.trees as u64 {
         let tree_seed = seed.wrapping_mul(0x9E37_79B9).wrapping_add(k);
-        let Some(found) = tree::grow(&l, budget.iterations, tree_seed) else {
+        let Some(found) = tree::grow(l, budget.iterations, tree_seed) else {
             continue;
         };
         nodes = nodes.max(found.nodes);
-        let Some(p) = shortened(&l, &found, budget.shortening, tree_seed) else {
+        let Some(p) = shortened(l, &found, budget.shortening, tree_seed) else {
             continue;
         };
         // A path longer than the needle cannot be inserted: the planner's check refuses it too.
