@@ -33,6 +33,9 @@ pub enum Quantity {
     /// Most instructions of one step of the motion core (`step_instructions.max`), on a board
     /// that drives axes.
     StepInterrupt,
+    /// Most instructions of one move request of the paper's schedule
+    /// (`step_instructions.move_request`), on a board that drives axes.
+    MoveRequest,
 }
 
 /// How a budget's figure is counted.
@@ -128,6 +131,15 @@ pub const BUDGETS: &[Budget] = &[
         protects: "each step of either axis computed in about 12 µs at 168 MHz, which leaves \
                    room for 30 kHz step rates on a board that drives axes",
     },
+    Budget {
+        name: "move request",
+        quantity: Quantity::MoveRequest,
+        unit: Unit::Instructions,
+        limit: 200_000,
+        protects: "a schedule's move request (every move checked against the soft limits and \
+                   queued, the first segment set up) answered in about 1.2 ms at 168 MHz, under \
+                   the link watchdog's 200 ms by far",
+    },
 ];
 
 impl Unit {
@@ -169,12 +181,18 @@ impl Budget {
             Quantity::SpheresPlan => plan("spheres256"),
             Quantity::SteeringReading => board.replan_instructions.iter().map(|(_, r)| r.max).max(),
             Quantity::StepInterrupt => board.steps.map(|s| s.max),
+            Quantity::MoveRequest => board.steps.map(|s| s.move_request),
         }
     }
 
-    /// Whether the budget holds for the board: the step interrupt's only where it drives axes.
+    /// Whether the budget holds for the board: the step interrupt's and the move request's
+    /// only where it drives axes.
     pub fn applies(&self, board: &BoardFigures) -> bool {
-        self.quantity != Quantity::StepInterrupt || board.steps.is_some()
+        let motion = matches!(
+            self.quantity,
+            Quantity::StepInterrupt | Quantity::MoveRequest
+        );
+        !motion || board.steps.is_some()
     }
 }
 
@@ -347,6 +365,7 @@ pub(crate) mod tests {
                 steps: 163_000,
                 max: 900,
                 sum: 97_800_000,
+                move_request: 30_000,
             }),
         }
     }
@@ -365,6 +384,7 @@ pub(crate) mod tests {
             Quantity::SpheresPlan => f.instructions[3].1 = above,
             Quantity::SteeringReading => f.replan_instructions[1].1.max = above,
             Quantity::StepInterrupt => f.steps.as_mut().unwrap().max = above,
+            Quantity::MoveRequest => f.steps.as_mut().unwrap().move_request = above,
         }
         f
     }
@@ -389,6 +409,7 @@ pub(crate) mod tests {
             Quantity::SpheresPlan,
             Quantity::SteeringReading,
             Quantity::StepInterrupt,
+            Quantity::MoveRequest,
         ];
         assert_eq!(quantities.len(), BUDGETS.len(), "a budget left untested");
         for quantity in quantities {

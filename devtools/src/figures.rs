@@ -66,6 +66,7 @@ impl BoardFigures {
                 "max": s.max,
                 "sum": s.sum,
                 "mean": s.mean(),
+                "move_request": s.move_request,
             })),
         })
     }
@@ -117,6 +118,7 @@ impl BoardFigures {
                 steps: number(s, "steps")?,
                 max: number(s, "max")?,
                 sum: number(s, "sum")?,
+                move_request: number(s, "move_request")?,
             }),
         };
         Ok(BoardFigures {

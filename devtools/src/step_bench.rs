@@ -3,7 +3,7 @@
 //! (`Controller::next_step`, the work of the step timer's interrupt) as a region of the
 //! instruction-count plugin, one report per homing or move.
 
-use crate::qemu::Qemu;
+use crate::qemu::{Qemu, Report};
 use anyhow::{anyhow, bail, Context, Result};
 use needle_link::{Client, LinkError, Transport};
 use needle_motion::{FaultCause, State};
@@ -21,6 +21,9 @@ pub struct StepFigures {
     pub max: u64,
     /// Instructions of all the steps.
     pub sum: u64,
+    /// Instructions of the costliest move request of the paper's schedule (decoded, every move
+    /// checked against the soft limits and queued, the first segment set up, answered).
+    pub move_request: u64,
 }
 
 impl StepFigures {
@@ -79,15 +82,19 @@ fn step_runs(qemu: &Qemu, before: usize) -> Result<Option<StepFigures>> {
     let mut seen = 0;
     loop {
         let reports = qemu.reports()?;
-        let runs = &reports[before.min(reports.len())..];
-        if runs.len() >= 2 && runs.len() == seen {
+        let since = &reports[before.min(reports.len())..];
+        // A move request is one region; a homing or a move's steps are thousands.
+        let (requests, runs): (Vec<&Report>, Vec<&Report>) =
+            since.iter().partition(|r| r.regions == 1);
+        if runs.len() >= 2 && !requests.is_empty() && since.len() == seen {
             return Ok(Some(StepFigures {
                 steps: runs.iter().map(|r| r.regions).sum(),
                 max: runs.iter().map(|r| r.largest).max().unwrap_or(0),
                 sum: runs.iter().map(|r| r.sum).sum(),
+                move_request: requests.iter().map(|r| r.sum).max().unwrap_or(0),
             }));
         }
-        seen = runs.len();
+        seen = since.len();
         if Instant::now() > deadline {
             bail!(
                 "the plugin reported {} step runs, not 2 or more (homing, move)",

@@ -90,16 +90,18 @@ pub fn run(
         let n = link.read(&mut rx);
         inbox.take(&rx[..n], service);
         let was_planning = service.is_planning();
-        let readings = service.stats().steer_readings;
+        let (readings, moves) = (service.stats().steer_readings, service.stats().motion_moves);
         marker::begin();
         service.poll(&mut |bytes| outbox.push(bytes, link));
         let planning = service.is_planning();
-        // A steering reading (one estimate update and at most one replan) is its own region.
+        // A steering reading (one estimate update and at most one replan) is its own region, and
+        // so is a move request (every move checked against the soft limits, the first set up).
         let steered = service.stats().steer_readings != readings;
-        if was_planning || planning || steered {
+        let moved = service.stats().motion_moves != moves;
+        if was_planning || planning || steered || moved {
             marker::end();
         }
-        if (was_planning && !planning) || steered {
+        if (was_planning && !planning) || steered || moved {
             marker::report();
         }
         outbox.flush(link);

@@ -69,6 +69,8 @@ pub struct DeviceStats {
     pub plans: u32,
     /// Steering readings answered.
     pub steer_readings: u32,
+    /// `Move` requests the motion core took (a board measures each one's work).
+    pub motion_moves: u32,
 }
 
 /// Everything but the frame decoder, so a decoded payload (borrowed from the decoder) can be
@@ -159,6 +161,7 @@ impl DeviceService {
                     overruns: 0,
                     plans: 0,
                     steer_readings: 0,
+                    motion_moves: 0,
                 },
                 steering: steer::Steered::Off,
                 steer_answer: [0; MAX_STEER_ANSWER],

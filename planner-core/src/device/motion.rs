@@ -86,6 +86,9 @@ impl Core {
             }
             Motion::Off => return self.fault(id, Fault::NoMotion, tx),
         };
+        if matches!(req, MotionRequest::Move { .. }) && matches!(body, ReplyBody::Motion(_)) {
+            self.stats.motion_moves = self.stats.motion_moves.wrapping_add(1);
+        }
         self.send(id, body, tx);
     }
 }
