@@ -267,3 +267,45 @@ fn a_reading_while_the_piece_moves_is_refused_and_a_repeat_is_answered_again() {
         ));
     }
 }
+
+/// The generated family `needle benchmark` steers (`needle_scenario::unseen`, seeds 101-108), as
+/// plain files plan them: wherever the host plans one, the board steers it as the host's
+/// simulation of the same board does, bit for bit, and no true path enters an obstacle.
+#[test]
+fn the_board_steers_the_unseen_family_as_the_host_simulates_it() {
+    let config = SteerConfig::DEFAULT;
+    let p = Perturbation::default();
+    let faults = TrackerFaults::default();
+    let world = conditions(&p, &faults);
+    let (mut steered, mut reached) = (0, 0);
+    for seed in 101..=108 {
+        let s = needle_scenario::unseen::unseen_scenario(seed);
+        let Some(best) = plan(&s).ok().and_then(|r| r.best().cloned()) else {
+            continue;
+        };
+        let planned = Planned::of(&s, &best);
+        let (mut b, sched) = board(&s, &config);
+        let on_board = driven_loop(&s, &planned, &sched, &world, &mut b, seed, 1.0)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let mut here = in_process(&s, &sched, &config).unwrap();
+        let expected = driven_loop(&s, &planned, &sched, &world, &mut here, seed, 1.0).unwrap();
+        assert!(
+            on_board == expected,
+            "seed {seed}: the board's run is not the host's"
+        );
+        assert!(!on_board.run.collided, "seed {seed}: into an obstacle");
+        let end = b.status().unwrap();
+        assert!(
+            (end.position[0] - inserted(&on_board)).abs() <= 1.0 / STEPS_PER_MM,
+            "seed {seed}: {end:?}"
+        );
+        steered += 1;
+        reached += usize::from(on_board.stop_reason.is_none());
+        println!(
+            "unseen {seed}: {:.3} mm, {:?}, {} readings",
+            on_board.run.target_error, on_board.stop_reason, on_board.stats.readings
+        );
+    }
+    println!("{reached} of {steered} board-steered insertions reached");
+    assert!(steered >= 4, "only {steered} of the family planned");
+}
