@@ -41,6 +41,12 @@ fn symbol(file: &ElfFile32<'_, LittleEndian>, name: &str) -> Result<u32> {
     anyhow::bail!("symbol {name} not found (is this a cortex-m-rt image?)")
 }
 
+/// The address of the symbol `name` (an unmangled static, say) in the image at `path`.
+pub fn symbol_address(path: &Path, name: &str) -> Result<u32> {
+    let data = read(path)?;
+    symbol(&parse(&data)?, name)
+}
+
 /// A function of the image: start address (Thumb bit cleared), size, demangled path.
 pub struct Function {
     /// First byte.

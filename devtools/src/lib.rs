@@ -1,6 +1,6 @@
 //! Developer tooling of needle-planner, kept out of the `needle` binary: what the firmware costs
 //! on the microcontroller ([`device_bench`], run as `cargo xtask device-bench`; the [`figures`]
-//! it measures) and what it may cost ([`budgets`]), the QEMU run it drives ([`qemu`]), reading
+//! it measures) and what it may cost ([`budgets`]), the QEMU run it drives ([`qemu`]) and a debugger's write into it ([`gdb_remote`]), reading
 //! the firmware image ([`elf`], with the `object` and `rustc-demangle` crates), the steering
 //! readings' and the step interrupt's counts ([`replan_bench`], [`step_bench`]), where the counted
 //! instructions go ([`profile`]), and the firmware and plugin builds that device-bench and the
@@ -25,6 +25,7 @@ pub mod device_bench;
 pub mod elf;
 pub mod figures;
 pub mod firmware_artifacts;
+pub mod gdb_remote;
 pub mod profile;
 pub mod qemu;
 pub mod replan_bench;

@@ -1,12 +1,15 @@
 //! The firmware on QEMU's mps2-an386 drives simulated axes: over its emulated UART the host
 //! arms, homes and moves the paper's schedule, and the board ends on the step where the host's
 //! simulation of the same moves (`hil-sim --axes`) ends; an e-stop sent over the link
-//! mid-insertion stops both axes at once and latches until cleared.
+//! mid-insertion stops both axes at once and latches until cleared; so does the e-stop input
+//! pressed mid-insertion (written through QEMU's debugger stub), which no clear lifts while it
+//! stays pressed.
 
 mod firmware_support;
 
 use firmware_support::{build_firmware, emulator_ready, Qemu};
 use hil_sim::{answer, DeviceService, SimulatedAxes, IDENTITY};
+use needle_devtools::{elf, gdb_remote};
 use needle_link::{open, Client, ClientConfig, LinkError, LinkTarget, Transport};
 use needle_motion::{FaultCause, MotionError, State};
 use planner_core::execute::schedule::{schedule, Op, Step};
@@ -178,7 +181,7 @@ fn the_qemu_board_moves_the_papers_schedule_like_the_host_and_obeys_an_estop() {
         .into_iter()
         .collect(),
     };
-    ask(&mut link, spin);
+    ask(&mut link, spin.clone());
     // 600 ms in, the host's heartbeat every 20 ms (silent for 200 ms, the board would hold).
     for _ in 0..30 {
         std::thread::sleep(Duration::from_millis(20));
@@ -209,5 +212,58 @@ fn the_qemu_board_moves_the_papers_schedule_like_the_host_and_obeys_an_estop() {
     );
     let cleared = ask(&mut link, MotionRequest::ClearFault);
     assert_eq!((cleared.state, cleared.homed), (State::Disarmed, false));
+
+    estop_input_stops_and_latches(&mut link, &qemu, &image, &spin);
     assert!(qemu.running(), "the firmware stopped QEMU (a fault)");
+}
+
+/// The e-stop input pressed while the needle goes in and spins: both axes stop at once, the
+/// fault latches, no clear lifts it while the input stays pressed; released, a clear does.
+fn estop_input_stops_and_latches(
+    link: &mut Link,
+    qemu: &Qemu,
+    image: &std::path::Path,
+    spin: &MotionRequest,
+) {
+    let input = elf::symbol_address(image, "ESTOP_INPUT").expect("the e-stop input's address");
+    let press = |v: u32| {
+        gdb_remote::write_word(&qemu.debugger, input, v)
+            .unwrap_or_else(|e| panic!("writing the e-stop input: {e:#}"))
+    };
+    ask(link, MotionRequest::Arm);
+    home(link);
+    ask(link, spin.clone());
+    for _ in 0..30 {
+        std::thread::sleep(Duration::from_millis(20));
+        ask(link, MotionRequest::Status);
+    }
+    let before = ask(link, MotionRequest::Status);
+    assert_eq!(before.state, State::Moving, "{before:?}");
+    press(1);
+    let stopped = ask(link, MotionRequest::Status);
+    let fault = stopped.last_fault.expect("the e-stop input is reported");
+    assert_eq!(
+        (stopped.state, fault.cause),
+        (State::Faulted, FaultCause::EStop)
+    );
+    assert!(
+        fault.position[0] >= before.position[0] && fault.position[0] < 10.0,
+        "stopped mid-insertion: {before:?} then {fault:?}"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(ask(link, MotionRequest::Status).position, fault.position);
+    assert_eq!(
+        refused(link.motion(MotionRequest::ClearFault)),
+        Fault::Motion(MotionError::CauseActive(FaultCause::EStop)),
+        "cleared while the e-stop is pressed"
+    );
+    assert_eq!(
+        refused(link.motion(MotionRequest::Arm)),
+        Fault::Motion(MotionError::Faulted(FaultCause::EStop))
+    );
+    press(0);
+    std::thread::sleep(Duration::from_millis(50));
+    let cleared = ask(link, MotionRequest::ClearFault);
+    assert_eq!((cleared.state, cleared.homed), (State::Disarmed, false));
+    assert_eq!(cleared.position, fault.position);
 }

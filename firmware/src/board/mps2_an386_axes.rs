@@ -6,11 +6,17 @@
 //! simulation of the same moves (`hil-sim --axes`) ends. Each step is a measured region for the
 //! instruction-count plugin, and each homing or move one report: the step interrupt's figures
 //! in `cargo xtask device-bench`.
+//!
+//! The e-stop input is the word [`ESTOP_INPUT`]: the emulated board has no pin a test can
+//! press, so a test writes the word through QEMU's debugger stub, as a probe would
+//! (`needle_devtools::gdb_remote`), and the board reads it every loop turn as it would read the
+//! pin (non-zero: pressed).
 
 use crate::axes::Axes;
 use crate::marker;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
+use core::sync::atomic::{AtomicU32, Ordering};
 use needle_motion::bench::{bench_config, bench_plant, run_for_with};
 use needle_motion::plant::Plant;
 use needle_motion::{Controller, SafetyConfig, State};
@@ -24,6 +30,12 @@ const RELOAD: u32 = 0x00FF_FFFF;
 /// machine) slows the simulated world down rather than making it jump, which the link
 /// watchdog would take for a silent host.
 const MAX_TURN_MS: u32 = 50;
+
+/// The e-stop input as wired: non-zero while pressed. Unmangled, so a debugger finds it by name
+/// in the image's symbols; an exported symbol also keeps the compiler from folding the reads
+/// of a word nothing in the firmware writes.
+#[no_mangle]
+pub static ESTOP_INPUT: AtomicU32 = AtomicU32::new(0);
 
 /// Simulated stages and the clock that runs them.
 pub struct SimulatedAxes {
@@ -70,6 +82,7 @@ impl Axes for SimulatedAxes {
         }
         self.ticks -= ms * (SYSCLK_HZ / 1000);
         let Some(core) = service.motion() else { return };
+        self.plant.estop = ESTOP_INPUT.load(Ordering::Relaxed) != 0;
         run_for_with(core, &mut self.plant, ms.min(MAX_TURN_MS), |c| {
             measured_step(c, &mut self.measured)
         });

@@ -52,21 +52,30 @@ pub struct Qemu {
     child: Child,
     /// `127.0.0.1:PORT` of the guest's UART.
     pub addr: String,
+    /// `127.0.0.1:PORT` of QEMU's debugger stub (`needle_devtools::gdb_remote` writes through it).
+    pub debugger: String,
+}
+
+/// Two distinct free local ports (both held until both are known).
+fn free_ports() -> (u16, u16) {
+    let bind = || TcpListener::bind("127.0.0.1:0").expect("a free local port");
+    let (a, b) = (bind(), bind());
+    let port = |l: &TcpListener| l.local_addr().expect("a bound port").port();
+    (port(&a), port(&b))
 }
 
 impl Qemu {
     /// Boots `image` on `machine` and waits until the UART's TCP server listens.
     pub fn start(machine: &str, image: &PathBuf) -> Qemu {
-        let port = TcpListener::bind("127.0.0.1:0")
-            .and_then(|l| l.local_addr())
-            .expect("a free local port")
-            .port();
+        let (port, gdb) = free_ports();
+        let debugger = format!("127.0.0.1:{gdb}");
         let child = Command::new("qemu-system-arm")
             .args(["-M", machine, "-display", "none", "-monitor", "none"])
             .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
             .arg(image)
             .arg("-serial")
             .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"))
+            .args(["-gdb", &format!("tcp:{debugger}")])
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::null())
@@ -75,6 +84,7 @@ impl Qemu {
         let mut qemu = Qemu {
             child,
             addr: format!("127.0.0.1:{port}"),
+            debugger,
         };
         // A first connection starts the guest; closing it leaves QEMU listening for the next.
         let deadline = Instant::now() + Duration::from_secs(20);
