@@ -51,11 +51,6 @@ pub(crate) fn steer_on_board(
         .link
         .as_ref()
         .ok_or_else(|| anyhow!("no board to steer on"))?;
-    anyhow::ensure!(
-        a.registration_name.is_none(),
-        "--registration-name is not served with a driver board: give the registration as a \
-         file (--registration)"
-    );
     let setup = set_up(a)?;
     let config = session_config(a, &setup)?;
     let schedule = &setup.prepared.schedule;
@@ -145,13 +140,13 @@ impl<T: Transport> BoardSession<'_, T> {
             clock_offset_applied: false,
             robot_stopped: false,
         };
-        let ending = match self.take_posture(start) {
-            Err(why) => {
+        let ending = match self.await_registration().map(|()| self.take_posture(start)) {
+            Err(ending) | Ok(Ok(Some(ending))) => ending,
+            Ok(Err(why)) => {
                 outcome.why = Some(why);
                 Ending::PostureRefused
             }
-            Ok(Some(ending)) => ending,
-            Ok(None) => self.steer(steps, &mut outcome),
+            Ok(Ok(None)) => self.steer(steps, &mut outcome),
         };
         // At rest after a piece, or mid-piece: the board decelerates and drops its moves.
         outcome.robot_stopped = self.client.motion(MotionRequest::Stop).is_ok() && self.at_rest();
@@ -178,6 +173,41 @@ impl<T: Transport> BoardSession<'_, T> {
         );
         self.slicer.state(outcome.stop_reason, true);
         outcome
+    }
+
+    /// With `--registration-name`: waits for the stream's first registration, which then maps
+    /// every reading (the board does not move before it); `Err` the ending if it does not come.
+    fn await_registration(&mut self) -> Result<(), Ending> {
+        let Some(name) = self.config.registration_name.clone() else {
+            return Ok(());
+        };
+        let deadline = Instant::now() + self.config.registration_timeout;
+        loop {
+            let received = self.state().registration;
+            if let Some(reg) = received {
+                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
+                self.log.write(
+                    "registration",
+                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
+                );
+                self.config.registration = Some(reg);
+                return Ok(());
+            }
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                return Err(Ending::Interrupted);
+            }
+            if Instant::now() > deadline {
+                let waited_ms = self.config.registration_timeout.as_millis() as u64;
+                self.log.write(
+                    "no_registration",
+                    json!({ "name": name, "waited_ms": waited_ms }),
+                );
+                return Err(Ending::NoRegistration);
+            }
+            if let Ok(Event::TrackerClosed) = self.events.recv_timeout(POLL) {
+                return Err(Ending::TrackerDisconnected);
+            }
+        }
     }
 
     /// Turns the shaft to the plan's roll: `Ok(None)` once there, `Ok(Some)` when the board
@@ -248,15 +278,36 @@ impl<T: Transport> BoardSession<'_, T> {
             };
             let latency_ms = tip.at.elapsed().as_secs_f64() * 1e3;
             outcome.latencies_ms.push(latency_ms);
+            // Asked while the board moves the next piece: the estimate the reading left.
+            let estimate = self.client.steer_estimate().ok();
             self.log.write(
                 "reading",
-                json!({ "measurement": m, "reply": reply, "latency_ms": latency_ms }),
+                json!({
+                    "measurement": m,
+                    "reply": reply,
+                    "latency_ms": latency_ms,
+                    "estimate": estimate,
+                }),
             );
+            self.show(estimate, &reply);
             if let Some(ending) = follow(&reply, &mut pieces, outcome) {
                 return ending;
             }
         }
         Ending::StepsRanOut
+    }
+
+    /// The board's estimated tip in Slicer, and the continuation it planned from there.
+    fn show(&mut self, estimate: Option<Pose>, reply: &SteerReply) {
+        let Some(tip) = estimate.and_then(|e| e.frame()) else {
+            return;
+        };
+        let replaced = match &reply.command {
+            Command::Replace(s) => Some(&s[..]),
+            _ => None,
+        };
+        self.slicer
+            .reading(&tip, replaced, self.config.arc_radius_mm);
     }
 
     /// Waits for the piece moving to end: the moment a status said so, or why the insertion

@@ -215,8 +215,8 @@ pub trait LabController {
     fn update(&mut self, m: &TipMeasurement) -> Result<SteerReply, String>;
     /// Its counters, if it can still give them.
     fn stats(&mut self) -> Option<SteerStats>;
-    /// Its estimated tip, if it shares it (a device does not).
-    fn estimated_tip(&self) -> Option<Frame>;
+    /// Its estimated tip after the last reading, if it can still give it (a device is asked).
+    fn estimated_tip(&mut self) -> Option<Frame>;
 }
 
 impl LabController for Steering {
@@ -226,7 +226,7 @@ impl LabController for Steering {
     fn stats(&mut self) -> Option<SteerStats> {
         Some(Steering::stats(self))
     }
-    fn estimated_tip(&self) -> Option<Frame> {
+    fn estimated_tip(&mut self) -> Option<Frame> {
         Some(self.estimate().tip)
     }
 }
@@ -238,7 +238,7 @@ impl<T: Transport> LabController for LinkController<'_, T> {
     fn stats(&mut self) -> Option<SteerStats> {
         needle_sim::Controller::stats(self).ok()
     }
-    fn estimated_tip(&self) -> Option<Frame> {
-        None
+    fn estimated_tip(&mut self) -> Option<Frame> {
+        self.0.steer_estimate().ok()?.frame()
     }
 }

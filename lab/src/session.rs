@@ -477,7 +477,12 @@ impl<'a> Session<'a> {
             Command::Replace(s) => Some(&s[..]),
             _ => None,
         };
-        if let Some(tip) = self.controller.estimated_tip() {
+        if let Some(tip) = self
+            .slicer
+            .shown()
+            .then(|| self.controller.estimated_tip())
+            .flatten()
+        {
             self.slicer
                 .reading(&tip, replaced, self.config.arc_radius_mm);
         }

@@ -163,6 +163,11 @@ impl Slicer {
         }
     }
 
+    /// Whether anything drawn may reach a viewer (else the drawing need not be computed).
+    pub fn shown(&self) -> bool {
+        self.viewers.active()
+    }
+
     /// The estimated tip, and the new continuation from it when the controller replaced the
     /// steps (drawn on the nominal needle of arc radius `radius`).
     pub fn reading(&mut self, tip: &Frame, replaced: Option<&[Step]>, radius: f32) {

@@ -8,7 +8,7 @@ use crate::client::Client;
 use crate::error::LinkError;
 use crate::transport::Transport;
 use planner_core::execute::schedule::Steps;
-use planner_core::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
+use planner_core::steer::{Pose, SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
 use planner_core::wire::{Fault, MotionStatus, ReplyBody, RequestBody};
 
 /// A steering answer: here, or announced for fetching.
@@ -107,10 +107,25 @@ impl<T: Transport> Client<T> {
 
     /// The device controller's counters, and its stop once it has stopped.
     pub fn steer_status(&mut self) -> Result<(SteerStats, Option<StopReason>), LinkError> {
+        self.steer_state()
+            .map(|(stats, stopped, _)| (stats, stopped))
+    }
+
+    /// Where the device controller estimates the tip after the last reading (a viewer's
+    /// drawing; the steering has it on the host).
+    pub fn steer_estimate(&mut self) -> Result<Pose, LinkError> {
+        self.steer_state().map(|(_, _, estimate)| estimate)
+    }
+
+    fn steer_state(&mut self) -> Result<(SteerStats, Option<StopReason>, Pose), LinkError> {
         self.begin();
         let id = self.steered_plan()?;
         self.exchange("steer status", id, &RequestBody::SteerStatus, |b| match b {
-            ReplyBody::SteerStatus { stats, stopped } => Some((*stats, *stopped)),
+            ReplyBody::SteerStatus {
+                stats,
+                stopped,
+                estimate,
+            } => Some((*stats, *stopped, *estimate)),
             _ => None,
         })
     }

@@ -149,6 +149,33 @@ fn exact_readings_steer_the_plan_to_the_target() {
     }
 }
 
+/// The pose a device reports of its estimate gives back the tip frame it came from (a viewer
+/// draws the continuation from it), along a 3-D insertion that rolls the bevel.
+#[test]
+fn a_reported_pose_gives_back_the_tip_frame() {
+    let s = space();
+    let mut frames = 0;
+    let mut tip = posture_frame(&s, &planned(&s));
+    for (kind, length) in pieces(SegmentKind::Arc, 30.0) {
+        tip = tip.advanced(kind, length, 63.7).rolled(0.7);
+        let back = Pose::of_frame(&tip).frame().expect("a bevel");
+        assert!((back.p - tip.p).norm() < 1e-6);
+        assert!(
+            (back.r - tip.r).norm() < 1e-5,
+            "{:?} vs {:?}",
+            back.r,
+            tip.r
+        );
+        frames += 1;
+    }
+    assert!(frames > 10);
+    let no_bevel = Pose {
+        bevel: None,
+        ..Pose::of_frame(&tip)
+    };
+    assert_eq!(no_bevel.frame(), None);
+}
+
 #[test]
 fn a_schedule_that_ends_short_is_missed_not_reached() {
     // The controller never replans for the target error here: the run ends where the schedule

@@ -9,7 +9,7 @@
 
 mod lab_support;
 
-use lab_support::{ending, log_lines, spawn, temp_path};
+use lab_support::{ending, log_lines, slicer_listener, spawn, temp_path};
 use needle_e2e::{example, needle};
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
@@ -24,8 +24,9 @@ struct BoardLab {
 }
 
 impl BoardLab {
-    fn start(file: &str, seed: u64) -> BoardLab {
-        let extra = ["--real-time", "--tracker-rate", "200"];
+    fn start(file: &str, seed: u64, flags: &[&str]) -> BoardLab {
+        let mut extra = vec!["--real-time", "--tracker-rate", "200"];
+        extra.extend_from_slice(flags);
         let (child, runs, tracker, board) = spawn(file, seed, "board", &extra);
         BoardLab {
             tracker,
@@ -118,7 +119,7 @@ fn host_simulation(file: &str, seed: u64) -> needle_sim::ClosedRun {
 #[test]
 fn the_board_steers_the_papers_insertion_from_relayed_poses() {
     let file = fast_paper("board-paper.toml");
-    let mut lab = BoardLab::start(&file, 3);
+    let mut lab = BoardLab::start(&file, 3, &[]);
     // Nothing moves before an explicit arm and homing.
     let (code, refused) = lab.steer(&file, &[]);
     assert_eq!(code, 5, "{refused}");
@@ -127,7 +128,11 @@ fn the_board_steers_the_papers_insertion_from_relayed_poses() {
     let homed = lab.motion("home");
     assert_eq!(homed["homed"], true, "{homed}");
     let log = temp_path("board-steer.jsonl");
-    let (code, v) = lab.steer(&file, &["--log", log.to_str().unwrap()]);
+    let (address, slicer) = slicer_listener();
+    let (code, v) = lab.steer(
+        &file,
+        &["--log", log.to_str().unwrap(), "--slicer", &address],
+    );
     assert_eq!((code, &v["outcome"]), (0, &Value::from("reached")), "{v}");
     let truth = lab.next_run();
     let expected = host_simulation(&file, 3);
@@ -145,6 +150,91 @@ fn the_board_steers_the_papers_insertion_from_relayed_poses() {
         lines.iter().any(|l| l["event"] == "board_drive"),
         "{lines:?}"
     );
+    board_estimates_are_shown_and_logged(&lines, &slicer.join().unwrap(), &steering);
+    let _ = std::fs::remove_file(log);
+}
+
+/// Slicer sees the board's estimated tip at every reading and each continuation the board
+/// planned, the log has each estimate, and the last is where the insertion ended.
+fn board_estimates_are_shown_and_logged(
+    lines: &[Value],
+    frames: &[needle_igtl::Frame],
+    steering: &needle_sim::ClosedRun,
+) {
+    let named = |name: &str| frames.iter().filter(|f| f.info.device_name == name).count();
+    let readings = steering.stats.readings as usize;
+    assert_eq!(named("NeedleTipEstimate"), readings);
+    let replaced = lines
+        .iter()
+        .filter(|l| l["event"] == "reading")
+        .filter(|l| l["reply"]["command"].get("Replace").is_some())
+        .count();
+    assert!(replaced > 0, "the board replanned");
+    assert_eq!(named("NeedleContinuation"), replaced);
+    let estimates: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["event"] == "reading")
+        .map(|l| &l["estimate"])
+        .collect();
+    assert_eq!(estimates.len(), readings);
+    let last: Vec<f32> = serde_json::from_value(estimates[readings - 1]["position"].clone())
+        .expect("the last estimate's position");
+    let tip = steering.run.points.last().expect("the true tip path");
+    let off = (0..3)
+        .map(|i| (last[i] - tip[i]).powi(2))
+        .sum::<f32>()
+        .sqrt();
+    assert!(
+        off < 1.0,
+        "the last estimate {last:?} is {off} mm from {tip:?}"
+    );
+}
+
+/// The registration sent by the tracker stream (`--registration-name`, poses in the tracker's
+/// frame, turned 90 degrees and moved): the board moves nothing before it arrives, every
+/// relayed reading is mapped by it, and the insertion ends as the host simulates it.
+#[test]
+fn a_streamed_registration_maps_the_boards_readings() {
+    let file = fast_paper("board-registered.toml");
+    let reg = temp_path("board-registration.json");
+    std::fs::write(
+        &reg,
+        r#"{"rotation": [[0, -1, 0], [1, 0, 0], [0, 0, 1]], "translation_mm": [100, -50, 25]}"#,
+    )
+    .unwrap();
+    let reg = reg.to_str().unwrap();
+    let name = "ReferenceToScenario";
+    let mut lab = BoardLab::start(
+        &file,
+        3,
+        &["--registration", reg, "--registration-name", name],
+    );
+    lab.motion("arm");
+    lab.motion("home");
+    let log = temp_path("board-registered.jsonl");
+    let log_flag = ["--log", log.to_str().unwrap()];
+    let (code, v) = lab.steer(
+        &file,
+        &[&log_flag[..], &["--registration-name", name]].concat(),
+    );
+    assert_eq!((code, &v["outcome"]), (0, &Value::from("reached")), "{v}");
+    let truth = lab.next_run();
+    let expected = host_simulation(&file, 3);
+    let error = truth["target_error"].as_f64().unwrap() as f32;
+    assert!(
+        (error - expected.run.target_error).abs() < 1e-3,
+        "{error} vs the host's {}",
+        expected.run.target_error
+    );
+    let events: Vec<String> = log_lines(&log)
+        .iter()
+        .map(|l| l["event"].as_str().unwrap_or("").to_string())
+        .collect();
+    let at = |e: &str| events.iter().position(|x| x == e);
+    assert!(
+        at("registration").is_some() && at("registration") < at("board_drive"),
+        "{events:?}"
+    );
     let _ = std::fs::remove_file(log);
 }
 
@@ -153,7 +243,7 @@ fn the_board_steers_the_papers_insertion_from_relayed_poses() {
 #[test]
 fn ctrl_c_stops_the_board_mid_insertion() {
     let file = fast_paper("board-ctrl-c.toml");
-    let lab = BoardLab::start(&file, 4);
+    let lab = BoardLab::start(&file, 4, &[]);
     lab.motion("arm");
     lab.motion("home");
     let log = temp_path("board-ctrl-c.jsonl");

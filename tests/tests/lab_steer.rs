@@ -4,7 +4,7 @@
 
 mod lab_support;
 
-use lab_support::{log_lines, simulated, temp_path, Lab};
+use lab_support::{log_lines, simulated, slicer_listener, temp_path, Lab};
 use needle_e2e::example;
 
 fn path(name: &str) -> String {
@@ -91,25 +91,8 @@ fn the_insertion_log_is_complete() {
 /// good CRC.
 #[test]
 fn slicer_sees_the_plan_the_estimate_and_the_stop() {
-    use needle_igtl::{Frame, FrameDecoder, Message};
-    use std::io::Read;
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let address = listener.local_addr().unwrap().to_string();
-    let slicer = std::thread::spawn(move || {
-        let (mut conn, _) = listener.accept().unwrap();
-        let mut decoder: Box<FrameDecoder<8192>> = Box::default();
-        let (mut frames, mut buf) = (Vec::<Frame>::new(), [0u8; 4096]);
-        loop {
-            let n = conn.read(&mut buf).unwrap();
-            if n == 0 {
-                return frames;
-            }
-            let mut input = &buf[..n];
-            while let Some(f) = decoder.feed(&mut input) {
-                frames.push(f.expect("every frame decodes, CRC checked"));
-            }
-        }
-    });
+    use needle_igtl::Message;
+    let (address, slicer) = slicer_listener();
     let file = path("paper");
     let log = temp_path("slicer.jsonl");
     let lab = Lab::start(&file, 3, &[]);

@@ -4,7 +4,7 @@
 
 use super::job::Job;
 use super::Core;
-use crate::steer::{Reading, SteerConfig, SteerError, Steering, TipMeasurement};
+use crate::steer::{Pose, Reading, SteerConfig, SteerError, Steering, TipMeasurement};
 use crate::wire::crc::crc32;
 use crate::wire::{Fault, PlanRequest, PlanResult, ReplyBody};
 
@@ -118,13 +118,14 @@ impl Core {
         self.answer(id, ReplyBody::Steer(reply), seq, max_len, tx);
     }
 
-    /// The counters and stop of the insertion steered under plan `id`.
+    /// The counters, stop and estimated tip of the insertion steered under plan `id`.
     pub(super) fn steer_status(&mut self, id: u16, tx: &mut dyn FnMut(&[u8])) {
         match &self.steering {
             Steered::On { plan, steering } if *plan == id => {
                 let body = ReplyBody::SteerStatus {
                     stats: steering.stats(),
                     stopped: steering.stopped(),
+                    estimate: Pose::of_frame(&steering.estimate().tip),
                 };
                 self.send(id, body, tx);
             }

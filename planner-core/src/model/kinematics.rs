@@ -36,7 +36,9 @@ impl Frame {
         self.r.column(2).into()
     }
 
-    fn from_columns(p: V3, e1: V3, e2: V3, e3: V3) -> Frame {
+    /// The frame at `p` with the columns `e1`, `e2`, `e3` (taken as given: unit and
+    /// right-handed is the caller's to ensure).
+    pub fn from_columns(p: V3, e1: V3, e2: V3, e3: V3) -> Frame {
         Frame {
             p,
             r: Matrix3::from_columns(&[e1, e2, e3]),

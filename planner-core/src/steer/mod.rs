@@ -42,6 +42,7 @@ pub use crate::execute::apriori;
 pub use state::Steering;
 
 use crate::execute::schedule::Steps;
+use crate::model::kinematics::{Frame, V3};
 use serde::{Deserialize, Serialize};
 
 /// Why the controller stopped the insertion.
@@ -106,6 +107,30 @@ pub struct Pose {
     pub heading: [f32; 3],
     /// Unit bevel direction, where the sensor measures the roll (a 6-DOF coil).
     pub bevel: Option<[f32; 3]>,
+}
+
+impl Pose {
+    /// The pose of the tip frame `f`, its bevel direction included.
+    pub fn of_frame(f: &Frame) -> Pose {
+        Pose {
+            position: f.p.into(),
+            heading: f.e3().into(),
+            bevel: Some(f.e2().into()),
+        }
+    }
+
+    /// The tip frame of this pose (the bending-plane normal completing the right-handed
+    /// columns); `None` without a bevel direction.
+    pub fn frame(&self) -> Option<Frame> {
+        let e2 = V3::from(self.bevel?);
+        let e3 = V3::from(self.heading);
+        Some(Frame::from_columns(
+            V3::from(self.position),
+            e2.cross(&e3),
+            e2,
+            e3,
+        ))
+    }
 }
 
 impl TipMeasurement {

@@ -8,12 +8,12 @@ use super::max_size::{max, MaxSize};
 use super::motion::{MotionRequest, MotionStatus};
 use crate::execute::schedule::Steps;
 use crate::model::form::Form;
-use crate::steer::{SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
+use crate::steer::{Pose, SteerConfig, SteerReply, SteerStats, StopReason, TipMeasurement};
 use serde::{Deserialize, Serialize};
 
 /// Version of this message set. A device answers any other version with
 /// [`Fault::UnsupportedVersion`] and nothing else.
-pub const PROTOCOL_VERSION: u8 = 11;
+pub const PROTOCOL_VERSION: u8 = 12;
 
 /// Largest data chunk in one [`RequestBody::Upload`] or [`ReplyBody::Part`].
 pub const MAX_CHUNK: usize = 192;
@@ -208,12 +208,15 @@ pub enum ReplyBody {
         /// CRC-32 of the encoded answer.
         crc: u32,
     },
-    /// The controller's counters, and why it stopped once it has.
+    /// The controller's counters, why it stopped once it has, and where it estimates the tip.
     SteerStatus {
         /// Counters over the insertion.
         stats: SteerStats,
         /// The stop, if any.
         stopped: Option<StopReason>,
+        /// The estimated tip after the last reading (the plan's entry before the first), in the
+        /// scenario's frame, its bevel direction included: what a viewer draws.
+        estimate: Pose,
     },
     /// A protocol fault.
     Fault(Fault),
@@ -403,7 +406,7 @@ impl MaxSize for ReplyBody {
                     max(
                         max(Steps::MAX_SIZE, SteerReply::MAX_SIZE),
                         max(
-                            SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE,
+                            SteerStats::MAX_SIZE + Option::<StopReason>::MAX_SIZE + Pose::MAX_SIZE,
                             MotionStatus::MAX_SIZE,
                         ),
                     ),

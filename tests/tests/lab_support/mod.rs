@@ -189,3 +189,28 @@ pub fn simulated_with(file: &str, first: u64, runs: usize, flags: &[&str]) -> Ve
     let v = needle_e2e::needle_json(&args);
     v["runs_detail"].as_array().expect("runs_detail").clone()
 }
+
+/// A stand-in 3D Slicer listening on a local port: every OpenIGTLink frame `needle steer
+/// --slicer ADDR` sends, each decoded with its CRC checked, once the connection closes.
+pub fn slicer_listener() -> (String, std::thread::JoinHandle<Vec<needle_igtl::Frame>>) {
+    use needle_igtl::{Frame, FrameDecoder};
+    use std::io::Read;
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let slicer = std::thread::spawn(move || {
+        let (mut conn, _) = listener.accept().unwrap();
+        let mut decoder: Box<FrameDecoder<8192>> = Box::default();
+        let (mut frames, mut buf) = (Vec::<Frame>::new(), [0u8; 4096]);
+        loop {
+            let n = conn.read(&mut buf).unwrap();
+            if n == 0 {
+                return frames;
+            }
+            let mut input = &buf[..n];
+            while let Some(f) = decoder.feed(&mut input) {
+                frames.push(f.expect("every frame decodes, CRC checked"));
+            }
+        }
+    });
+    (address, slicer)
+}
