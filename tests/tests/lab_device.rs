@@ -6,7 +6,7 @@ mod firmware_support;
 mod lab_support;
 
 use lab_support::wire_support::SimProcess;
-use lab_support::{log_lines, temp_path, Lab};
+use lab_support::{log_lines, slicer_listener, temp_path, Lab};
 use needle_e2e::{example, needle_json};
 use serde_json::Value;
 use std::process::Stdio;
@@ -56,6 +56,33 @@ fn hil_sim_steers_the_lab_as_in_process() {
     let device = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
     device_steers_the_lab_as_in_process(&device.address, "paper", 20);
     device_steers_the_lab_as_in_process(&device.address, "space", 5);
+}
+
+/// The estimated tips Slicer is sent, one per reading: from a device they are the in-process
+/// controller's, bit for bit (the device reports them in its steering status).
+#[test]
+fn slicer_sees_the_devices_estimates_as_in_process() {
+    let file = paper();
+    let device = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
+    let estimates = |flags: &[&str]| {
+        let mut lab = Lab::start(&file, 7, &[]);
+        let (address, slicer) = slicer_listener();
+        let v = lab.steer(&file, &[flags, &["--slicer", &address]].concat());
+        let frames = slicer.join().unwrap();
+        let drawn: Vec<_> = frames
+            .into_iter()
+            .filter(|f| f.info.device_name == "NeedleTipEstimate")
+            .map(|f| format!("{:?}", f.message))
+            .collect();
+        assert_eq!(
+            drawn.len() as u64,
+            v["steering"]["readings"].as_u64().unwrap()
+        );
+        drawn
+    };
+    let in_process = estimates(&[]);
+    assert!(in_process.len() > 50, "{}", in_process.len());
+    assert_eq!(estimates(&["--tcp", &device.address]), in_process);
 }
 
 /// One paper insertion steered on the firmware in QEMU (each emulated reading costs about a
