@@ -65,7 +65,7 @@ fn slicer_sees_the_devices_estimates_as_in_process() {
     let file = paper();
     let device = SimProcess::start(&["--tcp", "127.0.0.1:0"]);
     let estimates = |flags: &[&str]| {
-        let mut lab = Lab::start(&file, 7, &[]);
+        let lab = Lab::start(&file, 7, &[]);
         let (address, slicer) = slicer_listener();
         let v = lab.steer(&file, &[flags, &["--slicer", &address]].concat());
         let frames = slicer.join().unwrap();
