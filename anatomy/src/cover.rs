@@ -319,16 +319,32 @@ pub fn ladder(
     o: &CoverOptions,
     reach: Option<&Reach>,
 ) -> Result<Ladder> {
+    group_ladder(map, std::slice::from_ref(segment), o, reach)
+}
+
+/// The covers tried for the union of `segments` (segments that touch, covered as one:
+/// [`crate::touching`]), loosest first.
+pub fn group_ladder(
+    map: &LabelMap,
+    segments: &[Segment],
+    o: &CoverOptions,
+    reach: Option<&Reach>,
+) -> Result<Ladder> {
     let o = &o.validated()?;
-    let voxels = map.voxels_of(segment.label);
-    if voxels.is_empty() {
-        bail!(
-            "segment {:?} (label {}) has no voxels",
-            segment.name,
-            segment.label
-        );
+    let mut voxels = Vec::new();
+    for segment in segments {
+        let of_segment = map.voxels_of(segment.label);
+        if of_segment.is_empty() {
+            bail!(
+                "segment {:?} (label {}) has no voxels",
+                segment.name,
+                segment.label
+            );
+        }
+        voxels.extend(of_segment);
     }
-    let candidates = choose(map, &voxels, o, &name_of(segment), reach)?;
+    let name: Vec<String> = segments.iter().map(name_of).collect();
+    let candidates = choose(map, &voxels, o, &name.join(" with "), reach)?;
     Ok(Ladder { voxels, candidates })
 }
 

@@ -50,6 +50,7 @@ pub mod nrrd;
 pub mod progress;
 pub mod reach;
 pub mod read;
+pub mod touching;
 
 #[cfg(test)]
 mod tests;

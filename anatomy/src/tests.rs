@@ -312,3 +312,65 @@ fn a_target_near_a_segment_is_kept_outside_its_cover() {
     assert!(!holds(&kept.spheres, target));
     assert_eq!(uncovered_voxels(&map, &l.voxels, &kept.spheres, 0.5), 0);
 }
+
+/// Segments that meet at a face or only at a corner are one group; one a voxel apart is not;
+/// a label not chosen joins nothing. Groups keep the order given.
+#[test]
+fn touching_segments_are_grouped_and_apart_ones_not() {
+    use super::touching::touching_groups;
+    let map = map_of([12, 6, 6], scaled([1.0; 3], [0.0; 3]), |i, j, k| {
+        match (i, j, k) {
+            (0..=1, 0..=1, 0..=1) => 1,
+            (2, 2, 2) => 2,     // meets label 1 at a corner only
+            (3..=4, 2, 2) => 3, // meets label 2 at a face
+            (6..=7, _, _) => 4, // a voxel apart from label 3
+            (8, 0, 0) => 5,     // meets label 4, but is not chosen
+            (9, 0, 0) => 6,     // meets only label 5
+            _ => 0,
+        }
+    });
+    let chosen: Vec<Segment> = [6, 4, 1, 3, 2].map(segment).to_vec();
+    assert_eq!(
+        touching_groups(&map, &chosen),
+        vec![vec![0], vec![1], vec![2, 3, 4]]
+    );
+}
+
+/// A capsule wrapped round its organ: covered with it as one solid, the pair takes far fewer
+/// spheres than the capsule alone, and every voxel of both is held with the margin.
+#[test]
+fn a_capsule_with_its_organ_is_covered_as_one_solid() {
+    use super::cover::group_ladder;
+    let map = map_of([26, 26, 26], scaled([1.0; 3], [0.0; 3]), |i, j, k| {
+        let d = [i, j, k].map(|x| x as f64 - 12.5);
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if r <= 9.0 {
+            1
+        } else if r <= 10.5 {
+            2
+        } else {
+            0
+        }
+    });
+    let o = CoverOptions {
+        margin_mm: 1.0,
+        max_spheres: 512,
+        tightness: 1.5,
+    };
+    let capsule = ladder(&map, &segment(2), &o, None).unwrap();
+    let both = group_ladder(&map, &[segment(1), segment(2)], &o, None).unwrap();
+    let spheres = |l: &super::cover::Ladder| l.candidates.last().unwrap().spheres.clone();
+    let (alone, together) = (spheres(&capsule), spheres(&both));
+    assert!(
+        together.len() * 4 < alone.len(),
+        "{} spheres together, {} for the capsule alone",
+        together.len(),
+        alone.len()
+    );
+    for label in [1, 2] {
+        assert_eq!(
+            uncovered_voxels(&map, &map.voxels_of(label), &together, 1.0),
+            0
+        );
+    }
+}

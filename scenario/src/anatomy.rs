@@ -6,14 +6,18 @@ use super::shapes::ObstacleShape;
 use anyhow::{anyhow, bail, Result};
 use needle_anatomy::budget::allocate;
 use needle_anatomy::command::selected;
-use needle_anatomy::cover::{
-    clear_of, finish, ladder, CoverOptions, Ladder, Reach, DEFAULT_TIGHTNESS,
-};
+use needle_anatomy::cover::{clear_of, finish, group_ladder, CoverOptions, Ladder, Reach};
 use needle_anatomy::label_map::{LabelMap, Segment};
+use needle_anatomy::touching::{merged, touching_groups};
 use planner_core::model::scenario::{Obstacle, DEFAULT_NEEDLE_LENGTH_MM};
 use planner_core::{DEVICE_MAX_OBSTACLES, HOST_MAX_OBSTACLES};
 
-/// One segment of an `[[anatomy]]` entry and the covers tried for it.
+/// The tightness of a scenario's covers when its `[[anatomy]]` entry gives none: tighter than a
+/// lone `needle cover`'s ([`needle_anatomy::cover::DEFAULT_TIGHTNESS`]), since the scenario's sphere budget loosens
+/// them where that loses the least (docs/anatomy.md, "One sphere budget a scenario").
+pub const SCENARIO_TIGHTNESS: f64 = 1.2;
+
+/// Segments of an `[[anatomy]]` entry that touch (one, usually) and the covers tried for them.
 struct Covered {
     entry: usize,
     map: std::rc::Rc<LabelMap>,
@@ -115,7 +119,7 @@ impl ScenarioFile {
         let options = CoverOptions {
             margin_mm: a.margin_mm.unwrap_or(0.0),
             max_spheres: a.max_spheres.unwrap_or(HOST_MAX_OBSTACLES),
-            tightness: a.tightness.unwrap_or(DEFAULT_TIGHTNESS),
+            tightness: a.tightness.unwrap_or(SCENARIO_TIGHTNESS),
         }
         .validated()?;
         let voxel = a.voxel_mm.unwrap_or(needle_anatomy::mesh::DEFAULT_VOXEL_MM);
@@ -124,22 +128,30 @@ impl ScenarioFile {
         let chosen = selected(&map, a.labels.as_deref(), a.segments.as_deref()).map_err(at)?;
         let mut progress =
             needle_anatomy::progress::Progress::new(format!("covering {}", path.display()));
-        let total = chosen.len();
-        for (done, segment) in chosen.into_iter().enumerate() {
+        // Segments that touch are covered as one (a capsule with its organ).
+        let groups = touching_groups(&map, &chosen);
+        let total = groups.len();
+        for (done, group) in groups.iter().enumerate() {
+            let members: Vec<&Segment> = group.iter().map(|&g| &chosen[g]).collect();
+            let segment = merged(&members);
             progress.step(done, total, &format!("segment {:?}", segment.name));
             // A point no cover can keep out is an error before the cover is tried.
-            let voxels = map.voxels_of(segment.label);
-            for (what, p) in [("entry", reach.entry), ("target", reach.target)] {
-                let (hd, nearest) = clear_of(&map, &voxels, p);
-                if nearest - hd - 1e-3 < options.margin_mm {
-                    let name = format!("segment {:?} of {}", segment.name, path.display());
-                    bail!(
-                        "{}",
-                        kept_out_error(what, &name, options.margin_mm, hd, nearest)
-                    );
+            for member in &members {
+                let voxels = map.voxels_of(member.label);
+                for (what, p) in [("entry", reach.entry), ("target", reach.target)] {
+                    let (hd, nearest) = clear_of(&map, &voxels, p);
+                    if nearest - hd - 1e-3 < options.margin_mm {
+                        let name = format!("segment {:?} of {}", member.name, path.display());
+                        bail!(
+                            "{}",
+                            kept_out_error(what, &name, options.margin_mm, hd, nearest)
+                        );
+                    }
                 }
             }
-            let mut ladder = ladder(&map, &segment, &options, Some(reach)).map_err(at)?;
+            let group_segments: Vec<Segment> = members.iter().map(|&m| m.clone()).collect();
+            let mut ladder =
+                group_ladder(&map, &group_segments, &options, Some(reach)).map_err(at)?;
             let holds = |spheres: &[needle_anatomy::cover::Sphere], p: [f64; 3]| {
                 spheres.iter().any(|s| {
                     let d: f64 = (0..3).map(|k| (p[k] - s.center[k]).powi(2)).sum();

@@ -7,9 +7,12 @@
 //! voxel's diagonal from every voxel centre (so outside every voxel dilated by the margin: the
 //! region the cover must hold, without the cover's overshoot).
 //!
-//! The default suite runs three maps and asserts what must hold on any map: a plan `needle plan`
-//! makes keeps the margin from the voxels less half a voxel diagonal. The campaign over the
-//! family's first 20 maps prints the completeness figures (docs/anatomy.md):
+//! Each map is planned twice: as shipped (the safe defaults' curvature reserve and collision
+//! bound) and without them, the problem the sampler solves; only a plan made counts, not the
+//! best path a refusal prints. The default suite runs two maps and asserts what must hold on any
+//! map: a plan `needle plan` makes keeps the margin from the voxels less half a voxel diagonal.
+//! The campaign over the family's first 20 maps prints the completeness figures and asserts the
+//! aim, 95 % of the sampler's finds planned without the safe defaults (docs/anatomy.md):
 //!
 //! ```text
 //! cargo test -p needle-e2e --profile ci --test anatomy_completeness -- --ignored --nocapture
@@ -30,7 +33,7 @@ use std::sync::Arc;
 const MARGIN_MM: f64 = 1.0;
 
 /// One map: what the sampler found (its length) and what `needle plan` made of the file (its
-/// length and its clearance to the voxels, measured here).
+/// length and its clearance to the voxels, measured here), and of it without the safe defaults.
 struct Case {
     seed: u64,
     entry: &'static str,
@@ -38,6 +41,9 @@ struct Case {
     blocked: bool,
     sampled: Option<f64>,
     planned: Option<(f64, f64)>,
+    /// The length of the plan `needle plan` made without the curvature reserve and the
+    /// collision bound.
+    unbounded: Option<f64>,
     /// Why `needle plan` made none (its stderr's last line).
     why: String,
 }
@@ -120,18 +126,54 @@ fn case(dir: &Path, seed: u64, entry: &'static str) -> Case {
             [0, 1, 2].map(|k| top[k] + u * (t[k] - top[k]))
         })
         .any(|p| field.at(p) - half_diagonal < MARGIN_MM);
+    let (planned, why) = needle_plan(&path, &field, seed, entry, half_diagonal);
+    // The same map without the safe defaults' curvature reserve and collision bound, which the
+    // sampler does not keep either: what the cover and the optimiser leave.
+    let plain = std::fs::read_to_string(&path).unwrap();
+    let geometric = path.with_extension("geometric.toml");
+    std::fs::write(
+        &geometric,
+        format!(
+            "{plain}\n[planner]\nmax_collision_probability = \"off\"\ncurvature_reserve = 0.0\n"
+        ),
+    )
+    .unwrap();
+    let (unbounded, _) = needle_plan(&geometric, &field, seed, entry, half_diagonal);
+    Case {
+        seed,
+        entry,
+        blocked,
+        sampled,
+        planned,
+        unbounded: unbounded.map(|(length, _)| length),
+        why,
+    }
+}
+
+/// `needle plan` on `path`: the best path's length and its clearance to the voxels (measured
+/// here) when it succeeds, else why not (its stderr's last line). A plan made keeps the margin
+/// from the voxels, less what the grid cannot tell.
+fn needle_plan(
+    path: &Path,
+    field: &Field<'_>,
+    seed: u64,
+    entry: &str,
+    half_diagonal: f64,
+) -> (Option<(f64, f64)>, String) {
     let out = needle()
         .args(["plan", path.to_str().unwrap(), "--json"])
         .output()
         .expect("needle plan");
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
     let why = String::from_utf8_lossy(&out.stderr)
         .lines()
         .last()
         .unwrap_or("")
         .to_string();
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
     let best = &v["best"];
-    let planned = best["length"].as_f64().map(|length| {
+    // A refusal may still print the best path it found: only a plan made counts.
+    let length = best["length"].as_f64().filter(|_| out.status.success());
+    let planned = length.map(|length| {
         let points: Vec<[f64; 3]> = serde_json::from_value(best["points"].clone()).unwrap();
         let clearance = points
             .windows(2)
@@ -145,26 +187,20 @@ fn case(dir: &Path, seed: u64, entry: &'static str) -> Case {
             .fold(f64::INFINITY, f64::min);
         (length, clearance)
     });
-    // A plan made keeps the margin from the voxels, less what the grid cannot tell.
     if let Some((_, clearance)) = planned {
         assert!(
             clearance >= MARGIN_MM - half_diagonal - 1e-6,
             "map {seed} from {entry}: the plan passes {clearance:.3} mm from the voxels"
         );
     }
-    Case {
-        seed,
-        entry,
-        blocked,
-        sampled,
-        planned,
-        why,
-    }
+    (planned, why)
 }
 
-fn report(cases: &[Case]) -> (usize, usize) {
-    let (mut found, mut also) = (0, 0);
-    let mut ratios = Vec::new();
+/// What was found and planned: (sampled, planned as shipped, planned without the safe
+/// defaults), each of the last two among the sampled.
+fn report(cases: &[Case]) -> (usize, usize, usize) {
+    let (mut found, mut also, mut geometric) = (0, 0, 0);
+    let (mut ratios, mut unbounded_ratios) = (Vec::new(), Vec::new());
     for c in cases {
         let line = match (c.sampled, c.planned) {
             (Some(s), Some((p, clear))) => {
@@ -174,7 +210,14 @@ fn report(cases: &[Case]) -> (usize, usize) {
                     p / s
                 )
             }
-            (Some(s), None) => format!("sampled {s:.1} mm, not planned: {}", c.why),
+            (Some(s), None) => format!(
+                "sampled {s:.1} mm, not planned ({}): {}",
+                match c.unbounded {
+                    Some(_) => "planned without the reserve and the bound",
+                    None => "nor without the reserve and the bound",
+                },
+                c.why
+            ),
             (None, Some((p, clear))) => {
                 format!("not sampled, planned {p:.1} mm, {clear:.2} mm clear")
             }
@@ -188,16 +231,30 @@ fn report(cases: &[Case]) -> (usize, usize) {
         println!("map {} from {}{blocked}: {line}", c.seed, c.entry);
         found += usize::from(c.sampled.is_some());
         also += usize::from(c.sampled.is_some() && c.planned.is_some());
+        if let (Some(s), Some(p)) = (c.sampled, c.unbounded) {
+            geometric += 1;
+            unbounded_ratios.push(p / s);
+        }
     }
-    ratios.sort_by(f64::total_cmp);
-    let within = ratios.iter().filter(|&&r| r <= 1.05).count();
-    println!(
-        "sampled on {found} of {} maps; planned on {also} of those; length within 5 % or shorter on {within} of {}; median ratio {:.3}",
-        cases.len(),
-        ratios.len(),
-        ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN)
-    );
-    (found, also)
+    for (what, planned, ratios) in [
+        ("as shipped", also, &mut ratios),
+        (
+            "without the reserve and the bound",
+            geometric,
+            &mut unbounded_ratios,
+        ),
+    ] {
+        ratios.sort_by(f64::total_cmp);
+        let within = ratios.iter().filter(|&&r| r <= 1.05).count();
+        println!(
+            "{what}: sampled on {found} of {} maps; planned on {planned} of those; length \
+             within 5 % or shorter on {within} of {}; median ratio {:.3}",
+            cases.len(),
+            ratios.len(),
+            ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN)
+        );
+    }
+    (found, also, geometric)
 }
 
 #[test]
@@ -218,7 +275,12 @@ fn completeness_against_a_sampler_on_the_label_maps() {
         .flat_map(|seed| ENTRIES.map(|e| (seed, e)))
         .map(|(seed, e)| case(&dir, seed, e))
         .collect();
-    report(&cases);
+    let (found, _, geometric) = report(&cases);
+    // The aim, on the problem the sampler solves (no reserve, no bound): 95 % of its finds.
+    assert!(
+        geometric * 100 >= found * 95,
+        "planned {geometric} of the {found} the sampler found"
+    );
 }
 
 fn tempdir(name: &str) -> std::path::PathBuf {

@@ -180,17 +180,22 @@ fn the_family_fits_the_devices_sphere_budget() {
     }
     ratios.sort_by(f64::total_cmp);
     counts.sort_unstable();
-    let (median, worst) = (ratios[ratios.len() / 2], ratios[ratios.len() - 1]);
+    // Twenty maps: the median is the mean of the middle two.
+    let n = ratios.len();
+    let median = 0.5 * (ratios[(n - 1) / 2] + ratios[n / 2]);
+    let worst = ratios[n - 1];
     println!(
-        "{} scenarios: spheres {}..{}, outside the dilated segments: median {median:.3}, worst \
-         {worst:.3}",
-        ratios.len(),
+        "{n} scenarios: spheres {}..{}, outside the dilated segments: median {median:.3} (the \
+         middle two {:.3} and {:.3}), worst {worst:.3}",
         counts[0],
         counts[counts.len() - 1],
+        ratios[(n - 1) / 2],
+        ratios[n / 2],
     );
-    // What the cover meets today (the aim is 0.5 and 1.0; docs/anatomy.md, "Not yet").
+    // The aim: at most half the dilated segments' volume outside them over the family, and at
+    // most as much again on any map.
     assert!(
-        median <= 0.75 && worst <= 1.5,
+        median <= 0.5 && worst <= 1.0,
         "median {median}, worst {worst}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -47,12 +47,13 @@ fn write_case(dir: &Path) -> PathBuf {
         pairs: &[],
     };
     write_nrrd(&dir.join("ball.nrrd"), &m, &style);
+    // As tight as `needle cover` makes it by default: one sphere, the one the test draws.
     let scenario = dir.join("ball.toml");
     std::fs::write(
         &scenario,
         "[needle]\ncurvature_radius = 63.7\n[entry]\nposition = [0, 15, 0]\n\
          direction = [0, 0, 1]\n[target]\nposition = [0, 15, 90]\n\
-         [[anatomy]]\nfile = \"ball.nrrd\"\nlabels = [1]\n",
+         [[anatomy]]\nfile = \"ball.nrrd\"\nlabels = [1]\ntightness = 1.5\n",
     )
     .unwrap();
     scenario

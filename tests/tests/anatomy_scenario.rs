@@ -87,10 +87,10 @@ fn a_target_the_margin_covers_names_the_segment_and_the_largest_margin() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Writes map 3 of the family, whose covers as tight as asked take over 256 spheres, and a
-/// scenario from above it to its lesion with a 1 mm margin.
-fn map_three(dir: &Path) -> PathBuf {
-    let case = anatomy_case(3, 0.6);
+/// Writes map 0 of the family and a scenario from above it to its lesion with a 1 mm margin,
+/// its cover asked as tight as 1.05 takes more than the device's 256 spheres.
+fn budget_map(dir: &Path) -> PathBuf {
+    let case = anatomy_case(0, 0.6);
     write_map(dir, &case.labels);
     let d = case.labels.dims;
     let a = case.labels.ijk_to_ras;
@@ -98,20 +98,24 @@ fn map_three(dir: &Path) -> PathBuf {
         let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
         a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]
     });
-    scenario(dir, top, case.target, 1.0)
+    let path = scenario(dir, top, case.target, 1.0);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let tight = text.replace("margin_mm = 1.0\n", "margin_mm = 1.0\ntightness = 1.05\n");
+    std::fs::write(&path, tight).unwrap();
+    path
 }
 
-/// Map 3 is loosened to the device's 256 spheres; `needle plan` plans it and says on stderr
+/// Map 0 is loosened to the device's 256 spheres; `needle plan` plans it and says on stderr
 /// which segments were loosened; `needle send` to hil-sim plans it as the host does, bit for
 /// bit, and the host measures the device's plan against the label map alike.
 #[test]
 fn a_scenario_over_the_devices_spheres_is_loosened_and_the_device_plans_it() {
     let dir = temp_dir("budget");
-    let path = map_three(&dir);
+    let path = budget_map(&dir);
     let file = path.to_str().unwrap();
     let (ok_l, out_l, err_l) = run_needle(&["plan", file, "--json"]);
     assert!(
-        err_l.contains("looser than tightness 1.5 asks")
+        err_l.contains("looser than tightness 1.05 asks")
             && err_l.contains("holds at most 256 anatomy spheres"),
         "{err_l}"
     );
@@ -134,13 +138,13 @@ fn a_scenario_over_the_devices_spheres_is_loosened_and_the_device_plans_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `planner.max_anatomy_spheres` sets the budget: raised to the host's 512, map 3 is covered by
+/// `planner.max_anatomy_spheres` sets the budget: raised to the host's 512, map 0 is covered by
 /// more than the device's 256 spheres and plans on the host, and a device refuses it with the
 /// reason; 0 and more than the host holds are refused naming the key.
 #[test]
 fn the_sphere_budget_is_a_scenario_key() {
     let dir = temp_dir("budget-key");
-    let path = map_three(&dir);
+    let path = budget_map(&dir);
     let text = std::fs::read_to_string(&path).unwrap();
     let with = |n: &str| {
         let p = dir.join(format!("budget-{n}.toml"));
