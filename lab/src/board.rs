@@ -139,6 +139,7 @@ impl<T: Transport> BoardSession<'_, T> {
             clock_offset_ms: None,
             clock_offset_applied: false,
             robot_stopped: false,
+            on_board: true,
         };
         let ending = match self.await_registration().map(|()| self.take_posture(start)) {
             Err(ending) | Ok(Ok(Some(ending))) => ending,

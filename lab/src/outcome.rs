@@ -192,8 +192,11 @@ pub struct SessionOutcome {
     /// A peer's clock was proven ahead of this program's (a frame arrived before its stamp) and
     /// its stamps were moved back to judge the poses' freshness.
     pub clock_offset_applied: bool,
-    /// The robot confirmed the stop (`stopped`).
+    /// The robot confirmed the stop (`stopped`); with a driver board, the board came to rest.
     pub robot_stopped: bool,
+    /// A driver board moved the needle, not a robot (the words of the summary).
+    #[serde(skip)]
+    pub on_board: bool,
 }
 
 /// The times of one reading.

@@ -119,6 +119,7 @@ pub fn failed(a: Printing<'_>, form: Option<String>, e: anyhow::Error) -> Result
 pub fn print(a: Printing<'_>, form: String, outcome: SessionOutcome) -> Result<()> {
     let latency = Latency::of(&outcome.latencies_ms);
     let (class, stop_reason, why) = (outcome.outcome, outcome.stop_reason, outcome.why.clone());
+    let outcome_on_board = outcome.on_board;
     let code = class.exit_code();
     if a.json {
         let of = |f: fn(&ReadingTimes) -> Option<f64>| {
@@ -157,7 +158,8 @@ pub fn print(a: Printing<'_>, form: String, outcome: SessionOutcome) -> Result<(
         );
     }
     if reason == "interrupted" {
-        message = "interrupted: the robot was told to stop".into();
+        let mover = if outcome_on_board { "board" } else { "robot" };
+        message = format!("interrupted: the {mover} was told to stop");
     }
     Err(SteerEnded { code, message }.into())
 }
@@ -171,16 +173,13 @@ fn print_text(form: &str, outcome: &SessionOutcome, latency: Option<Latency>) {
         println!("predicted miss {m:.2} mm");
     }
     let s = outcome.steering;
-    println!(
-        "{} readings, {} replans, robot {}",
-        s.readings,
-        s.replans,
-        if outcome.robot_stopped {
-            "stopped"
-        } else {
-            "did not confirm the stop"
-        }
-    );
+    let stop = match (outcome.on_board, outcome.robot_stopped) {
+        (false, true) => "robot stopped",
+        (false, false) => "robot did not confirm the stop",
+        (true, true) => "board at rest",
+        (true, false) => "board not seen at rest",
+    };
+    println!("{} readings, {} replans, {stop}", s.readings, s.replans);
     if let Some(l) = latency {
         println!(
             "latency pose to command: median {:.2} ms, max {:.2} ms over {} readings",

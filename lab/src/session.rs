@@ -185,6 +185,7 @@ impl<'a> Session<'a> {
                 clock_offset_ms: None,
                 clock_offset_applied: false,
                 robot_stopped: false,
+                on_board: false,
             },
         }
     }

@@ -283,6 +283,10 @@ fn ctrl_c_stops_the_board_mid_insertion() {
         "{v}"
     );
     assert_eq!(v["robot_stopped"], true, "{v}");
+    assert!(
+        err.contains("interrupted: the board was told to stop"),
+        "{err}"
+    );
     let s = lab.motion("status");
     assert_eq!(
         (&s["state"], &s["moves_left"]),
