@@ -13,10 +13,11 @@ use needle_e2e::reference::random::random_scenario;
 use needle_motion::check::TrainCheck;
 use needle_motion::moves::Planned;
 use needle_motion::runner::SegmentRun;
-use needle_motion::{Axis, Controller, Inputs, MotionConfig, Move, Rates, SafetyConfig, State};
+use needle_motion::{Axis, Controller, Inputs, MotionConfig, Move, SafetyConfig, State};
 use needle_sim::random::{seeded, Draw};
 use planner_core::execute::schedule::{continuation_steps, schedule, Op, Step};
 use planner_core::model::scenario::Driver;
+use planner_core::wire::motion_rates;
 use planner_core::{plan, Scenario, SegmentKind, SegmentPlan};
 
 /// Schedules drawn as continuations.
@@ -37,12 +38,7 @@ fn to_move(op: &Op) -> Move {
 /// turn, shaft motors of 200 to 3200 steps a turn, timers of 0.25 to 2 MHz.
 fn drawn_config(seed: u64, needle_mm: f32, d: &Driver) -> MotionConfig {
     let mut rng = seeded(seed ^ 0x6d6f_7469_6f6e);
-    let rates = Rates {
-        insert_mm_s: d.insert_speed,
-        rotate_deg_s: d.rotate_speed,
-        spin_rev_s: d.spin_rate,
-    };
-    let mut cfg = MotionConfig::bench(needle_mm, d.max_twist_deg, rates);
+    let mut cfg = MotionConfig::bench(needle_mm, d.max_twist_deg, motion_rates(d));
     cfg.tick_hz = [250_000, 1_000_000, 2_000_000][rng.int(0, 2)];
     let micro = [200.0, 400.0, 800.0, 1600.0, 3200.0];
     cfg.axes[0].steps_per_unit = micro[rng.int(0, 4)] / rng.range(1.0, 5.0) as f32;

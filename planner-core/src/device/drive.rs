@@ -9,8 +9,8 @@ use super::Core;
 use crate::execute::pieces::Pieces;
 use crate::execute::schedule::Op;
 use crate::steer::{Command, Reading, SteerReply, TipMeasurement};
-use crate::wire::{motion_move, Fault, MotionStatus, ReplyBody};
-use needle_motion::{Controller, MotionError, Rates, State};
+use crate::wire::{motion_move, motion_rates, Fault, MotionStatus, ReplyBody};
+use needle_motion::{Controller, MotionError, State};
 
 /// The insertion the board drives, if any.
 // An explicit tag rather than an `Option`, as for steering (see `DeviceService::new`).
@@ -78,11 +78,7 @@ impl Core {
             return self.fault(id, Fault::BadPieceLength, tx);
         };
         let s = steering.scenario();
-        let rates = Rates {
-            insert_mm_s: s.driver.insert_speed,
-            rotate_deg_s: s.driver.rotate_speed,
-            spin_rev_s: s.driver.spin_rate,
-        };
+        let rates = motion_rates(&s.driver);
         let (needle_mm, twist) = (s.needle.length, s.driver.max_twist_deg);
         let started = with_core(&mut self.motion, &mut |c| {
             c.heartbeat();

@@ -8,8 +8,8 @@
 //! axes a motion request is answered with [`Fault::NoMotion`].
 
 use super::{Core, DeviceService};
-use crate::wire::{motion_move, Fault, MotionRequest, MotionStatus, ReplyBody};
-use needle_motion::{Controller, MotionError, Move, Rates, QUEUE};
+use crate::wire::{motion_move, motion_rates, Fault, MotionRequest, MotionStatus, ReplyBody};
+use needle_motion::{Controller, MotionError, Move, QUEUE};
 #[cfg(feature = "owned-motion")]
 use needle_motion::{MotionConfig, SafetyConfig};
 
@@ -114,12 +114,7 @@ fn apply(c: &mut Controller, req: &MotionRequest) -> Result<(), MotionError> {
             needle_mm,
             steps,
         } => {
-            let rates = Rates {
-                insert_mm_s: driver.insert_speed,
-                rotate_deg_s: driver.rotate_speed,
-                spin_rev_s: driver.spin_rate,
-            };
-            c.set_job(rates, *needle_mm, driver.max_twist_deg)?;
+            c.set_job(motion_rates(driver), *needle_mm, driver.max_twist_deg)?;
             let mut moves = heapless::Vec::<Move, QUEUE>::new();
             for s in steps {
                 moves

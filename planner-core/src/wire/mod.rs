@@ -24,7 +24,7 @@ pub use messages::{
     Chunk, DeviceInfo, Fault, Header, Reply, ReplyBody, Request, RequestBody, MAX_CHUNK,
     PROTOCOL_VERSION,
 };
-pub use motion::{motion_move, MotionFault, MotionRequest, MotionStatus};
+pub use motion::{motion_move, motion_rates, MotionFault, MotionRequest, MotionStatus};
 pub use obstacles::{WireObstacles, WIRE_MAX_OBSTACLES};
 pub use plan::{ChanceRequest, DevicePlan, PlanRequest, PlanResult, RequestError};
 

@@ -5,7 +5,7 @@
 use super::max_size::{max, MaxSize};
 use crate::execute::schedule::{Op, Steps};
 use crate::model::scenario::Driver;
-use needle_motion::{Axis, ConfigField, FaultCause, MotionError, Move, State, Status};
+use needle_motion::{Axis, ConfigField, FaultCause, MotionError, Move, Rates, State, Status};
 use serde::{Deserialize, Serialize};
 
 /// A motion or safety request.
@@ -98,6 +98,15 @@ pub fn motion_move(op: &Op) -> Move {
         Op::Insert { length_mm } => Move::Insert { length_mm },
         Op::InsertSpin { length_mm, turns } => Move::InsertSpin { length_mm, turns },
         Op::InsertDuty { length_mm, duty } => Move::InsertDuty { length_mm, duty },
+    }
+}
+
+/// A driver's speeds as the motion core's rates.
+pub fn motion_rates(driver: &Driver) -> Rates {
+    Rates {
+        insert_mm_s: driver.insert_speed,
+        rotate_deg_s: driver.rotate_speed,
+        spin_rev_s: driver.spin_rate,
     }
 }
 
