@@ -202,8 +202,9 @@ fn the_family_fits_the_devices_sphere_budget() {
 }
 
 /// Prints how long `needle cover` takes on a map of the family with over 500 000 labelled voxels
-/// in five segments (and, with `NEEDLE_COMPARE=/path/to/an/older/needle`, that binary beside
-/// it). A benchmark that prints, not a timed test:
+/// in five segments, and `needle plan` on a scenario of it, its lesion from above (and, with
+/// `NEEDLE_COMPARE=/path/to/an/older/needle`, that binary beside it). A benchmark that prints,
+/// not a timed test:
 /// `cargo test -p needle-e2e --profile ci --test anatomy_family -- --ignored --nocapture`.
 #[test]
 #[ignore]
@@ -220,6 +221,20 @@ fn cover_benchmark() {
     };
     write_nrrd(&path, &case.labels, &style);
     println!("{} labelled voxels, grid {:?}", voxels, case.labels.dims);
+    let (d, a) = (case.labels.dims, case.labels.ijk_to_ras);
+    let g = [0.5 * d[0] as f64, 0.5 * d[1] as f64, d[2] as f64 + 4.0];
+    let top = [0, 1, 2].map(|r| a[r][0] * g[0] + a[r][1] * g[1] + a[r][2] * g[2] + a[r][3]);
+    let scenario = dir.join("bench.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "[needle]\ncurvature_radius = 60.0\n\n[entry]\nposition = {top:?}\ndirection = {:?}\n\n\
+             [target]\nposition = {:?}\n\n[[anatomy]]\nfile = \"bench.nrrd\"\nmargin_mm = 1.0\n",
+            [0, 1, 2].map(|k| case.target[k] - top[k]),
+            case.target
+        ),
+    )
+    .unwrap();
     let mut binaries = vec![("this", needle_e2e::needle_bin().to_path_buf())];
     if let Some(other) = std::env::var_os("NEEDLE_COMPARE") {
         binaries.push(("compared", other.into()));
@@ -237,6 +252,19 @@ fn cover_benchmark() {
             bin.display(),
             r["spheres"],
             String::from_utf8_lossy(&out.stderr).trim()
+        );
+        let start = std::time::Instant::now();
+        let out = std::process::Command::new(&bin)
+            .args(["plan", scenario.to_str().unwrap(), "--json"])
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        println!(
+            "{name}: needle plan on it from above, {:.2} s (covers and plan), best {} mm, {}",
+            start.elapsed().as_secs_f64(),
+            v["best"]["length"],
+            stderr.trim().lines().last().unwrap_or("")
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
