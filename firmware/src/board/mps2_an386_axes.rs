@@ -14,9 +14,9 @@
 
 use crate::axes::Axes;
 use crate::marker;
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
-use core::sync::atomic::{AtomicU32, Ordering};
 use needle_motion::bench::{bench_config, bench_plant, run_for_with};
 use needle_motion::plant::Plant;
 use needle_motion::{Controller, SafetyConfig, State};
