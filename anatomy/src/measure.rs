@@ -36,32 +36,49 @@ pub fn dilated(b: &Block, margin: f64) -> Dilated {
     let hd = b.half_diagonal();
     let reach = b.reach(margin + hd);
     let offsets = samples();
-    let bits = (0..b.inside.len())
-        .map(|c| {
-            let d = to_segment[c];
-            if b.inside[c] || d + 0.5 * hd <= margin {
-                return 0xff;
+    // A sample lies within a quarter cell of its centre (half the half diagonal), and a cube's
+    // points within `hd` of its centre: a voxel whose centre is farther than this from the
+    // cell's holds no point within the margin of any of its samples.
+    let limit = margin + 1.5 * hd + 1e-6;
+    let mut near: Vec<(f64, [usize; 3])> = Vec::new();
+    let mut bits = Vec::with_capacity(b.inside.len());
+    for c in 0..b.inside.len() {
+        let d = to_segment[c];
+        if b.inside[c] || d + 0.5 * hd <= margin {
+            bits.push(0xff);
+            continue;
+        }
+        if d - 1.5 * hd > margin || margin == 0.0 {
+            bits.push(0);
+            continue;
+        }
+        let g = b.cell(c);
+        let (lo, hi) = b.window(g, reach);
+        near.clear();
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let w = [x, y, z];
+                    if b.inside[b.index(w)] {
+                        let o = b.offset([0, 1, 2].map(|k| w[k] as f64 - g[k] as f64));
+                        let apart = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+                        if apart <= limit {
+                            near.push((apart, w));
+                        }
+                    }
+                }
             }
-            if d - 1.5 * hd > margin || margin == 0.0 {
-                return 0;
-            }
-            let g = b.cell(c);
-            let (lo, hi) = b.window(g, reach);
-            let mut bits = 0u8;
-            for (m, o) in offsets.iter().enumerate() {
-                let p = [0, 1, 2].map(|k| g[k] as f64 + o[k]);
-                let near = (lo[2]..=hi[2]).any(|z| {
-                    (lo[1]..=hi[1]).any(|y| {
-                        (lo[0]..=hi[0]).any(|x| {
-                            b.inside[b.index([x, y, z])] && to_cube(b, p, [x, y, z]) <= margin
-                        })
-                    })
-                });
-                bits |= u8::from(near) << m;
-            }
-            bits
-        })
-        .collect();
+        }
+        // Nearest first: a sample within the margin is found after a voxel or two.
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut cell_bits = 0u8;
+        for (m, o) in offsets.iter().enumerate() {
+            let p = [0, 1, 2].map(|k| g[k] as f64 + o[k]);
+            let within = near.iter().any(|&(_, w)| to_cube(b, p, w) <= margin);
+            cell_bits |= u8::from(within) << m;
+        }
+        bits.push(cell_bits);
+    }
     Dilated { bits, to_segment }
 }
 
