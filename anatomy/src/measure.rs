@@ -42,8 +42,7 @@ pub fn dilated(b: &Block, margin: f64) -> Dilated {
     let limit = margin + 1.5 * hd + 1e-6;
     let mut near: Vec<(f64, [usize; 3])> = Vec::new();
     let mut bits = Vec::with_capacity(b.inside.len());
-    for c in 0..b.inside.len() {
-        let d = to_segment[c];
+    for (c, &d) in to_segment.iter().enumerate() {
         if b.inside[c] || d + 0.5 * hd <= margin {
             bits.push(0xff);
             continue;
