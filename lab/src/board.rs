@@ -186,11 +186,7 @@ impl<T: Transport> BoardSession<'_, T> {
         loop {
             let received = self.state().registration;
             if let Some(reg) = received {
-                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
-                self.log.write(
-                    "registration",
-                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
-                );
+                self.log.registration(&name, &reg);
                 self.config.registration = Some(reg);
                 return Ok(());
             }
@@ -198,11 +194,8 @@ impl<T: Transport> BoardSession<'_, T> {
                 return Err(Ending::Interrupted);
             }
             if Instant::now() > deadline {
-                let waited_ms = self.config.registration_timeout.as_millis() as u64;
-                self.log.write(
-                    "no_registration",
-                    json!({ "name": name, "waited_ms": waited_ms }),
-                );
+                self.log
+                    .no_registration(&name, self.config.registration_timeout);
                 return Err(Ending::NoRegistration);
             }
             if let Ok(Event::TrackerClosed) = self.events.recv_timeout(POLL) {

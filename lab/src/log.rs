@@ -55,4 +55,22 @@ impl InsertionLog {
             self.failure.get_or_insert(e.to_string());
         }
     }
+
+    /// The registration `name` the tracker streamed, taken for the session.
+    pub fn registration(&mut self, name: &str, reg: &needle_igtl::Transform) {
+        let (rotation, translation_mm) = (reg.rotation(), reg.translation());
+        self.write(
+            "registration",
+            json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
+        );
+    }
+
+    /// No registration `name` came within `waited`.
+    pub fn no_registration(&mut self, name: &str, waited: std::time::Duration) {
+        let waited_ms = waited.as_millis() as u64;
+        self.write(
+            "no_registration",
+            json!({ "name": name, "waited_ms": waited_ms }),
+        );
+    }
 }

@@ -32,11 +32,7 @@ impl Session<'_> {
             self.look_at_tracker();
             let received = self.state().registration;
             if let Some(reg) = received {
-                let (rotation, translation_mm) = (reg.rotation(), reg.translation());
-                self.log.write(
-                    "registration",
-                    json!({ "name": name, "rotation": rotation, "translation_mm": translation_mm }),
-                );
+                self.log.registration(&name, &reg);
                 self.registration = Some(reg);
                 return None;
             }
@@ -44,11 +40,8 @@ impl Session<'_> {
                 return Some(Ending::Interrupted);
             }
             if Instant::now() > deadline {
-                let waited_ms = self.config.registration_timeout.as_millis() as u64;
-                self.log.write(
-                    "no_registration",
-                    json!({ "name": name, "waited_ms": waited_ms }),
-                );
+                self.log
+                    .no_registration(&name, self.config.registration_timeout);
                 return Some(Ending::NoRegistration);
             }
             match self.events.recv_timeout(POLL) {
