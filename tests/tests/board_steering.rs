@@ -123,6 +123,28 @@ fn blind(seq: u32) -> TipMeasurement {
     }
 }
 
+/// The insertion of `s` on the simulated board with seed `seed`'s world, asserted bit for bit
+/// the host's simulation of the same board (the in-process controller on the same pieces); the
+/// board, the schedule it steered and the run.
+fn board_as_host(
+    s: &Scenario,
+    planned: &Planned,
+    config: &SteerConfig,
+    world: &Conditions<'_>,
+    seed: u64,
+) -> (SimBoard, Schedule, ClosedRun) {
+    let (mut b, sched) = board(s, config);
+    let on_board = driven_loop(s, planned, &sched, world, &mut b, seed, 1.0)
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+    let mut here = in_process(s, &sched, config).unwrap();
+    let expected = driven_loop(s, planned, &sched, world, &mut here, seed, 1.0).unwrap();
+    assert!(
+        on_board == expected,
+        "seed {seed}: the board's run is not the host's"
+    );
+    (b, sched, on_board)
+}
+
 fn conditions<'a>(p: &'a Perturbation, faults: &'a TrackerFaults) -> Conditions<'a> {
     static NO_EFFECTS: std::sync::OnceLock<WorldEffects> = std::sync::OnceLock::new();
     Conditions {
@@ -146,15 +168,7 @@ fn the_board_steers_the_paper_insertion_as_the_host_simulates_it() {
     let faults = TrackerFaults::default();
     let world = conditions(&p, &faults);
     for seed in 1..=3 {
-        let (mut b, sched) = board(&s, &config);
-        let on_board = driven_loop(&s, &planned, &sched, &world, &mut b, seed, 1.0)
-            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let mut here = in_process(&s, &sched, &config).unwrap();
-        let expected = driven_loop(&s, &planned, &sched, &world, &mut here, seed, 1.0).unwrap();
-        assert!(
-            on_board == expected,
-            "seed {seed}: the board's run is not the host's"
-        );
+        let (mut b, sched, on_board) = board_as_host(&s, &planned, &config, &world, seed);
         assert_eq!(on_board.stop_reason, None, "seed {seed}: reached");
         // The stages are where the board's pieces put them: a step of the executed insertion.
         let end = b.status().unwrap();
@@ -284,15 +298,7 @@ fn the_board_steers_the_unseen_family_as_the_host_simulates_it() {
             continue;
         };
         let planned = Planned::of(&s, &best);
-        let (mut b, sched) = board(&s, &config);
-        let on_board = driven_loop(&s, &planned, &sched, &world, &mut b, seed, 1.0)
-            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let mut here = in_process(&s, &sched, &config).unwrap();
-        let expected = driven_loop(&s, &planned, &sched, &world, &mut here, seed, 1.0).unwrap();
-        assert!(
-            on_board == expected,
-            "seed {seed}: the board's run is not the host's"
-        );
+        let (mut b, _, on_board) = board_as_host(&s, &planned, &config, &world, seed);
         assert!(!on_board.run.collided, "seed {seed}: into an obstacle");
         let end = b.status().unwrap();
         assert!(
